@@ -1,0 +1,37 @@
+"""lfproc: Standard Plenoptic Camera light fields — refocusing, viewpoints, and the metric geometry of each.
+
+Importing lfproc is cheap: numba, OpenCV and OpenImageIO load only when a function that needs them
+is first used (``lfproc.refocus``, ``lfproc.viewpoints``, the readers and writers).
+"""
+
+from importlib import import_module
+
+from .camera import Camera
+from .errors import LfprocError
+from .grid import LensGrid
+from .lightfield import LightField
+
+__version__ = "0.1.0"
+
+# public name -> (module, attribute), imported on first access
+_LAZY = {
+    "refocus": ("lfproc.refocus", "refocus"),
+    "viewpoints": ("lfproc.viewpoints", "viewpoints"),
+    "geometry": ("lfproc.geometry", None),
+    "simulate": ("lfproc.simulate", None),
+    "calibrate": ("lfproc.calibrate", None),
+    "decode": ("lfproc.decode", None),
+    "io": ("lfproc.io", None),
+}
+
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", *_LAZY]
+
+
+def __getattr__(name):
+    if name not in _LAZY:
+        raise AttributeError(f"module 'lfproc' has no attribute {name!r}")
+    module_name, attr = _LAZY[name]
+    module = import_module(module_name)
+    value = module if attr is None else getattr(module, attr)
+    globals()[name] = value
+    return value

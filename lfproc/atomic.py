@@ -1,0 +1,46 @@
+"""Atomic file output: write to a temporary file in the destination folder, then rename over the target.
+
+A reader never sees a half-written file, and an interrupted or failed write leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, suffix: str | None = None):
+    """Yield a temporary path next to ``path``; on success it is renamed to ``path``, on error removed.
+
+    ``suffix`` defaults to the target's extension, so writers that pick a format from the file name
+    (OpenImageIO, numpy) still do so.
+    """
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
+    if suffix is None:
+        suffix = os.path.splitext(path)[1]
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part" + suffix, dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(tmp)
+        raise
+
+
+def write_text_atomic(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+
+
+def write_json_atomic(path: str | os.PathLike, obj) -> None:
+    """Write strict JSON (no NaN/Infinity: use ``None`` for infinite distances) atomically."""
+    write_text_atomic(path, json.dumps(obj, indent=2, allow_nan=False) + "\n")

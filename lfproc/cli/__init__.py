@@ -1,0 +1,69 @@
+"""The ``lfproc`` command: one module per subcommand, each with ``register(subparsers)``.
+
+Subcommand modules import numba, OpenCV and OpenImageIO only inside their ``run`` function, so
+``lfproc geometry`` starts in a fraction of a second. An `LfprocError` becomes one line on stderr and
+exit status 2; anything else is a bug and exits with status 1 and a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from importlib import import_module
+
+from ..errors import LfprocError
+
+#: subcommand modules in the order ``lfproc --help`` lists them
+COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "batch", "demo")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line usage errors (exit status 2, like every bad input)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="lfproc", description="Standard Plenoptic Camera light fields: refocusing, viewpoints "
+                                                "and the metric geometry of every output.")
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name in COMMANDS:
+        try:
+            module = import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:  # a command not yet built in this checkout
+            if exc.name == f"{__name__}.{name}":
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def _version() -> str:
+    from .. import __version__
+    return f"lfproc {__version__}"
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        status = args.func(args)
+    except LfprocError as exc:
+        print(f"lfproc {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # `lfproc geometry | head`: the reader left, which is not an error
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        print(f"lfproc {args.command}: interrupted; finished outputs are complete, nothing partial was written",
+              file=sys.stderr)
+        return 130
+    return int(status or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

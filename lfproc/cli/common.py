@@ -1,0 +1,72 @@
+"""Argument parsing helpers shared by the subcommands (no heavy imports here)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+from ..errors import LfprocError
+
+
+def parse_number_list(text: str, what: str = "--a") -> list[float]:
+    """Parse comma-separated numbers and inclusive ranges ``START:STOP[:STEP]`` (contract's LIST).
+
+    ``0:5`` is 0, 1, …, 5; ``0:1:0.25`` is 0, 0.25, 0.5, 0.75, 1; ``5:0:-1`` counts down. A range
+    whose step does not land on STOP ends at the last value before it.
+    """
+    values: list[float] = []
+    if text is None or not text.strip():
+        raise LfprocError(f"{what}: empty list; give numbers like 0,1.5 or a range like 0:5")
+    for item in text.split(","):
+        item = item.strip()
+        if not item:
+            continue
+        parts = item.split(":")
+        try:
+            nums = [float(p) for p in parts]
+        except ValueError:
+            raise LfprocError(f"{what}: {item!r} is not a number or START:STOP[:STEP] range") from None
+        if any(not math.isfinite(n) for n in nums) or len(nums) > 3:
+            raise LfprocError(f"{what}: {item!r} is not a finite number or START:STOP[:STEP] range")
+        if len(nums) == 1:
+            values.append(nums[0])
+            continue
+        start, stop = nums[0], nums[1]
+        step = nums[2] if len(nums) == 3 else (1.0 if stop >= start else -1.0)
+        if step == 0 or (stop - start) * step < 0:
+            raise LfprocError(f"{what}: range {item!r} never reaches its end; check the sign of STEP")
+        count = int(math.floor((stop - start) / step + 1e-9)) + 1
+        if count > 100000:
+            raise LfprocError(f"{what}: range {item!r} has {count} values; use a larger STEP")
+        values.extend(round(start + k * step, 12) for k in range(count))
+    if not values:
+        raise LfprocError(f"{what}: empty list; give numbers like 0,1.5 or a range like 0:5")
+    return values
+
+
+def parse_depth_range(text: str) -> tuple[float, float]:
+    """Parse ``NEAR_MM:FAR_MM`` (FAR may be ``inf``)."""
+    parts = text.split(":")
+    try:
+        near, far = (float(p) for p in parts)
+    except ValueError:
+        raise LfprocError(f"--depth-range: {text!r} must be NEAR_MM:FAR_MM, e.g. 200:400 or 1000:inf") from None
+    if not (math.isfinite(near) and near > 0 and far >= near):
+        raise LfprocError(f"--depth-range: {text!r} needs 0 < NEAR <= FAR")
+    return near, far
+
+
+def json_safe(obj):
+    """Replace infinities by ``None`` (strict JSON writes ``null``), recursively."""
+    if isinstance(obj, float):
+        return None if math.isinf(obj) else obj
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj
+
+
+def dumps_strict(obj, **kwargs) -> str:
+    """Strict JSON at full double precision; infinity becomes ``null``."""
+    return json.dumps(json_safe(obj), allow_nan=False, **kwargs)

@@ -1,0 +1,12 @@
+"""The one exception type a user of lfproc needs to catch."""
+
+
+class LfprocError(Exception):
+    """An error the user caused and can fix: a bad file, an impossible camera, an `a` out of range.
+
+    The message is a single line that names the input and says what to do. The CLI prints it,
+    exits with status 2 and leaves no partial output behind.
+    """
+
+    def __init__(self, message: str):
+        super().__init__(" ".join(str(message).split()))

@@ -1,0 +1,107 @@
+"""The micro lens lattice on the sensor: the one description shared by calibration, decoding and the simulator.
+
+Coordinates are in sensor pixels, x = column and y = row, with the centre of pixel (0, 0) at (0, 0).
+A lattice has two unit axes: ``u`` at ``rotation_deg`` from +x towards +y, and ``v`` = ``u`` turned
+by +90°. Lens (r, q) — row r, column q — sits at
+
+* rectangular: ``origin + q·pitch·u + r·pitch·v``
+* hexagonal:   ``origin + (q + (r mod 2)/2)·pitch·u + r·(√3/2)·pitch·v`` (odd rows shifted by half a pitch)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import LfprocError
+
+ROW_SPACING = {"rectangular": 1.0, "hexagonal": math.sqrt(3.0) / 2.0}
+
+
+@dataclass(frozen=True)
+class LensGrid:
+    """A fitted or simulated micro lens lattice (see the module docstring for the convention).
+
+    Parameters
+    ----------
+    kind : {"rectangular", "hexagonal"}
+    pitch_px : float
+        Distance between neighbouring lens centres along ``u``, in sensor pixels.
+    rotation_deg : float
+        Angle of ``u`` from +x towards +y (the lattice axis nearest to +x).
+    origin_xy_px : tuple of float
+        Centre of lens (0, 0).
+    rows, cols : int
+        Number of lens rows (along ``v``) and columns (along ``u``).
+    residual_rms_px : float
+        RMS distance between measured centres and the lattice, where fitted.
+    """
+
+    kind: str
+    pitch_px: float
+    rotation_deg: float
+    origin_xy_px: tuple
+    rows: int
+    cols: int
+    residual_rms_px: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in ROW_SPACING:
+            raise LfprocError(f"unknown grid kind {self.kind!r}; use rectangular or hexagonal")
+        object.__setattr__(self, "origin_xy_px", (float(self.origin_xy_px[0]), float(self.origin_xy_px[1])))
+
+    @property
+    def axes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit vectors (u, v) in (x, y)."""
+        t = math.radians(self.rotation_deg)
+        return np.array([math.cos(t), math.sin(t)]), np.array([-math.sin(t), math.cos(t)])
+
+    @property
+    def row_spacing_px(self) -> float:
+        """Distance between lens rows along ``v``."""
+        return self.pitch_px * ROW_SPACING[self.kind]
+
+    def lens_xy(self, row, col) -> np.ndarray:
+        """Centres (x, y) of lenses at integer (or fractional) ``row``, ``col``; shape ``(..., 2)``."""
+        row = np.asarray(row, dtype=np.float64)
+        col = np.asarray(col, dtype=np.float64)
+        u, v = self.axes
+        shift = 0.5 * np.mod(np.floor(row), 2.0) if self.kind == "hexagonal" else 0.0
+        along_u = (col + shift) * self.pitch_px
+        along_v = row * self.row_spacing_px
+        x = self.origin_xy_px[0] + along_u * u[0] + along_v * v[0]
+        y = self.origin_xy_px[1] + along_u * u[1] + along_v * v[1]
+        return np.stack([x, y], axis=-1)
+
+    def centers_xy_px(self) -> np.ndarray:
+        """All lens centres, shape ``(rows, cols, 2)`` as (x, y)."""
+        r, q = np.meshgrid(np.arange(self.rows), np.arange(self.cols), indexing="ij")
+        return self.lens_xy(r, q)
+
+    def to_json_dict(self) -> dict:
+        """The contract's GRID.json fields plus what is needed to rebuild the lattice."""
+        return {
+            "grid": self.kind,
+            "pitch_px": self.pitch_px,
+            "rotation_deg": self.rotation_deg,
+            "residual_rms_px": self.residual_rms_px,
+            "origin_xy_px": list(self.origin_xy_px),
+            "rows": self.rows,
+            "cols": self.cols,
+            "row_spacing_px": self.row_spacing_px,
+            "centers_xy_px": self.centers_xy_px().reshape(-1, 2).tolist(),
+        }
+
+    @classmethod
+    def from_json_dict(cls, data: dict, source: str = "grid") -> "LensGrid":
+        try:
+            return cls(kind=str(data["grid"]), pitch_px=float(data["pitch_px"]),
+                       rotation_deg=float(data["rotation_deg"]),
+                       origin_xy_px=tuple(float(v) for v in data["origin_xy_px"]),
+                       rows=int(data["rows"]), cols=int(data["cols"]),
+                       residual_rms_px=float(data.get("residual_rms_px", 0.0)))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise LfprocError(f"{source}: not a grid file written by 'lfproc calibrate' ({exc!r}); "
+                              f"run lfproc calibrate again") from None

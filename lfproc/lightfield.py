@@ -1,0 +1,102 @@
+"""`LightField`: the decoded 4-D light field, its camera and lens grid, and its file format.
+
+Layout (contract): ``views[ky, kx, jy, jx, ch]`` — view row, view column, lens row, lens column,
+channel — float32, linear, with m̂ × m̂ views (m̂ odd). View index k increases with the sensor
+coordinate like the lens index j; the central view is k = c = (m̂ − 1)/2.
+
+File format (``.lfp.npz``, written by :meth:`LightField.save`): an uncompressed numpy ``.npz``
+archive with the members ``views`` (the array above), ``camera_toml`` (the camera file, a string;
+empty if none) and ``grid_json`` (the lens grid as written by ``lfproc calibrate``; empty if none),
+plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it: ``np.load(path)["views"]``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import zipfile
+from dataclasses import dataclass
+
+import numpy as np
+
+from .atomic import atomic_path
+from .camera import Camera
+from .errors import LfprocError
+from .grid import LensGrid
+
+FILE_FORMAT = "lfproc-lightfield-1"
+
+
+@dataclass(frozen=True, eq=False)
+class LightField:
+    """A decoded light field: ``views`` shaped ``(m̂, m̂, Ny, Nx, C)`` plus optional camera and grid."""
+
+    views: np.ndarray
+    camera: Camera | None = None
+    grid: LensGrid | None = None
+
+    def __post_init__(self):
+        v = self.views
+        if v.ndim != 5 or v.shape[0] != v.shape[1] or v.shape[0] % 2 == 0:
+            raise LfprocError(f"light field views must be shaped (m, m, Ny, Nx, C) with m odd, got {v.shape}")
+        if min(v.shape) < 1:
+            raise LfprocError(f"light field views must not be empty, got shape {v.shape}")
+        if self.camera is not None and self.camera.m_hat != v.shape[0]:
+            raise LfprocError(f"light field has {v.shape[0]}x{v.shape[0]} views but the camera's micro_image_px "
+                              f"is {self.camera.m_hat}; decode with that camera or fix decode.micro_image_px")
+
+    @classmethod
+    def from_views(cls, views, camera: Camera | None = None, grid: LensGrid | None = None) -> "LightField":
+        """Wrap an array shaped ``(m̂, m̂, Ny, Nx, C)``; it is converted to float32 (no copy if it already is)."""
+        arr = np.asarray(views)
+        if arr.dtype != np.float32:
+            arr = arr.astype(np.float32)
+        return cls(np.ascontiguousarray(arr), camera, grid)
+
+    @property
+    def m_hat(self) -> int:
+        return int(self.views.shape[0])
+
+    @property
+    def center_index(self) -> int:
+        return (self.m_hat - 1) // 2
+
+    @property
+    def lens_shape(self) -> tuple[int, int]:
+        return int(self.views.shape[2]), int(self.views.shape[3])
+
+    @property
+    def channels(self) -> int:
+        return int(self.views.shape[4])
+
+    @property
+    def effective_pixel_pitch_mm(self) -> float | None:
+        return None if self.camera is None else self.camera.effective_pixel_pitch_mm
+
+    # ------------------------------------------------------------------ file format
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the light field atomically in the format of the module docstring."""
+        camera_toml = self.camera.to_toml() if self.camera is not None else ""
+        grid_json = json.dumps(self.grid.to_json_dict()) if self.grid is not None else ""
+        with atomic_path(path, suffix=".npz") as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, views=self.views, camera_toml=np.array(camera_toml),
+                         grid_json=np.array(grid_json), format=np.array(FILE_FORMAT))
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "LightField":
+        path = os.fspath(path)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if "format" not in data or str(data["format"]) != FILE_FORMAT:
+                    raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+                views = data["views"]
+                camera_toml, grid_json = str(data["camera_toml"]), str(data["grid_json"])
+        except FileNotFoundError:
+            raise LfprocError(f"{path}: light field file not found; check the path") from None
+        except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:
+            raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
+                from None
+        camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
+        grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
+        return cls.from_views(views, camera, grid)
