@@ -1,0 +1,20 @@
+"""The README's two set-up commands are the ones CI runs, and its examples are real."""
+
+import re
+
+from conftest import ROOT
+
+README = (ROOT / "README.md").read_text()
+CI = (ROOT / ".ci" / "run").read_text()
+
+
+def test_ci_runs_the_readme_test_command():
+    ci_lines = [line for line in CI.splitlines() if "pytest" in line and not line.startswith("#")]
+    assert len(ci_lines) == 1
+    assert ci_lines[0].strip() in README
+
+
+def test_readme_first_screen_has_both_commands():
+    first_screen = "\n".join(README.splitlines()[:40])
+    assert re.search(r"^python3 -m venv .*lfproc demo$", first_screen, re.M)
+    assert re.search(r"^python3 -m venv .*pytest.*$", first_screen, re.M)
