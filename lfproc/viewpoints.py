@@ -1,0 +1,116 @@
+"""Viewpoint images (the paper's Eq. 32) and the virtual camera behind each (Eqs. 17, 33, 34).
+
+Eq. 32, E'_{u_{c+i}}[s_j] = E[u_{c+i}, s_j], gathers the pixel at the same micro image position
+under every lens into one image: after decoding that is exactly ``lf.views[ky, kx]``. Each view
+looks from a virtual optical centre F_i = m_i·f_U in the main lens's front focal plane (Eq. 17), with
+its optical axis tilted by Φ_i (Eq. 33); adjacent views are ΔB_1 apart (Eq. 34). In two dimensions
+view (ky, kx) has offsets (iy, ix) = (ky − c, kx − c) and the geometry applies per axis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import geometry
+from .errors import LfprocError
+from .lightfield import LightField
+
+
+def viewpoints(lf: LightField, *, inside_aperture: bool = False) -> np.ndarray:
+    """The m̂ × m̂ viewpoint images of ``lf`` (Eq. 32), shaped ``(m̂, m̂, Ny, Nx, C)`` float32.
+
+    Parameters
+    ----------
+    lf : LightField
+    inside_aperture : bool
+        If true, views whose virtual centre lies outside the main lens stop (vignetted corners,
+        see :func:`lfproc.geometry.views_inside_aperture`) are set to 0; needs a camera with
+        ``f_number``.
+    """
+    if not inside_aperture:
+        return lf.views
+    mask = aperture_mask(lf)
+    return np.where(mask[:, :, None, None, None], lf.views, np.float32(0))
+
+
+def aperture_mask(lf: LightField) -> np.ndarray:
+    """``(m̂, m̂)`` booleans: views inside the main lens aperture (all true without an f-number)."""
+    if lf.camera is None:
+        raise LfprocError("the aperture of the views needs the light field's camera; decode with --camera")
+    return geometry.views_inside_aperture(lf.camera)
+
+
+@dataclass(frozen=True)
+class ViewpointGeometry:
+    """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x]."""
+
+    view: tuple            # (ky, kx)
+    offset: tuple          # (iy, ix) = (ky − c, kx − c)
+    position_mm: tuple     # (F_iy, F_ix), Eq. 17
+    tilt_deg: tuple        # (Φ_iy, Φ_ix), Eq. 33
+    baseline_to_center_mm: float   # |F_i − F_0| in the focal plane, Eq. 34 in 2-D
+    baseline_to_neighbour_mm: float  # ΔB_1, Eq. 34 with g = 1
+
+    def metadata(self) -> dict:
+        """The contract's sidecar fields (plus the baselines)."""
+        return {"view": list(self.view), "position_mm": list(self.position_mm), "tilt_deg": list(self.tilt_deg),
+                "baseline_to_center_mm": self.baseline_to_center_mm,
+                "baseline_to_neighbour_mm": self.baseline_to_neighbour_mm}
+
+
+def viewpoint_geometry(camera) -> list[list[ViewpointGeometry]]:
+    """Virtual camera of every view as an m̂ × m̂ nested list indexed ``[ky][kx]``."""
+    positions = geometry.view_positions_mm(camera)
+    tilts = geometry.view_tilts_deg(camera)
+    offsets = geometry.view_offsets(camera)
+    neighbour = geometry.baseline_mm(camera, 1)
+    table = []
+    for ky, iy in enumerate(offsets):
+        row = []
+        for kx, ix in enumerate(offsets):
+            row.append(ViewpointGeometry(
+                (ky, kx), (int(iy), int(ix)), (float(positions[ky]), float(positions[kx])),
+                (float(tilts[ky]), float(tilts[kx])), float(math.hypot(positions[ky], positions[kx])),
+                float(neighbour)))
+        table.append(row)
+    return table
+
+
+def mosaic(views: np.ndarray, gap: int = 0) -> np.ndarray:
+    """Tile all views into one image: view (ky, kx) at block row ky, block column kx.
+
+    Returns ``(m̂·Ny + (m̂−1)·gap, m̂·Nx + (m̂−1)·gap, C)`` float32 (gaps are 0).
+    """
+    m, _, ny, nx, ch = views.shape
+    out = np.zeros((m * ny + (m - 1) * gap, m * nx + (m - 1) * gap, ch), np.float32)
+    for ky in range(m):
+        for kx in range(m):
+            y0, x0 = ky * (ny + gap), kx * (nx + gap)
+            out[y0:y0 + ny, x0:x0 + nx] = views[ky, kx]
+    return out
+
+
+def circular_walk(m_hat: int, radius: float | None = None, frames: int = 24,
+                  mask: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """Views (ky, kx) visited by a walk around a circle of ``radius`` views about the centre.
+
+    The default radius is 0.7·c, inside the aperture of a typical f-number-matched camera; with
+    ``mask`` the radius shrinks until every visited view is inside it. Consecutive duplicates are
+    dropped.
+    """
+    c = (m_hat - 1) // 2
+    if c == 0:
+        return [(0, 0)]
+    r = 0.7 * c if radius is None else float(radius)
+    while True:
+        path = []
+        for t in np.linspace(0, 2 * np.pi, frames, endpoint=False):
+            k = (int(round(c + r * math.sin(t))), int(round(c + r * math.cos(t))))
+            if not path or path[-1] != k:
+                path.append(k)
+        if mask is None or all(mask[k] for k in path) or r <= 0.5:
+            return path
+        r -= 0.5
