@@ -1,0 +1,58 @@
+"""Options and the per-capture loop shared by ``decode``, ``refocus`` and ``views``."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from ..errors import LfprocError
+
+
+def add_decode_options(p) -> None:
+    p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+    p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
+    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) "
+                                                    "and corrects vignetting")
+    p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
+                   help="resampling of the sensor into micro images (default linear)")
+    p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
+                   help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
+
+
+def setup_from_args(args):
+    """Camera, grid and white image from the parsed options (errors before any work is done)."""
+    from ..camera import Camera
+    from ..pipeline import prepare_decoding
+
+    camera = Camera.from_toml(args.camera)
+    if not args.calib and not args.white:
+        raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
+    return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
+                            demosaic_method=args.demosaic)
+
+
+def for_each_capture(command: str, paths: list[str], work, total_steps: int | None = None) -> int:
+    """Run ``work(path, progress)`` per capture; failures are reported and skipped, the rest complete.
+
+    ``progress`` is a tqdm bar (on stderr, only on a terminal) that ``work`` advances. Returns the exit
+    status: 0 if every capture succeeded, 2 if any failed (the summary names them).
+    """
+    from tqdm import tqdm
+
+    failed, done = [], 0
+    start = time.perf_counter()
+    with tqdm(total=total_steps or len(paths), unit="img", disable=None, file=sys.stderr,
+              desc=f"lfproc {command}") as progress:
+        for path in paths:
+            try:
+                work(path, progress)
+                done += 1
+            except LfprocError as exc:
+                failed.append(path)
+                progress.write(f"lfproc {command}: error: {exc}")
+    elapsed = time.perf_counter() - start
+    summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"
+    if failed:
+        summary += f"; failed: {', '.join(failed)}"
+    print(summary, file=sys.stderr)
+    return 2 if failed else 0

@@ -1,0 +1,132 @@
+"""From files to light fields: the steps every command shares (camera, lens grid, white image, decoder).
+
+``--white WHITE`` calibrates the grid from the white image and devignettes with it; ``--calib GRID.json``
+reads a grid written by ``lfproc calibrate`` and devignettes with the white image recorded in it (if
+that file still exists); both together use the given grid and the given white image. Without any
+white image the captures are decoded without devignetting, and a warning says so.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .camera import Camera
+from .errors import LfprocError
+from .grid import LensGrid
+from .lightfield import LightField
+
+
+@dataclass(frozen=True, eq=False)
+class DecodeSetup:
+    """Everything needed to decode captures of one camera: the camera, its grid and white image."""
+
+    camera: Camera
+    grid: LensGrid
+    white: object | None          # lfproc.io.Capture or None
+    interpolation: str = "linear"
+    demosaic_method: str = "fast"
+    _decoders: dict = field(default_factory=dict, repr=False)
+
+    def decoder_for(self, shape: tuple, cfa: str):
+        """The (cached) decoder for captures of this sensor shape and CFA."""
+        from .decode import make_decoder
+
+        key = (tuple(shape[:2]), cfa)
+        if key not in self._decoders:
+            if self.white is not None:
+                white, white_cfa = self.white.data, self.white.cfa
+            else:
+                white, white_cfa = np.ones(shape, np.float32), cfa
+            self._decoders[key] = make_decoder(white, self.grid, self.camera.m_hat, white_cfa,
+                                               interpolation=self.interpolation,
+                                               demosaic_method=self.demosaic_method)
+        return self._decoders[key]
+
+
+def read_grid(path: str) -> tuple[LensGrid, str | None]:
+    """A GRID.json written by ``lfproc calibrate``: the grid and the white image it recorded (or None)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except FileNotFoundError:
+        raise LfprocError(f"{path}: grid file not found; run 'lfproc calibrate WHITE --camera CAM -o {path}'") \
+            from None
+    except (OSError, ValueError) as exc:
+        raise LfprocError(f"{path}: not a readable grid file ({exc}); run lfproc calibrate again") from None
+    if not isinstance(data, dict):
+        raise LfprocError(f"{path}: not a grid file written by 'lfproc calibrate'; run lfproc calibrate again")
+    return LensGrid.from_json_dict(data, source=path), data.get("white_image")
+
+
+def calibrate_white(white, camera: Camera) -> LensGrid:
+    """Fit the lens grid to a white :class:`~lfproc.io.Capture`."""
+    from .calibrate import estimate_grid
+
+    try:
+        return estimate_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa)
+    except LfprocError as exc:
+        raise LfprocError(f"{white.source}: {exc}") from None
+
+
+def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
+                     interpolation: str = "linear", demosaic_method: str = "fast") -> DecodeSetup:
+    """Resolve ``--calib``/``--white`` into a :class:`DecodeSetup` (see the module docstring)."""
+    from .io import read_capture
+
+    if calib is None and white is None:
+        raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
+    recorded_white = None
+    if calib is not None:
+        grid, recorded_white = read_grid(calib)
+    white_path = white or (recorded_white if recorded_white and os.path.exists(recorded_white) else None)
+    white_capture = read_capture(white_path, camera) if white_path else None
+    if calib is None:
+        grid = calibrate_white(white_capture, camera)
+    elif white_capture is None:
+        warnings.warn(f"{calib}: no white image available (recorded: {recorded_white}); decoding without "
+                      f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
+    return DecodeSetup(camera, grid, white_capture, interpolation, demosaic_method)
+
+
+def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
+    """Read and decode one capture."""
+    from .io import read_capture
+
+    capture = read_capture(path, setup.camera)
+    if setup.white is not None and capture.data.shape[:2] != setup.white.data.shape[:2]:
+        raise LfprocError(f"{path} is {capture.data.shape[1]}x{capture.data.shape[0]} px but the white image "
+                          f"{setup.white.source} is {setup.white.data.shape[1]}x{setup.white.data.shape[0]}; "
+                          f"use the white image of the same camera")
+    if setup.white is not None and capture.cfa != setup.white.cfa:
+        raise LfprocError(f"{path} has colour filter {capture.cfa} but the white image has {setup.white.cfa}; "
+                          f"use a white image of the same camera and mode")
+    decoder = setup.decoder_for(capture.data.shape, capture.cfa)
+    try:
+        views = decoder(capture.data)
+    except LfprocError as exc:
+        raise LfprocError(f"{path}: {exc}") from None
+    return LightField.from_views(views, setup.camera, decoder.output_grid)
+
+
+def output_stem(path: str) -> str:
+    """The name outputs of a capture start with: its file name without extension."""
+    return os.path.splitext(os.path.basename(path))[0]
+
+
+def unique_stems(paths: list[str]) -> dict[str, str]:
+    """Map each input to its output stem; inputs whose names collide get their folder name prefixed."""
+    stems = [output_stem(p) for p in paths]
+    result = {}
+    for path, stem in zip(paths, stems):
+        if stems.count(stem) > 1:
+            parent = os.path.basename(os.path.dirname(os.path.abspath(path))) or "root"
+            stem = f"{parent}_{stem}"
+        result[path] = stem
+    if len(set(result.values())) != len(result):
+        raise LfprocError("several inputs would write outputs of the same name; give each capture a distinct name")
+    return result
