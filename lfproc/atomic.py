@@ -8,7 +8,11 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import math
 import tempfile
+from collections.abc import Mapping
+
+import numpy as np
 
 
 @contextlib.contextmanager
@@ -43,4 +47,32 @@ def write_text_atomic(path: str | os.PathLike, text: str) -> None:
 
 def write_json_atomic(path: str | os.PathLike, obj) -> None:
     """Write strict JSON (no NaN/Infinity: use ``None`` for infinite distances) atomically."""
-    write_text_atomic(path, json.dumps(obj, indent=2, allow_nan=False) + "\n")
+    write_text_atomic(path, json.dumps(json_safe(obj), indent=2, allow_nan=False) + "\n")
+
+
+def json_safe(obj):
+    """A copy of ``obj`` that strict JSON accepts: ±inf -> None, numpy scalars/arrays -> Python.
+
+    NaN is a bug upstream, not a value to hide: it raises ``ValueError``.
+    """
+    obj = python_scalar(obj)
+    if isinstance(obj, float):
+        if math.isnan(obj):
+            raise ValueError("metadata contains NaN; compute a finite value or None")
+        return None if math.isinf(obj) else obj
+    if isinstance(obj, Mapping):
+        return {str(key): json_safe(value) for key, value in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(value) for value in obj]
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    return obj
+
+
+def python_scalar(value):
+    """numpy scalars and arrays as Python numbers and lists; everything else unchanged."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value

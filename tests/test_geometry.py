@@ -9,7 +9,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from lfproc import Camera, LfprocError
+from lfproc import Camera
 from lfproc import geometry as g
 
 CAMERAS = Path(__file__).resolve().parent.parent / "samples" / "cameras"

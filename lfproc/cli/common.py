@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 
+from ..atomic import json_safe
 from ..errors import LfprocError
 
 
@@ -54,17 +55,6 @@ def parse_depth_range(text: str) -> tuple[float, float]:
     if not (math.isfinite(near) and near > 0 and far >= near):
         raise LfprocError(f"--depth-range: {text!r} needs 0 < NEAR <= FAR")
     return near, far
-
-
-def json_safe(obj):
-    """Replace infinities by ``None`` (strict JSON writes ``null``), recursively."""
-    if isinstance(obj, float):
-        return None if math.isinf(obj) else obj
-    if isinstance(obj, dict):
-        return {k: json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    return obj
 
 
 def dumps_strict(obj, **kwargs) -> str:
