@@ -67,10 +67,8 @@ def calibrate_white(white, camera: Camera) -> LensGrid:
     """Fit the lens grid to a white :class:`~lfproc.io.Capture`."""
     from .calibrate import estimate_grid
 
-    try:
-        return estimate_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa)
-    except LfprocError as exc:
-        raise LfprocError(f"{white.source}: {exc}") from None
+    return estimate_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
+                         source=white.source)
 
 
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
