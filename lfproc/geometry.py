@@ -226,7 +226,7 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, max_slices: int =
         raise LfprocError(f"depth range starts at {near_mm} mm, but slices of this camera focus only beyond "
                           f"{closest:.3f} mm from the sensor; give a larger NEAR")
     slices = []
-    target = far_mm
+    target = far_mm * (1.0 + 1e-9)  # every target a hair beyond, so rounding never leaves a sliver uncovered
     while True:
         a = _slice_for_far_limit(camera, target)
         slices.append(a)

@@ -39,6 +39,7 @@ def run(args) -> int:
     from ..outputs import write_slice_gif, write_slices, write_view_gif, write_view_mosaic
     from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
     from ..refocus import refocus
+    from ..viewpoints import viewpoints
 
     sample = Path(args.sample) if args.sample else default_sample_dir()
     missing = [name for name in SAMPLE_FILES if not (sample / name).is_file()]
@@ -88,8 +89,10 @@ def run(args) -> int:
                 if lo <= d <= hi]
         step(f"  plane at {d:.0f} mm is in focus in slice {', '.join(hits) or '(none)'}")
 
-    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, lf.views, "tiff")
-    view_gif = write_view_gif(str(out), "sample", lf.views, geometry.views_inside_aperture(camera))
-    step(f"views: mosaic {mosaic_path}, animation {view_gif}")
+    inside = viewpoints(lf, inside_aperture=True)  # views outside the main lens stop are black
+    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, inside, "tiff")
+    view_gif = write_view_gif(str(out), "sample", inside, geometry.views_inside_aperture(camera))
+    step(f"views: {int(geometry.views_inside_aperture(camera).sum())} of {m * m} inside the aperture; "
+         f"mosaic {mosaic_path}, animation {view_gif}")
     step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations in {out}/")
     return 0
