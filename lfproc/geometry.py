@@ -273,7 +273,7 @@ def view_offsets(camera: Camera) -> np.ndarray:
 def view_slopes(camera: Camera, i=None) -> np.ndarray:
     """Chief-ray slope m_i = −i·p_p/f_s of view offset i (Eq. 13 with Δu = −i)."""
     i = view_offsets(camera) if i is None else np.asarray(i, dtype=np.float64)
-    return -i * _slope_step(camera)
+    return -i * _slope_step(camera) + 0.0  # + 0.0: the central view is at 0.0, not -0.0
 
 
 def view_positions_mm(camera: Camera, i=None) -> np.ndarray:
@@ -288,7 +288,8 @@ def view_tilts_deg(camera: Camera, i=None) -> np.ndarray:
     paper's Table 4 prints the opposite sign for the same magnitudes).
     """
     eps = camera.image_distance_mm - camera.main_focal_length_mm
-    return np.degrees(np.arctan(view_slopes(camera, i) * eps / camera.main_focal_length_mm))
+    tilt = np.degrees(np.arctan(view_slopes(camera, i) * eps / camera.main_focal_length_mm))
+    return tilt + 0.0  # no negative zeros (b_U = f_U gives -0.0 for i > 0)
 
 
 def baseline_mm(camera: Camera, gap=1) -> np.ndarray | float:

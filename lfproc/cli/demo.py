@@ -8,7 +8,6 @@ view animation. The summary checks the refocused slices against the sample's kno
 from __future__ import annotations
 
 import json
-import sys
 import time
 from pathlib import Path
 
@@ -52,7 +51,7 @@ def run(args) -> int:
 
     def step(text):
         lines.append(text)
-        print(text, file=sys.stderr)
+        print(text, flush=True)
 
     camera = Camera.from_toml(sample / "camera.toml")
     truth = json.loads((sample / "ground_truth.json").read_text())
