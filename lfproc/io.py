@@ -384,6 +384,7 @@ def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | 
     spec.attribute("oiio:ColorSpace", colour_space)
     spec.attribute("oiio:UnassociatedAlpha", 1)      # store a 4th channel's colour as given, never ÷ alpha
     spec.attribute("Software", "lfproc")
+    spec.attribute("DateTime", "")  # TIFF/EXR would stamp the write time: same inputs, same bytes
     if fmt == "jpeg":
         spec.attribute("Compression", f"jpeg:{_JPEG_QUALITY}")
         spec.attribute("jpeg:subsampling", "4:4:4")
