@@ -194,14 +194,23 @@ def _slice_for_far_limit(camera: Camera, far_mm: float) -> float:
     return (a_plus * (2.0 * c + 1.0) + 1.0) / (2.0 * c)
 
 
-def plan_slices(camera: Camera, near_mm: float, far_mm: float, max_slices: int = 10000) -> np.ndarray:
+def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: float = 0.0, integer: bool = False,
+                max_slices: int = 10000) -> np.ndarray:
     """The fewest refocus parameters whose [near, far] DOF intervals together cover [near_mm, far_mm].
 
     Greedy from the far end, which is optimal for intervals whose both ends decrease with ``a``:
     each slice is the one whose far limit sits exactly on the nearest point not yet covered, so its
-    near limit reaches as close as any slice covering that point can. Real ``a`` values result
-    (interpolated refocusing); neighbouring intervals touch (with a 1e-9 relative overlap against
-    rounding), so no depth in the range is left out of focus.
+    near limit reaches as close as any slice covering that point can. Neighbouring intervals touch
+    (with a 1e-9 relative overlap against rounding), so no depth in the range is left out of focus.
+
+    Two ways to compute less, when the scene allows:
+
+    * ``max_gap_mm`` > 0 tolerates uncovered depths up to that size *between* slices (never at the
+      ends of the range): the next slice's far limit may sit that much nearer, so fewer slices.
+    * ``integer=True`` uses integer ``a`` only — pure gathers, no interpolation, the cheapest slices —
+      and leaves the gaps between integer slices that the paper points out (Section 5.2). Where even
+      the next integer cannot keep a gap within ``max_gap_mm`` it is taken anyway; check the result
+      with :func:`uncovered_depths`.
 
     Parameters
     ----------
@@ -209,6 +218,10 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, max_slices: int =
         Needs m̂ ≥ 3 (a single-pixel micro image cannot refocus).
     near_mm, far_mm : float
         The depth range from the sensor; ``far_mm`` may be ``inf``.
+    max_gap_mm : float
+        Largest uncovered depth interval allowed between slices.
+    integer : bool
+        Plan integer refocus parameters only.
     max_slices : int
         Guard against ranges that would need absurdly many slices.
 
@@ -221,22 +234,45 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, max_slices: int =
         raise LfprocError("depth-range planning needs micro images of 3 px or more (micro_image_px >= 3)")
     if not (near_mm > 0 and far_mm >= near_mm) or math.isnan(far_mm):
         raise LfprocError(f"depth range {near_mm}:{far_mm} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")
+    if not (max_gap_mm >= 0 and math.isfinite(max_gap_mm)):
+        raise LfprocError(f"the largest allowed DOF gap must be a finite number of mm >= 0, got {max_gap_mm}")
     closest = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
     if near_mm <= closest:
         raise LfprocError(f"depth range starts at {near_mm} mm, but slices of this camera focus only beyond "
                           f"{closest:.3f} mm from the sensor; give a larger NEAR")
-    slices = []
+    slices: list[float] = []
+    edge = far_mm                   # everything beyond the edge is covered (or an allowed gap)
     target = far_mm * (1.0 + 1e-9)  # every target a hair beyond, so rounding never leaves a sliver uncovered
     while True:
         a = _slice_for_far_limit(camera, target)
+        if integer:  # the largest integer whose far limit still reaches the target (far decreases with a)
+            a = float(math.floor(a + 1e-9))
+            if slices and a <= slices[-1]:
+                a = slices[-1] + 1.0
+            if float(slice_geometry(camera, a).near_mm) >= edge:
+                a += 1.0  # its interval lies wholly beyond the edge: the next integer makes progress
         slices.append(a)
-        reached = float(slice_geometry(camera, a).near_mm)
-        if reached <= near_mm:
+        edge = min(edge, float(slice_geometry(camera, a).near_mm))
+        if edge <= near_mm:
             break
         if len(slices) >= max_slices:
             raise LfprocError(f"depth range {near_mm}:{far_mm} mm needs more than {max_slices} slices; narrow it")
-        target = reached * (1.0 + 1e-9)
+        target = max(edge - max_gap_mm, near_mm) * (1.0 + 1e-9)
     return np.array(slices)
+
+
+def uncovered_depths(camera: Camera, a_values, near_mm: float, far_mm: float) -> list[tuple[float, float]]:
+    """Depth intervals inside [near_mm, far_mm] that no slice's [near, far] DOF interval covers."""
+    geo = slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)))
+    intervals = sorted(zip(np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm)))
+    gaps, covered_to = [], near_mm
+    for lo, hi in intervals:
+        if lo > covered_to and covered_to < far_mm:
+            gaps.append((float(covered_to), float(min(lo, far_mm))))
+        covered_to = max(covered_to, hi)
+    if covered_to < far_mm:
+        gaps.append((float(covered_to), float(far_mm)))
+    return gaps
 
 
 def integer_slice_gaps(camera: Camera, a_values) -> list[tuple[float, float, float]]:

@@ -293,3 +293,46 @@ def test_property_distance_decreasing_in_a(cam, a1, a2):
     assume(a1 < a2)
     d1, d2 = g.slice_distance_mm(cam, [a1, a2])
     assert d1 >= d2
+
+
+def test_plan_slices_with_allowed_gaps_uses_fewer_and_respects_the_gap():
+    cam = load("paper-f100")
+    full = g.plan_slices(cam, 200.0, 3000.0)
+    assert g.uncovered_depths(cam, full, 200.0, 3000.0) == []
+    for gap in (5.0, 50.0):
+        fewer = g.plan_slices(cam, 200.0, 3000.0, max_gap_mm=gap)
+        assert len(fewer) < len(full)
+        holes = g.uncovered_depths(cam, fewer, 200.0, 3000.0)
+        assert holes and all(hi - lo <= gap * (1 + 1e-9) for lo, hi in holes)
+        assert all(200.0 < lo and hi < 3000.0 for lo, hi in holes)  # the ends stay covered
+
+
+def test_plan_integer_slices():
+    cam = load("paper-f100")
+    a = g.plan_slices(cam, 200.0, math.inf, integer=True)
+    assert list(a) == [0, 1, 2, 3, 4, 5]  # slice 5 reaches d_5- = 196.359 mm <= 200 (Table 2)
+    holes = g.uncovered_depths(cam, a, 200.0, math.inf)  # nearest first
+    assert holes[-1] == pytest.approx((325.596, 3483.222), abs=0.01)  # the paper's gap between a = 0 and 1
+    assert holes[0] == pytest.approx((200.0, 203.136), abs=0.01)  # slice 5 ends at 199.241, slice 4 at 203.136
+    # with a generous allowed gap, integers are still all it uses, and it never repeats one
+    b = g.plan_slices(cam, 200.0, 400.0, integer=True, max_gap_mm=1e4)
+    assert list(b) == sorted(set(b)) and all(float(x).is_integer() for x in b)
+
+
+def test_uncovered_depths_reference():
+    cam = load("paper-f100")
+    # slices a = 1 and 2 over 230..330: covered [236.6, 245.6] and [301.5, 325.6]
+    holes = g.uncovered_depths(cam, [1.0, 2.0], 230.0, 330.0)
+    expect = [(230.0, 236.606), (245.616, 301.538), (325.596, 330.0)]
+    assert len(holes) == 3
+    for (lo, hi), (elo, ehi) in zip(holes, expect):
+        assert lo == pytest.approx(elo, abs=0.01) and hi == pytest.approx(ehi, abs=0.01)
+
+
+def test_integer_plan_never_wastes_a_slice_beyond_the_range():
+    cam = load("paper-f100")
+    # 300..3000 mm: slice 0 starts at 3483 mm, wholly beyond the range, so it must not be planned
+    a = g.plan_slices(cam, 300.0, 3000.0, integer=True)
+    geo = g.slice_geometry(cam, a)
+    assert 0.0 not in a
+    assert np.all(geo.near_mm < 3000.0)  # every planned slice covers something inside the range
