@@ -13,15 +13,11 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from dataclasses import dataclass, field, replace
 
 from .errors import LfprocError
+from .tomlfile import parse_toml, read_toml
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised only on Python 3.10
-    import tomli as tomllib
 
 GRIDS = ("rectangular", "hexagonal")
 CFA_PATTERNS = ("none", "RGGB", "BGGR", "GRBG", "GBRG")
@@ -169,25 +165,12 @@ class Camera:
     def from_toml(cls, path: str | os.PathLike) -> "Camera":
         """Load a camera file (contract format); every problem raises `LfprocError` naming the file."""
         path = os.fspath(path)
-        try:
-            with open(path, "rb") as fh:
-                data = tomllib.load(fh)
-        except FileNotFoundError:
-            raise LfprocError(f"{path}: camera file not found; pass an existing TOML file to --camera") from None
-        except IsADirectoryError:
-            raise LfprocError(f"{path}: is a directory, not a camera file; pass a TOML file to --camera") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise LfprocError(f"{path}: not valid TOML ({exc}); fix the syntax of the camera file") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise LfprocError(f"{path}: cannot read camera file ({exc}); check the path and permissions") from None
+        data = read_toml(path, "camera file", "an existing TOML file to --camera")
         return cls.from_dict(data, source=path)
 
     @classmethod
     def from_toml_string(cls, text: str, source: str = "camera") -> "Camera":
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise LfprocError(f"{source}: not valid TOML ({exc}); fix the syntax of the camera file") from None
+        data = parse_toml(text, source, "camera file")
         return cls.from_dict(data, source=source)
 
     @classmethod

@@ -30,18 +30,14 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from .camera import Camera
 from .errors import LfprocError
+from .tomlfile import read_toml
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised only on Python 3.10
-    import tomli as tomllib
 
 #: texture kind ids shared with the numba kernels of :mod:`lfproc.simulate`
 KIND_UNIFORM, KIND_CHECKER, KIND_SINUSOID, KIND_NOISE, KIND_IMAGE = range(5)
@@ -295,17 +291,7 @@ _TOP_KEYS = {"camera", "background", "render", "plane"}
 def load_scene_file(path: str | os.PathLike) -> SceneFile:
     """Parse a scene TOML file (``docs/scene-format.md``); every problem raises `LfprocError` naming the file."""
     path = os.fspath(path)
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise LfprocError(f"{path}: scene file not found; pass an existing SCENE.toml") from None
-    except IsADirectoryError:
-        raise LfprocError(f"{path}: is a directory, not a scene file; pass a SCENE.toml") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise LfprocError(f"{path}: not valid TOML ({exc}); fix the syntax of the scene file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise LfprocError(f"{path}: cannot read scene file ({exc}); check the path and permissions") from None
+    data = read_toml(path, "scene file", "an existing SCENE.toml")
     return parse_scene_dict(data, source=path, base_dir=os.path.dirname(os.path.abspath(path)))
 
 
