@@ -89,6 +89,9 @@ def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
         raise LfprocError(f"unknown demosaic method {method!r}; use one of {', '.join(DEMOSAIC_METHODS)}")
     cv2 = _cv2()
     data = np.asarray(mosaic, dtype=np.float32)
+    if not np.all(np.isfinite(data)):   # the 16-bit conversion below would turn them into silent zeros
+        raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
+                          "(e.g. numpy.nan_to_num) before decoding")
     top = float(data.max()) if data.size else 0.0
     scale = 65535.0 / top if top > 0 else 1.0
     as_u16 = np.clip(data * scale + 0.5, 0, 65535).astype(np.uint16)
@@ -239,9 +242,9 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     """
     if not 0 <= dark_fraction < 1:
         raise LfprocError(f"dark_fraction must be in [0, 1), got {dark_fraction}")
-    white_img = to_channels(white, cfa, demosaic_method)
-    if not np.all(np.isfinite(white_img)):
+    if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
+    white_img = to_channels(white, cfa, demosaic_method)
     positions = sample_positions(grid, m_hat)
     white_views = resample_views(white_img, grid, m_hat, interpolation, positions)
     bright = float(np.percentile(white_views, 99)) if white_views.size else 0.0

@@ -188,10 +188,22 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
 
 
 def _slice_for_far_limit(camera: Camera, far_mm: float) -> float:
-    """The ``a`` whose far DOF limit d_a+ equals ``far_mm`` (inverts a₊ = (2ac − 1)/(2c + 1))."""
+    """The ``a`` whose far DOF limit equals ``far_mm`` (inverts a₊ = (2ac − 1)/(2c + 1), or a₋ below a = −1)."""
     c = camera.center_index
-    a_plus = refocus_parameter(camera, far_mm)
-    return (a_plus * (2.0 * c + 1.0) + 1.0) / (2.0 * c)
+    a_limit = refocus_parameter(camera, far_mm)
+    a = (a_limit * (2.0 * c + 1.0) + 1.0) / (2.0 * c)
+    if a < -1.0:  # there the inner and outer rays swap roles: the far limit is d(a₋), a₋ = (2ac + 1)/(2c − 1)
+        a = (a_limit * (2.0 * c - 1.0) - 1.0) / (2.0 * c)
+    # Near infinity a₊ = (2ac − 1)/(2c + 1) cancels digits, so the far limit of that a can fall short
+    # of far_mm (or stay finite for far_mm = inf). Lower a by doubling steps from the rounding of a₊
+    # until it reaches: the far limit never increases with a, so this ends, overshooting by < 2 steps.
+    step = 2.0 ** -52 * (abs(a) + 1.0 / (2.0 * c))
+    for _ in range(2000):
+        if slice_geometry(camera, a).far_mm >= far_mm:
+            break
+        a -= step
+        step *= 2.0
+    return a
 
 
 def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: float = 0.0, integer: bool = False,
@@ -252,7 +264,11 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: fl
             if float(slice_geometry(camera, a).near_mm) >= edge:
                 a += 1.0  # its interval lies wholly beyond the edge: the next integer makes progress
         slices.append(a)
-        edge = min(edge, float(slice_geometry(camera, a).near_mm))
+        reached = float(slice_geometry(camera, a).near_mm)
+        if reached > edge and not integer:  # the DOF here is narrower than the 1e-9 overlap: no progress possible
+            raise LfprocError(f"depth range {near_mm}:{far_mm} mm reaches within a rounding error of the nearest "
+                              f"slice ({closest:.3f} mm), where slices are too thin to plan; give a larger NEAR")
+        edge = min(edge, reached)
         if edge <= near_mm:
             break
         if len(slices) >= max_slices:
