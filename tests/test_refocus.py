@@ -1,0 +1,375 @@
+"""`lfproc.refocus` (centred Eq. 9) against an independent plain-numpy implementation of the contract.
+
+The reference below is written from the contract's formula, not from the module: it computes every
+sample position per output pixel, builds a dense 1-D interpolation matrix per view axis from the
+interpolation kernels' textbook definitions (the piecewise Keys kernel, not the module's polynomial
+weights), and counts the inside samples pixel by pixel.
+"""
+
+import contextlib
+import importlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import lfproc
+from lfproc import LfprocError, LightField
+
+rf = importlib.import_module("lfproc.refocus")   # the module (``lfproc.refocus`` may be bound to the function)
+
+INTERPOLATIONS = ("nearest", "linear", "cubic")
+RTOL, ATOL = 2e-5, 2e-5
+
+
+# ------------------------------------------------------------------ independent reference
+def _snap(x):
+    r = np.round(x)
+    return np.where(np.abs(x - r) < 1e-9, r, x)
+
+
+def _keys(x):
+    """Keys (1981) cubic convolution kernel with a = -0.5, piecewise in |x|."""
+    x = np.abs(x)
+    return np.where(x <= 1, 1.5 * x**3 - 2.5 * x**2 + 1,
+                    np.where(x < 2, -0.5 * x**3 + 2.5 * x**2 - 4 * x + 2, 0.0))
+
+
+def _interp_matrix(pos, n, interpolation):
+    """Dense (len(pos), n) matrix: row p samples a length-n signal at pos[p] (rows outside [0, n-1] are 0)."""
+    w = np.zeros((len(pos), n))
+    for p, x in enumerate(pos):
+        if not 0 <= x <= n - 1:
+            continue
+        if interpolation == "nearest":
+            w[p, int(np.floor(x + 0.5))] = 1.0
+        elif interpolation == "linear":
+            i = int(np.floor(x))
+            t = x - i
+            w[p, i] += 1 - t
+            w[p, min(i + 1, n - 1)] += t
+        else:
+            i = int(np.floor(x))
+            for j in range(i - 1, i + 3):
+                w[p, min(max(j, 0), n - 1)] += _keys(x - j)
+    return w
+
+
+def reference(views, a, interpolation="linear", upsample=1):
+    """out[py, px] = mean over inside (ky, kx) of views[ky, kx] sampled at (py/s + a(c-ky), px/s + a(c-kx))."""
+    views = np.asarray(views, dtype=np.float64)
+    m, _, ny, nx, channels = views.shape
+    c = (m - 1) // 2
+    s = upsample
+    py = np.arange((ny - 1) * s + 1) / s
+    px = np.arange((nx - 1) * s + 1) / s
+    total = np.zeros((len(py), len(px), channels))
+    count = np.zeros((len(py), len(px)))
+    for ky in range(m):
+        y = _snap(py + a * (c - ky))
+        wy = _interp_matrix(y, ny, interpolation)
+        for kx in range(m):
+            x = _snap(px + a * (c - kx))
+            wx = _interp_matrix(x, nx, interpolation)
+            inside = ((0 <= y) & (y <= ny - 1))[:, None] & ((0 <= x) & (x <= nx - 1))[None, :]
+            sampled = np.einsum("pi,ijc,qj->pqc", wy, views[ky, kx], wx)
+            total += np.where(inside[..., None], sampled, 0.0)
+            count += inside
+    assert count.min() >= 1
+    return total / count[..., None]
+
+
+def random_views(m, ny, nx, channels, seed=0, dtype=np.float32):
+    return np.random.default_rng(seed).random((m, m, ny, nx, channels)).astype(dtype)
+
+
+def close(actual, expected):
+    np.testing.assert_allclose(actual, expected, rtol=RTOL, atol=ATOL)
+
+
+# ------------------------------------------------------------------ against the reference
+@pytest.mark.parametrize("m, ny, nx", [(1, 5, 6), (3, 7, 9), (5, 8, 7), (9, 6, 10), (25, 4, 5)])
+@pytest.mark.parametrize("channels", [1, 3])
+def test_integer_a_matches_reference(m, ny, nx, channels):
+    views = random_views(m, ny, nx, channels, seed=m)
+    for a in (0, 1, -2, 3, -7):   # |a|·c ≥ N for the larger ones: most samples fall outside
+        out = lfproc.refocus(views, a)
+        assert out.shape == (ny, nx, channels) and out.dtype == np.float32
+        close(out, reference(views, a))
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+@pytest.mark.parametrize("m, channels", [(1, 1), (3, 3), (5, 1), (9, 3)])
+def test_real_a_matches_reference(interpolation, m, channels):
+    views = random_views(m, 9, 11, channels, seed=3 * m + channels)
+    for a in (0.5, -0.5, 0.3, -1.25, 2.7, -4.6):
+        close(lfproc.refocus(views, a, interpolation), reference(views, a, interpolation))
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+def test_upsampled_matches_reference(interpolation):
+    views = random_views(5, 6, 7, 3, seed=11)
+    for a, s in ((1.0, 2), (-0.75, 3), (2.4, 4)):
+        out = lfproc.refocus(views, a, interpolation, upsample=s)
+        assert out.shape == (5 * s + 1, 6 * s + 1, 3)
+        close(out, reference(views, a, interpolation, s))
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(m=st.sampled_from([1, 3, 5, 7]), ny=st.integers(1, 9), nx=st.integers(1, 9), channels=st.sampled_from([1, 3]),
+       a=st.one_of(st.integers(-6, 6).map(float), st.floats(-6, 6, allow_nan=False)),
+       interpolation=st.sampled_from(INTERPOLATIONS), upsample=st.integers(1, 3), seed=st.integers(0, 99))
+def test_random_cases_match_reference(m, ny, nx, channels, a, interpolation, upsample, seed):
+    views = random_views(m, ny, nx, channels, seed)
+    close(lfproc.refocus(views, a, interpolation, upsample), reference(views, a, interpolation, upsample))
+
+
+def test_offsets_with_rounding_error_count_as_whole_lenses():
+    """1.1·10 = 11.000000000000002 in floating point: snapped to 11, so the view is read without
+    interpolation and its last row (position exactly N − 1) still counts."""
+    plan = rf.axis_plan([1.1], m=21, n=14, upsample=1, interpolation="linear")
+    assert plan.offset[0, 0, 0] == 11.0 and plan.ntaps[0, 0, 0] == 1 and plan.hi[0, 0, 0] == 2
+    views = random_views(21, 14, 3, 1, seed=12)
+    close(lfproc.refocus(views, 1.1, "cubic"), reference(views, 1.1, "cubic"))
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_many_small_bands_match_reference(monkeypatch, threads):
+    """A tiny accumulator budget forces one-row bands, run inline or on a pool: the split changes nothing."""
+    monkeypatch.setattr(rf, "ACCUMULATOR_BUDGET_BYTES", 8)
+    monkeypatch.setattr(rf, "MIN_BAND_ROWS", 1)
+    monkeypatch.setattr(rf, "_thread_count", lambda: threads)
+    assert len(rf._bands(2, 13, 18, threads)) == 13
+    views = random_views(5, 13, 6, 3, seed=5)
+    for a in (2, -1.5):
+        close(lfproc.refocus(views, [a, a + 1]), np.stack([reference(views, a), reference(views, a + 1)]))
+
+
+def test_bands_cover_every_row_once():
+    for n_slices, n_rows, row_len, threads in ((1, 434, 1875, 2), (5, 434, 1875, 2), (100, 434, 1875, 2),
+                                               (1, 1, 3, 4), (3, 7, 5, 16)):
+        bands = rf._bands(n_slices, n_rows, row_len, threads)
+        assert [r for lo, hi in bands for r in range(lo, hi)] == list(range(n_rows))
+        assert len(bands) % threads == 0 or len(bands) == n_rows
+        assert min(hi - lo for lo, hi in bands) >= min(rf.MIN_BAND_ROWS, n_rows // threads)
+
+
+# ------------------------------------------------------------------ hand-checked semantics
+def test_one_dimensional_example_of_eq_8():
+    """Ny = 1: only the central view row is inside; out[j] = mean over kx of views[c, kx, 0, j + a(c - kx)]."""
+    views = np.zeros((3, 3, 1, 6, 1), np.float32)
+    views[:, :, 0, :, 0] = np.arange(3)[None, :, None] * 100 + np.arange(6)[None, None, :]  # value 100·kx + jx
+    views[0] += 5000  # view rows other than c = 1 must not contribute
+    out = lfproc.refocus(views, 1.0)[0, :, 0]
+    # j = 2: kx = 0 reads jx 3 (3), kx = 1 reads 2 (102), kx = 2 reads 1 (201)
+    assert out[2] == pytest.approx((3 + 102 + 201) / 3)
+    # j = 0: kx = 2 would read jx -1 (outside): mean of kx = 0 (jx 1) and kx = 1 (jx 0)
+    assert out[0] == pytest.approx((1 + 100) / 2)
+    # j = 5: kx = 0 would read jx 6 (outside)
+    assert out[5] == pytest.approx((105 + 204) / 2)
+
+
+def test_border_counts_by_hand():
+    """Views of constant value 10·ky + kx, a = 1, m = 3: each pixel averages exactly the views inside."""
+    m, n = 3, 4
+    views = np.zeros((m, m, n, n, 1), np.float32)
+    for ky in range(m):
+        for kx in range(m):
+            views[ky, kx] = 10 * ky + kx
+    out = lfproc.refocus(views, 1)[..., 0]
+    inside = {0: [0, 1], 1: [0, 1, 2], 2: [0, 1, 2], 3: [1, 2]}   # j + (1 - k) ∈ [0, 3]
+    for jy in range(n):
+        for jx in range(n):
+            expected = np.mean([10 * ky + kx for ky in inside[jy] for kx in inside[jx]])
+            assert out[jy, jx] == pytest.approx(expected)
+
+
+def test_huge_a_leaves_only_the_central_view():
+    views = random_views(5, 6, 7, 3, seed=2)
+    for a in (1e6, -3.5e9, 1e308):
+        for interpolation in INTERPOLATIONS:
+            out = lfproc.refocus(views, a, interpolation)
+            np.testing.assert_array_equal(out, views[2, 2])
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+def test_a_zero_is_the_plain_mean_of_views(interpolation):
+    views = random_views(7, 5, 8, 3, seed=4)
+    close(lfproc.refocus(views, 0.0, interpolation), views.astype(np.float64).mean(axis=(0, 1)))
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+def test_constant_light_field_stays_constant(interpolation):
+    views = np.full((5, 5, 6, 9, 3), 0.625, np.float32)
+    out = lfproc.refocus(views, [0, 1, -2.3, 0.5, 40.0], interpolation, upsample=2)
+    np.testing.assert_allclose(out, 0.625, rtol=1e-6)
+
+
+@pytest.mark.parametrize("interpolation, exact_margin", [("linear", 0), ("cubic", 3)])
+def test_refocusing_at_the_planes_slope_recovers_it(interpolation, exact_margin):
+    """A Lambertian plane of slope a0 (view k sees g shifted by -a0(c - k)) comes back as g at a = a0.
+
+    g is linear (reproduced by bilinear everywhere) plus, for cubic, a quadratic term: Keys reproduces
+    quadratics wherever no tap is clamped, i.e. where every counted sample lies in [1, N − 2]; with
+    offsets up to a0·c = 1.5 that is three lenses in from the border.
+    """
+    m, n, a0 = 5, 16, 0.75
+    c = (m - 1) // 2
+
+    def g(y, x):
+        value = 0.3 + 0.05 * y - 0.02 * x
+        return value + (0.001 * x * x if interpolation == "cubic" else 0.0)
+
+    jy, jx = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    views = np.stack([np.stack([g(jy - a0 * (c - ky), jx - a0 * (c - kx)) for kx in range(m)]) for ky in range(m)])
+    out = lfproc.refocus(views[..., None].astype(np.float64), a0, interpolation)[..., 0]
+    core = slice(exact_margin, n - exact_margin)
+    np.testing.assert_allclose(out[core, core], g(jy, jx)[core, core], rtol=0, atol=2e-6)
+
+
+# ------------------------------------------------------------------ dtypes and precision
+def test_uint16_near_full_scale_never_overflows():
+    rng = np.random.default_rng(7)
+    views = (65535 - rng.integers(0, 40, size=(9, 9, 6, 7, 3))).astype(np.uint16)
+    for a in (0, 1, -0.5):
+        out = lfproc.refocus(views, a, "cubic")
+        assert out.min() > 65400 and out.max() <= 65535.5
+        np.testing.assert_allclose(out, reference(views, a, "cubic"), rtol=1e-6, atol=0)
+    # integer a on integer data: per-view-row sums are exact, so the mean is exact to float32 rounding
+    np.testing.assert_allclose(lfproc.refocus(views, 2), reference(views, 2), rtol=6e-8, atol=0)
+
+
+def test_float64_input_is_summed_in_float64():
+    """Values whose float32 sum would lose the small part: 1e8 + k·1e-1 views."""
+    m = 5
+    views = np.zeros((m, m, 3, 4, 1))
+    views[...] = 1e8
+    views[1, 2] += 0.5
+    out = lfproc.refocus(views, 0)
+    assert out.dtype == np.float32
+    # mean = 1e8 + 0.5/25 = 1e8 + 0.02 → float32(1e8 + 0.02) == float32(1e8); check via subtraction instead
+    views -= 1e8
+    np.testing.assert_allclose(lfproc.refocus(views, 0), 0.5 / 25, rtol=1e-6)
+    close(out, np.full_like(out, 1e8))
+
+
+def test_other_input_dtypes_and_lightfield_agree():
+    views = (random_views(3, 5, 6, 1, seed=8) * 200).astype(np.uint8)
+    expected = reference(views, 1.5)
+    close(lfproc.refocus(views, 1.5), expected)
+    close(lfproc.refocus(views.astype(np.int32), 1.5), expected)
+    close(lfproc.refocus(LightField.from_views(views), 1.5), expected)
+
+
+# ------------------------------------------------------------------ several slices, shapes, dispatch
+def test_stack_equals_separate_calls_exactly():
+    views = random_views(7, 10, 12, 3, seed=9)
+    for slopes in ([0, 1, 2, -3, 5], [0.5, -1.25, 2, 3.75]):
+        for interpolation in INTERPOLATIONS:
+            stacked = lfproc.refocus(views, slopes, interpolation)
+            separate = np.stack([lfproc.refocus(views, a, interpolation) for a in slopes])
+            np.testing.assert_array_equal(stacked, separate)
+
+
+def test_upsample_one_is_plain_and_upsampled_grid_contains_the_plain_one():
+    views = random_views(5, 6, 8, 3, seed=10)
+    for a in (2, 0.4):
+        plain = lfproc.refocus(views, a, "cubic")
+        np.testing.assert_array_equal(lfproc.refocus(views, a, "cubic", upsample=1), plain)
+        close(lfproc.refocus(views, a, "cubic", upsample=3)[::3, ::3], plain)
+
+
+def test_scalar_and_sequence_shapes():
+    views = random_views(3, 4, 5, 3)
+    assert lfproc.refocus(views, 1).shape == (4, 5, 3)
+    assert lfproc.refocus(views, np.float32(1.5)).shape == (4, 5, 3)
+    assert lfproc.refocus(views, np.array(2)).shape == (4, 5, 3)
+    assert lfproc.refocus(views, [1]).shape == (1, 4, 5, 3)
+    assert lfproc.refocus(views, (0, 1.5, -2)).shape == (3, 4, 5, 3)
+    assert lfproc.refocus(views, np.arange(4)).shape == (4, 4, 5, 3)
+    np.testing.assert_array_equal(lfproc.refocus(views, [1.5])[0], lfproc.refocus(views, 1.5))
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+def test_integer_a_is_a_pure_gather(monkeypatch, interpolation):
+    """Integer a (and nearest, any a) at upsample 1 never reaches the interpolating kernel."""
+    def forbidden(*args):
+        raise AssertionError("interpolating kernel used for whole-lens shifts")
+    monkeypatch.setattr(rf, "_interpolated_band", forbidden)
+    views = random_views(5, 6, 7, 1)
+    lfproc.refocus(views, [0, 3, -1], interpolation)
+    lfproc.refocus(views, [0.37, -2.5], "nearest")
+    real_a_interpolates = pytest.raises(AssertionError) if interpolation != "nearest" else contextlib.nullcontext()
+    with real_a_interpolates:
+        lfproc.refocus(views, 0.5, interpolation)
+
+
+def test_axis_plan_weights_sum_to_one_and_counts_are_separable():
+    plan = rf.axis_plan([0.3, -1.7, 2.0], m=5, n=9, upsample=2, interpolation="cubic")
+    used = np.arange(4)[None, None, None, :] < plan.ntaps[..., None]
+    np.testing.assert_allclose(np.where(used, plan.weights, 0).sum(axis=-1), 1.0, atol=1e-12)
+    assert plan.count.shape == (3, 17) and plan.count.min() >= 1 and plan.count.max() <= 5
+    np.testing.assert_allclose(rf.keys_cubic_weights(np.array([0.0]))[0], [0, 1, 0, 0])
+
+
+# ------------------------------------------------------------------ errors
+@pytest.mark.parametrize("a, words", [([], "empty"), (float("nan"), "finite"), ([0, float("inf")], "finite"),
+                                      ("1", "not a number"), ([True], "not a number"), ([[1, 2]], "flat")])
+def test_bad_a_is_a_user_error(a, words):
+    with pytest.raises(LfprocError, match=words):
+        lfproc.refocus(random_views(3, 4, 4, 1), a)
+
+
+def test_bad_arguments_are_user_errors():
+    views = random_views(3, 4, 4, 1)
+    with pytest.raises(LfprocError, match="interpolation"):
+        lfproc.refocus(views, 1, "bicubic")
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(LfprocError, match="upsample"):
+            lfproc.refocus(views, 1, upsample=bad)
+    for shape in ((3, 3, 4, 4), (2, 2, 4, 4, 1), (3, 5, 4, 4, 1), (3, 3, 0, 4, 1)):
+        with pytest.raises(LfprocError, match="shaped"):
+            lfproc.refocus(np.zeros(shape, np.float32), 1)
+    with pytest.raises(LfprocError, match="real-valued"):
+        lfproc.refocus(np.zeros((3, 3, 4, 4, 1), np.complex64), 1)
+
+
+def test_non_finite_pixels_that_reach_a_slice_are_a_user_error():
+    views = random_views(3, 5, 5, 1)
+    views[0, 0, 4, 4, 0] = np.nan        # read by a = 0, outside of every sample for a = 10
+    np.testing.assert_array_equal(lfproc.refocus(views, 10.0), views[1, 1])
+    with pytest.raises(LfprocError, match="a=0"):
+        lfproc.refocus(views, [10, 0])
+    views[0, 0, 4, 4, 0] = np.inf
+    with pytest.raises(LfprocError, match="NaN or infinite"):
+        lfproc.refocus(views, 0.5, "cubic")
+
+
+# ------------------------------------------------------------------ numba on-disk cache
+def _kernel_cache_misses_and_hits_in_a_new_process():
+    code = ("import importlib, numpy as np, lfproc\n"
+            "rf = importlib.import_module('lfproc.refocus')\n"
+            "v = np.ones((3, 3, 4, 5, 1), np.float32)\n"
+            "lfproc.refocus(v, [0, 1]); lfproc.refocus(v, 0.5)\n"
+            "k = (rf._gather_band, rf._interpolated_band)\n"
+            "print(*(sum(sum(getattr(f.stats, n).values()) for f in k) for n in ('cache_misses', 'cache_hits')))")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return tuple(map(int, proc.stdout.split()))
+
+
+def test_second_process_loads_kernels_from_cache():
+    """cache=True: a new process loads both kernels from numba's on-disk cache instead of compiling.
+
+    The cache is shared with anything else that runs lfproc in this tree at the same moment, which may
+    rewrite it (another source stamp): then the first probe compiles, and the next one must not.
+    """
+    lfproc.refocus(random_views(3, 4, 5, 1), [0, 1])     # compiles (or loads) and saves in this process
+    lfproc.refocus(random_views(3, 4, 5, 1), 0.5)
+    misses, hits = _kernel_cache_misses_and_hits_in_a_new_process()
+    if misses:
+        misses, hits = _kernel_cache_misses_and_hits_in_a_new_process()
+    assert (misses, hits) == (0, 2)
