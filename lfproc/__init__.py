@@ -1,7 +1,9 @@
 """lfproc: Standard Plenoptic Camera light fields — refocusing, viewpoints, and the metric geometry of each.
 
 Importing lfproc is cheap: numba, OpenCV and OpenImageIO load only when a function that needs them
-is first used (``lfproc.refocus``, ``lfproc.viewpoints``, the readers and writers).
+is first used (``lfproc.refocus``, the readers and writers, decoding). ``lfproc.refocus`` is the
+function of the contract; its module ``lfproc/refocus.py`` is callable too, so the name works
+whichever was imported first.
 """
 
 from importlib import import_module
@@ -10,13 +12,13 @@ from .camera import Camera
 from .errors import LfprocError
 from .grid import LensGrid
 from .lightfield import LightField
+from .viewpoints import viewpoints  # light (numpy only); bound here so the submodule cannot shadow it
 
 __version__ = "0.1.0"
 
 # public name -> (module, attribute), imported on first access
 _LAZY = {
     "refocus": ("lfproc.refocus", "refocus"),
-    "viewpoints": ("lfproc.viewpoints", "viewpoints"),
     "geometry": ("lfproc.geometry", None),
     "simulate": ("lfproc.simulate", None),
     "calibrate": ("lfproc.calibrate", None),
@@ -24,7 +26,7 @@ _LAZY = {
     "io": ("lfproc.io", None),
 }
 
-__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", *_LAZY]
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", *_LAZY]
 
 
 def __getattr__(name):
