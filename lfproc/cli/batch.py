@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import sys
 import time
 
@@ -11,24 +13,36 @@ from ..errors import LfprocError
 
 def register(sub) -> None:
     p = sub.add_parser("batch", help="process folders of captures in parallel (local or Dask), resumable",
-                       description="Process many captures: inputs are files, folders or glob patterns. A manifest "
-                                   "in OUTDIR records each capture; a rerun skips completed captures whose "
-                                   "parameters are unchanged. Failures are recorded and the rest complete.")
+                       description="Refocus and/or extract the views of many captures: inputs are files, folders or "
+                                   "glob patterns. Outputs and sidecars are those of lfproc refocus and lfproc views. "
+                                   "A manifest (OUTDIR/lfproc-manifest.json) records each capture; a rerun skips "
+                                   "completed captures whose inputs and parameters are unchanged. A capture that "
+                                   "fails is recorded with its error and the rest complete; the exit status is 2 "
+                                   "if any failed, 130 if interrupted (rerun to resume). See docs/batch.md.")
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="capture files, folders or glob patterns")
-    p.add_argument("--camera", required=True, metavar="CAM")
-    p.add_argument("--calib", metavar="GRID.json")
-    p.add_argument("--white", metavar="WHITE")
+    p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+    p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
+    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) and "
+                                                    "corrects vignetting")
     p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
     which = p.add_mutually_exclusive_group()
-    which.add_argument("--refocus", metavar="LIST", help="refocus parameters a (numbers, START:STOP[:STEP])")
-    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM", help="the fewest slices covering this range")
+    which.add_argument("--refocus", metavar="LIST", help="refocus parameters a: numbers and ranges START:STOP[:STEP]")
+    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
+                       help="the fewest slices whose depths of field cover this range (FAR may be inf)")
     p.add_argument("--views", action="store_true", help="also write every viewpoint image")
-    p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"))
-    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"))
-    p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"))
-    p.add_argument("--demosaic", default="fast", choices=("fast", "careful"))
-    p.add_argument("--workers", type=int, metavar="N", help="local processes (default: from cores and memory)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler, e.g. tcp://host:8786")
+    p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"),
+                   help="tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, exr")
+    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
+                   help="interpolation between lenses for real a (default linear)")
+    p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
+                   help="resampling of the sensor into micro images (default linear)")
+    p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
+                   help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
+    p.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: from the cores and the memory a capture needs; "
+                        "1 = in this process, with multi-threaded refocusing)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on a dask.distributed cluster instead, e.g. tcp://host:8786 (shared file system)")
     p.set_defaults(func=run)
 
 
@@ -37,8 +51,6 @@ def _abs(path):
 
 
 def run(args) -> int:
-    from tqdm import tqdm
-
     from .. import batch
     from ..camera import Camera
     from ..pipeline import unique_stems
@@ -54,6 +66,9 @@ def run(args) -> int:
         raise LfprocError("nothing to do: give --refocus LIST, --depth-range NEAR:FAR and/or --views")
     if args.workers is not None and args.workers < 1:
         raise LfprocError(f"--workers must be >= 1, got {args.workers}")
+    if args.workers is not None and args.scheduler:
+        raise LfprocError("--workers sizes local processing; with --scheduler the cluster's workers run the "
+                          "captures (start them with 'dask worker --nworkers N'): drop one of the two")
     if args.refocus is not None:
         a_values = tuple(parse_number_list(args.refocus, "--refocus"))
     elif args.depth_range is not None:
@@ -69,42 +84,86 @@ def run(args) -> int:
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), _abs(args.white), a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic)
             for src in sources]
-    os.makedirs(outdir, exist_ok=True)
-    manifest = batch.Manifest(outdir, {"camera": os.path.abspath(args.camera), "calib": _abs(args.calib),
-                                       "white": _abs(args.white), "refocus_a": list(a_values), "views": args.views,
-                                       "format": args.format})
+    try:
+        os.makedirs(outdir, exist_ok=True)
+    except OSError as exc:
+        raise LfprocError(f"{args.outdir}: cannot create the output folder ({exc.strerror}); check the path") \
+            from None
+    with batch.lock_outdir(outdir), _sigterm_as_interrupt():
+        batch.remove_stale_partial_files(outdir)
+        manifest = batch.Manifest(outdir, {
+            "camera": os.path.abspath(args.camera), "calib": _abs(args.calib), "white": _abs(args.white),
+            "refocus_a": list(a_values), "views": bool(args.views), "format": args.format,
+            "interpolation": args.interpolation, "decode_interpolation": args.decode_interpolation,
+            "demosaic": args.demosaic, "scheduler": args.scheduler})
+        return _process(args, jobs, manifest)
+
+
+def _process(args, jobs, manifest) -> int:
+    """Skip what is complete, run the rest, keep the manifest current; returns the exit status."""
+    from tqdm import tqdm
+
+    from .. import batch
+
     fingerprints = {job.source: job.fingerprint() for job in jobs}
-    todo, counts = [], {"done": 0, "skipped": 0, "failed": 0}
+    todo, counts, failures = [], {"done": 0, "skipped": 0, "failed": 0}, []
     for job in jobs:
-        if batch.is_complete(manifest.entry(job.source), fingerprints[job.source]):
+        if manifest.is_complete(job, fingerprints[job.source]):
             counts["skipped"] += 1
-            manifest.record(batch.JobResult(job.source, "skipped"), fingerprints[job.source])
+            manifest.record(job, batch.JobResult(job.source, "skipped"), fingerprints[job.source])
         else:
             todo.append(job)
-    failures = []
+    if todo:
+        # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
+        batch.decode_setup(todo[0])
     start = time.perf_counter()
-    with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
-        def on_result(job, result):
-            counts[result.status] += 1
-            manifest.record(result, fingerprints[job.source])
-            if result.status == "failed":
-                failures.append((job.source, result.error))
-                bar.write(f"lfproc batch: failed: {result.error}")
-            bar.update(1)
+    interrupted = True
+    try:
+        with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
+            def on_result(job, result):
+                counts[result.status] += 1
+                manifest.record(job, result, fingerprints[job.source])
+                manifest.save_soon()
+                if result.status == "failed":
+                    failures.append((job.source, result.error))
+                    bar.write(f"lfproc batch: failed: {result.error}", file=sys.stderr)
+                bar.update(1)
 
-        if not todo:
-            pass
-        elif args.scheduler:
-            batch.run_dask(todo, args.scheduler, on_result)
-        else:
-            workers = args.workers or batch.default_workers(todo[0].source, camera)
-            batch.run_local(todo, min(workers, len(todo)), on_result)
-    elapsed = time.perf_counter() - start
-    summary = dict(counts, total=len(jobs), seconds=round(elapsed, 3),
-                   failed_captures=[{"source": s, "error": e} for s, e in failures])
-    manifest.save(summary)
+            if not todo:
+                pass
+            elif args.scheduler:
+                batch.run_dask(todo, args.scheduler, on_result)
+            else:
+                workers = args.workers or batch.default_workers(todo[0].source)
+                batch.run_local(todo, min(workers, len(todo)), on_result)
+        interrupted = False
+        # every task has ended: what a killed worker was writing is garbage now
+        batch.remove_stale_partial_files(manifest.outdir)
+    finally:
+        summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
+                       interrupted=interrupted,
+                       failed_captures=[{"source": s, "error": e} for s, e in failures])
+        manifest.save(summary)
     print(format_summary(summary, manifest.path))
     return 2 if failures else 0
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM (kill, a job scheduler's time limit) stops a batch like Ctrl-C: partial writes removed,
+    captures in progress in local worker processes finished, the manifest saved."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread (an embedding application): leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def format_summary(summary: dict, manifest_path: str) -> str:
@@ -112,6 +171,7 @@ def format_summary(summary: dict, manifest_path: str) -> str:
              f"{summary['done']:>8} {summary['skipped']:>8} {summary['failed']:>8} {summary['total']:>8} "
              f"{summary['seconds']:>9.1f}"]
     for item in summary["failed_captures"]:
-        lines.append(f"failed: {item['source']}: {item['error']}")
+        error = item["error"] or ""
+        lines.append(f"failed: {error if error.startswith(item['source']) else item['source'] + ': ' + error}")
     lines.append(f"manifest: {manifest_path}")
     return "\n".join(lines)
