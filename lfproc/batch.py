@@ -22,14 +22,14 @@ One batch at a time may write to an OUTDIR: :func:`lock_outdir` holds an advisor
 from __future__ import annotations
 
 import contextlib
-import functools
 import glob
 import hashlib
 import json
 import os
 import time
+import uuid
 from collections import deque
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 
 from .atomic import write_json_atomic
 from .errors import LfprocError
@@ -135,25 +135,42 @@ def expand_inputs(inputs: list[str]) -> list[str]:
 
 
 # ------------------------------------------------------------------------------ the worker side
-@functools.lru_cache(maxsize=4)
-def _decode_setup(camera_toml: str, calib: str | None, white: str | None, decode_interpolation: str,
-                  demosaic: str, stamps: str):
-    """One calibration and white-image decode per worker process, reused for all its captures.
+#: per process: setup key -> DecodeSetup (the calibrated grid and white image), oldest first
+_SETUP_CACHE: dict = {}
+_SETUP_CACHE_SIZE = 4
 
-    ``stamps`` (the grid and white files' sizes and times) is part of the cache key only: a long-lived
-    Dask worker recalibrates when the white image or grid file is replaced.
-    """
-    from .camera import Camera
-    from .pipeline import prepare_decoding
 
-    camera = Camera.from_toml_string(camera_toml, source="batch camera")
-    return prepare_decoding(camera, calib, white, interpolation=decode_interpolation, demosaic_method=demosaic)
+def setup_key(job: Job) -> tuple:
+    """What a decode setup depends on. The grid and white files' sizes and times are part of it, so a
+    long-lived Dask worker recalibrates when the white image or grid file is replaced."""
+    return (job.camera_toml, job.calib, job.white, job.decode_interpolation, job.demosaic,
+            json.dumps([file_stamp(job.calib), file_stamp(job.white)]))
 
 
 def decode_setup(job: Job):
-    """The (per-process cached) :class:`lfproc.pipeline.DecodeSetup` of a job."""
-    stamps = json.dumps([file_stamp(job.calib), file_stamp(job.white)])
-    return _decode_setup(job.camera_toml, job.calib, job.white, job.decode_interpolation, job.demosaic, stamps)
+    """The :class:`lfproc.pipeline.DecodeSetup` of a job: one calibration per process, reused for all its
+    captures (and handed to local pool processes ready-made, see :func:`run_local`)."""
+    key = setup_key(job)
+    setup = _SETUP_CACHE.get(key)
+    if setup is None:
+        from .camera import Camera
+        from .pipeline import prepare_decoding
+
+        camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
+        setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
+                                 demosaic_method=job.demosaic)
+        while len(_SETUP_CACHE) >= _SETUP_CACHE_SIZE:
+            _SETUP_CACHE.pop(next(iter(_SETUP_CACHE)))
+        _SETUP_CACHE[key] = setup
+    return setup
+
+
+def _portable_setups(jobs: list[Job]) -> dict:
+    """This process's setups for ``jobs``, without their per-shape decoders (cheap to rebuild), to pickle."""
+    import dataclasses
+
+    keys = {setup_key(job) for job in jobs}
+    return {key: dataclasses.replace(setup, _decoders={}) for key, setup in _SETUP_CACHE.items() if key in keys}
 
 
 def run_job(job: Job) -> JobResult:
@@ -186,12 +203,14 @@ def run_job(job: Job) -> JobResult:
                          time.perf_counter() - start)
 
 
-def init_pool_worker() -> None:
-    """Set up a local pool process: one thread for numba and OpenCV (parallelism comes from the
-    processes), and Ctrl-C left to the parent, which lets the captures in progress finish."""
+def init_pool_worker(setups: dict | None = None) -> None:
+    """Set up a local pool process: the parent's decode setups (no second calibration), one thread for
+    numba and OpenCV (parallelism comes from the processes), and Ctrl-C left to the parent, which lets
+    the captures in progress finish."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _SETUP_CACHE.update(setups or {})
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # read when numba is first imported, later in run_job
     try:
         import cv2
@@ -311,10 +330,12 @@ def remove_stale_partial_files(outdir: str) -> list[str]:
 def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -> None:
     """Run jobs in ``workers`` processes (in this process if 1), calling ``on_result(job, result)`` as each ends.
 
-    At most ``workers`` captures are in flight, which bounds memory. A worker process that dies (out
-    of memory, killed) breaks the pool: the captures then in flight are suspects and are retried, each
-    alone in a fresh pool (so a capture that kills its worker cannot take others down with it), up to
-    ``max_attempts`` in all, then reported as failed; captures not yet started are not charged.
+    Each pool process starts with this process's decode setups for the jobs (see :func:`decode_setup`),
+    so the white image is calibrated once, not once per process. At most ``workers`` captures are in
+    flight, which bounds memory. A worker process that dies (out of memory, killed) breaks the pool:
+    the captures then in flight are suspects and are retried, each alone in a fresh pool (so a capture
+    that kills its worker cannot take others down with it), up to ``max_attempts`` in all, then
+    reported as failed; captures not yet started are not charged.
 
     On ``KeyboardInterrupt`` no new capture starts; those in progress finish (the pool processes
     ignore Ctrl-C) and are reported, then the interrupt propagates.
@@ -330,6 +351,7 @@ def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -
     queue = deque(jobs)
     attempts = {job.source: 0 for job in jobs}
     context = multiprocessing.get_context("spawn")  # no fork of numba/OpenCV thread pools
+    setups = _portable_setups(jobs)  # calibrated here already (the CLI checks the setup before it starts)
 
     def collect(future, job, suspects):
         try:
@@ -347,7 +369,8 @@ def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -
 
     while queue:
         suspects = []
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=init_pool_worker) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=init_pool_worker,
+                                 initargs=(setups,)) as pool:
             in_flight = {}
             try:
                 while queue or in_flight:
@@ -375,7 +398,7 @@ def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -
                 queue.appendleft(job)
 
 
-def run_dask(jobs: list[Job], scheduler, on_result, allowed_errors: int = 0) -> None:
+def run_dask(jobs: list[Job], scheduler, on_result) -> None:
     """Run one task per capture on a dask.distributed cluster; ``on_result`` is called as tasks finish.
 
     ``scheduler`` is an address (``tcp://host:8786``) or a ``distributed.Client``. Tasks carry only
@@ -400,8 +423,8 @@ def run_dask(jobs: list[Job], scheduler, on_result, allowed_errors: int = 0) -> 
     try:
         by_key = {}
         for job in jobs:
-            future = client.submit(run_job, job, key=f"lfproc-{job.fingerprint()}-{job.stem}", pure=False,
-                                   retries=allowed_errors)
+            # a unique key: two batches of one capture into different OUTDIRs must not share a task
+            future = client.submit(run_job, job, key=f"lfproc-{uuid.uuid4().hex}")
             by_key[future.key] = job
             futures.append(future)
         for future in as_completed(futures):

@@ -117,7 +117,7 @@ def _process(args, jobs, manifest) -> int:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
         batch.decode_setup(todo[0])
     start = time.perf_counter()
-    interrupted = True
+    interrupted = False
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
@@ -136,9 +136,11 @@ def _process(args, jobs, manifest) -> int:
             else:
                 workers = args.workers or batch.default_workers(todo[0].source)
                 batch.run_local(todo, min(workers, len(todo)), on_result)
-        interrupted = False
         # every task has ended: what a killed worker was writing is garbage now
         batch.remove_stale_partial_files(manifest.outdir)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
         summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
                        interrupted=interrupted,
