@@ -3,8 +3,8 @@
 A batch is a list of :class:`Job` — plain, picklable data: one capture and what to make of it. The
 same :func:`run_job` runs in this process, in a local process pool (:func:`run_local`) or on
 dask.distributed workers (:func:`run_dask`); each worker reads its capture and writes its outputs
-itself, atomically (:mod:`lfproc.atomic`), so no image crosses a process boundary and no reader ever
-sees a half-written file.
+itself, atomically (:mod:`lfproc.atomic`), so no capture's pixels cross a process boundary (only the
+calibrated white image, once per local worker process) and no reader ever sees a half-written file.
 
 The manifest ``OUTDIR/lfproc-manifest.json`` (:class:`Manifest`) records, per capture, a fingerprint
 (the capture file's size and modification time, those of the white image and grid file, the camera

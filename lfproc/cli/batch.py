@@ -140,6 +140,8 @@ def _process(args, jobs, manifest) -> int:
         batch.remove_stale_partial_files(manifest.outdir)
     except KeyboardInterrupt:
         interrupted = True
+        if not args.scheduler:  # the local captures in progress have finished: nothing writes any more
+            batch.remove_stale_partial_files(manifest.outdir)
         raise
     finally:
         summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
