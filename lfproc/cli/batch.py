@@ -9,6 +9,7 @@ import sys
 import time
 
 from ..errors import LfprocError
+from .common import add_slice_planning_options
 
 
 def register(sub) -> None:
@@ -27,6 +28,7 @@ def register(sub) -> None:
     p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
     which = p.add_mutually_exclusive_group()
     which.add_argument("--refocus", metavar="LIST", help="refocus parameters a: numbers and ranges START:STOP[:STEP]")
+    add_slice_planning_options(p)
     which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
                        help="the fewest slices whose depths of field cover this range (FAR may be inf)")
     p.add_argument("--views", action="store_true", help="also write every viewpoint image")
@@ -54,7 +56,7 @@ def run(args) -> int:
     from .. import batch
     from ..camera import Camera
     from ..pipeline import unique_stems
-    from .common import parse_depth_range, parse_number_list
+    from .common import slice_parameters
 
     camera = Camera.from_toml(args.camera)
     if not args.calib and not args.white:
@@ -69,11 +71,11 @@ def run(args) -> int:
     if args.workers is not None and args.scheduler:
         raise LfprocError("--workers sizes local processing; with --scheduler the cluster's workers run the "
                           "captures (start them with 'dask worker --nworkers N'): drop one of the two")
-    if args.refocus is not None:
-        a_values = tuple(parse_number_list(args.refocus, "--refocus"))
-    elif args.depth_range is not None:
-        from ..geometry import plan_slices
-        a_values = tuple(float(a) for a in plan_slices(camera, *parse_depth_range(args.depth_range)))
+    if (args.max_gap or args.integer) and args.depth_range is None:
+        raise LfprocError("--max-gap and --integer apply to --depth-range only")
+    if args.refocus is not None or args.depth_range is not None:
+        a_values = tuple(slice_parameters(camera, args.refocus, args.depth_range, None, args.max_gap, args.integer,
+                                          what="--refocus"))
     else:
         a_values = ()
     sources = batch.expand_inputs(args.inputs)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 
 from ..atomic import json_safe
 from ..errors import LfprocError
@@ -60,3 +61,31 @@ def parse_depth_range(text: str) -> tuple[float, float]:
 def dumps_strict(obj, **kwargs) -> str:
     """Strict JSON at full double precision; infinity becomes ``null``."""
     return json.dumps(json_safe(obj), allow_nan=False, **kwargs)
+
+
+def add_slice_planning_options(p) -> None:
+    """``--max-gap`` and ``--integer``: compute fewer or cheaper slices for a ``--depth-range``."""
+    p.add_argument("--max-gap", type=float, default=0.0, metavar="MM",
+                   help="with --depth-range: allow uncovered depths up to MM between slices (fewer slices)")
+    p.add_argument("--integer", action="store_true",
+                   help="with --depth-range: integer a only (fastest slices; may leave gaps, which are listed)")
+
+
+def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
+                     integer=False, what: str = "--a") -> list[float]:
+    """The refocus parameters one of --a, --depth-range or --at asks for (holes reported on stderr)."""
+    from .. import geometry
+
+    if a_list is not None:
+        return parse_number_list(a_list, what)
+    if depth_range is not None:
+        near, far = parse_depth_range(depth_range)
+        a_values = geometry.plan_slices(camera, near, far, max_gap_mm=max_gap_mm, integer=integer)
+        holes = geometry.uncovered_depths(camera, a_values, near, far)
+        if holes:
+            listed = ", ".join(f"{lo:.1f}..{hi:.1f}" for lo, hi in holes)
+            print(f"lfproc: note: no slice is in focus at {listed} mm", file=sys.stderr)
+        return [float(a) for a in a_values]
+    if at_mm is None or math.isnan(at_mm):
+        raise LfprocError("give one of --a, --depth-range or --at")
+    return [float(geometry.refocus_parameter(camera, at_mm))]

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import math
 import os
-import sys
 
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, for_each_capture, setup_from_args
-from .common import parse_depth_range, parse_number_list
+from .common import add_slice_planning_options, slice_parameters
 
 
 def register(sub) -> None:
@@ -23,10 +21,7 @@ def register(sub) -> None:
     which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
                        help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
     which.add_argument("--at", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance")
-    p.add_argument("--max-gap", type=float, default=0.0, metavar="MM",
-                   help="with --depth-range: allow uncovered depths up to MM between slices (fewer slices)")
-    p.add_argument("--integer", action="store_true",
-                   help="with --depth-range: integer a only (fastest slices; may leave gaps, which are listed)")
+    add_slice_planning_options(p)
     p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"),
                    help="tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, exr")
@@ -34,26 +29,6 @@ def register(sub) -> None:
                    help="interpolation between lenses for real a (default linear)")
     p.add_argument("--upsample", type=int, default=1, help="spatial upsampling factor of the slices (default 1)")
     p.set_defaults(func=run)
-
-
-def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
-                     integer=False) -> list[float]:
-    """The refocus parameters one of --a, --depth-range or --at asks for (holes reported on stderr)."""
-    from .. import geometry
-
-    if a_list is not None:
-        return parse_number_list(a_list, "--a")
-    if depth_range is not None:
-        near, far = parse_depth_range(depth_range)
-        a_values = geometry.plan_slices(camera, near, far, max_gap_mm=max_gap_mm, integer=integer)
-        holes = geometry.uncovered_depths(camera, a_values, near, far)
-        if holes:
-            listed = ", ".join(f"{lo:.1f}..{hi:.1f}" for lo, hi in holes)
-            print(f"lfproc refocus: note: no slice is in focus at {listed} mm", file=sys.stderr)
-        return [float(a) for a in a_values]
-    if at_mm is None or math.isnan(at_mm):
-        raise LfprocError("give one of --a, --depth-range or --at")
-    return [float(geometry.refocus_parameter(camera, at_mm))]
 
 
 def run(args) -> int:
