@@ -164,19 +164,29 @@ def hex_to_rect(views: np.ndarray, grid: LensGrid) -> tuple[np.ndarray, LensGrid
         raise LfprocError("a hexagonal light field needs at least 2 lens rows and columns to resample")
     ratio = 1.0 / (math.sqrt(3.0) / 2.0)                 # hexagonal rows per rectangular row
     n_rect_rows = int(math.floor((rows - 1) / ratio + 1e-9)) + 1
+    # Row by row into the one output array, through two small reused scratch rows: on large light
+    # fields the cost is dominated by first touches of freshly allocated memory, not by arithmetic.
     out = np.empty(views.shape[:2] + (n_rect_rows, cols - 1, views.shape[4]), dtype=np.float32)
-    q = np.arange(cols - 1)
+    upper = np.empty(views.shape[:2] + (cols - 1, views.shape[4]), dtype=np.float32)
+    lower = np.empty_like(upper)
+
+    def row_on_columns(r, dst):
+        """Hexagonal row r read at the rectangular columns (Q + ½)·p."""
+        if r % 2 == 0:   # lenses at q·p: half-way between lenses Q and Q + 1
+            np.add(views[:, :, r, :-1], views[:, :, r, 1:], out=dst)
+            dst *= np.float32(0.5)
+        else:            # lenses at (q + ½)·p: exactly on lens Q
+            dst[...] = views[:, :, r, :-1]
+
     for big_r in range(n_rect_rows):
-        rho = big_r * ratio
-        r0 = min(int(math.floor(rho)), rows - 2)
+        rho = big_r * ratio  # rectangular row R sits at hexagonal row coordinate R·2/√3
+        r0 = min(int(math.floor(rho + 1e-9)), rows - 2)
         t = np.float32(rho - r0)
-        row_vals = []
-        for r in (r0, r0 + 1):
-            if r % 2 == 0:   # lenses at q·p: the target (Q + ½)·p is half-way between Q and Q + 1
-                row_vals.append(0.5 * (views[:, :, r, q] + views[:, :, r, q + 1]))
-            else:            # lenses at (q + ½)·p: exactly on lens Q
-                row_vals.append(views[:, :, r, q])
-        out[:, :, big_r] = (1 - t) * row_vals[0] + t * row_vals[1]
+        row_on_columns(r0, upper)
+        row_on_columns(r0 + 1, lower)
+        np.multiply(upper, 1 - t, out=out[:, :, big_r])
+        lower *= t
+        out[:, :, big_r] += lower
     u, v = grid.axes
     origin = np.asarray(grid.origin_xy_px) + 0.5 * grid.pitch_px * u
     rect = LensGrid("rectangular", grid.pitch_px, grid.rotation_deg, tuple(origin), n_rect_rows, cols - 1,
