@@ -33,6 +33,7 @@ from dataclasses import dataclass, fields
 
 from .atomic import write_json_atomic
 from .errors import LfprocError
+from .io import sidecar_path
 
 MANIFEST_NAME = "lfproc-manifest.json"
 MANIFEST_VERSION = 1
@@ -103,11 +104,6 @@ def file_stamp(path: str | None) -> list | None:
         return [path, st.st_size, st.st_mtime_ns]
     except OSError:
         return [path, None, None]
-
-
-def sidecar_path(image_path: str) -> str:
-    """The contract's sidecar of an output image: ``NAME.EXT`` -> ``NAME.json``."""
-    return os.path.splitext(image_path)[0] + ".json"
 
 
 def expand_inputs(inputs: list[str]) -> list[str]:
