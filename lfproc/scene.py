@@ -44,6 +44,13 @@ KIND_UNIFORM, KIND_CHECKER, KIND_SINUSOID, KIND_NOISE, KIND_IMAGE = range(5)
 
 
 # ---------------------------------------------------------------------------- textures
+class _LowHigh:
+    """Textures whose value t in [0, 1] maps to ``low + (high − low)·t``."""
+
+    def levels(self) -> tuple[float, float]:
+        return float(self.low), float(self.high)
+
+
 @dataclass(frozen=True)
 class Uniform:
     """A constant radiance ``value``."""
@@ -59,7 +66,7 @@ class Uniform:
 
 
 @dataclass(frozen=True)
-class Checkerboard:
+class Checkerboard(_LowHigh):
     """Checkerboard of period ``period_mm`` (squares of side ``period_mm / 2``); the square at the origin's
     upper-right quadrant (0 ≤ x, y < period/2) is ``low``."""
 
@@ -72,12 +79,9 @@ class Checkerboard:
         _check_positive(self.period_mm, "period_mm")
         _check_levels(self.low, self.high)
 
-    def levels(self):
-        return float(self.low), float(self.high)
-
 
 @dataclass(frozen=True)
-class Sinusoid:
+class Sinusoid(_LowHigh):
     """Sinusoidal grating of period ``period_mm`` whose stripes run across the direction ``angle_deg``
     (from +x towards +y); ``phase_deg`` shifts it."""
 
@@ -94,12 +98,9 @@ class Sinusoid:
         _check_finite(self.phase_deg, "phase_deg")
         _check_levels(self.low, self.high)
 
-    def levels(self):
-        return float(self.low), float(self.high)
-
 
 @dataclass(frozen=True)
-class Noise:
+class Noise(_LowHigh):
     """Band-limited random texture: value noise with lattice spacing ``feature_mm`` (see the module docstring)."""
 
     feature_mm: float
@@ -114,12 +115,9 @@ class Noise:
             raise LfprocError(f"noise seed must be an integer in [0, 2^31), got {self.seed!r}")
         _check_levels(self.low, self.high)
 
-    def levels(self):
-        return float(self.low), float(self.high)
-
 
 @dataclass(frozen=True, eq=False)
-class ImageTexture:
+class ImageTexture(_LowHigh):
     """An RGB image (``pixels`` shaped (h, w, 3), linear float in [0, 1]) mapped onto ``width_mm``.
 
     Row 0 of the image is at the smallest y (top of the upright picture), column 0 at the smallest x.
@@ -146,9 +144,6 @@ class ImageTexture:
     def height_mm(self) -> float:
         h, w = self.pixels.shape[:2]
         return self.width_mm * h / w
-
-    def levels(self):
-        return float(self.low), float(self.high)
 
 
 TEXTURES = {"uniform": Uniform, "checkerboard": Checkerboard, "sinusoid": Sinusoid, "grating": Sinusoid,
