@@ -50,7 +50,11 @@ class LightField:
         """Wrap an array shaped ``(m̂, m̂, Ny, Nx, C)``; it is converted to float32 (no copy if it already is)."""
         arr = np.asarray(views)
         if arr.dtype != np.float32:
-            arr = arr.astype(np.float32)
+            source = arr
+            with np.errstate(over="ignore"):
+                arr = arr.astype(np.float32)
+            if np.issubdtype(source.dtype, np.floating) and not np.isfinite(arr).all() and np.isfinite(source).all():
+                raise LfprocError("light field values exceed the float32 range (|x| > 3.4e38); rescale them first")
         return cls(np.ascontiguousarray(arr), camera, grid)
 
     @property

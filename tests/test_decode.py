@@ -115,3 +115,12 @@ def test_size_mismatch_and_bad_options():
         decode(np.ones((6, 6), np.float32), np.zeros((6, 6), np.float32), grid, 3)
     with pytest.raises(LfprocError, match="odd"):
         decode(np.ones((6, 6), np.float32), np.ones((6, 6), np.float32), grid, 4)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_non_finite_captures_are_refused(bad):
+    grid = aligned_grid(3, 2, 2)
+    sensor = np.ones((6, 6), np.float32)
+    sensor[2, 3] = bad
+    with pytest.raises(LfprocError, match="NaN or infinite"):
+        decode(sensor, np.ones((6, 6), np.float32), grid, 3)
