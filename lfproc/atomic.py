@@ -7,21 +7,14 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import math
-import tempfile
+import os
+import uuid
 from collections.abc import Mapping
 
 import numpy as np
 
-
-def _current_umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-_UMASK = _current_umask()
+from .errors import LfprocError
 
 
 @contextlib.contextmanager
@@ -33,21 +26,37 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None):
     """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
     if suffix is None:
         suffix = os.path.splitext(path)[1]
     tmp = None
     try:  # everything from the creation on, so an interrupt at any point leaves no temporary file
-        fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part" + suffix, dir=folder)
-        os.close(fd)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; outputs get the usual permissions
+        try:
+            os.makedirs(folder, exist_ok=True)
+            tmp = _create_temporary(folder, "." + os.path.basename(path) + ".", ".part" + suffix)
+        except OSError as exc:
+            raise LfprocError(f"{path}: cannot write there ({exc.strerror or exc}); check the output folder") from None
         yield tmp
-        os.replace(tmp, path)
+        try:
+            os.replace(tmp, path)
+        except OSError as exc:
+            raise LfprocError(f"{path}: cannot write there ({exc.strerror or exc}); check the output path") from None
     except BaseException:
         if tmp is not None:
             with contextlib.suppress(FileNotFoundError):
                 os.remove(tmp)
         raise
+
+
+def _create_temporary(folder: str, prefix: str, suffix: str) -> str:
+    """Create an empty file with a random name; mode 0666 less the process umask, like any output."""
+    for _ in range(100):
+        candidate = os.path.join(folder, f"{prefix}{uuid.uuid4().hex[:12]}{suffix}")
+        try:
+            os.close(os.open(candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            return candidate
+        except FileExistsError:
+            continue
+    raise FileExistsError(f"no free temporary name in {folder}")
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> None:

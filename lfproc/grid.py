@@ -50,7 +50,17 @@ class LensGrid:
     def __post_init__(self):
         if self.kind not in ROW_SPACING:
             raise LfprocError(f"unknown grid kind {self.kind!r}; use rectangular or hexagonal")
-        object.__setattr__(self, "origin_xy_px", (float(self.origin_xy_px[0]), float(self.origin_xy_px[1])))
+        origin = (float(self.origin_xy_px[0]), float(self.origin_xy_px[1]))
+        if not (math.isfinite(self.pitch_px) and self.pitch_px > 0):
+            raise LfprocError(f"grid pitch_px must be a finite positive number of pixels, got {self.pitch_px}")
+        if not (math.isfinite(self.rotation_deg) and all(math.isfinite(v) for v in origin)):
+            raise LfprocError("grid rotation_deg and origin_xy_px must be finite numbers")
+        for name in ("rows", "cols"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not float(value).is_integer() or value < 1:
+                raise LfprocError(f"grid {name} must be a whole number >= 1, got {value}")
+            object.__setattr__(self, name, int(value))
+        object.__setattr__(self, "origin_xy_px", origin)
 
     @property
     def axes(self) -> tuple[np.ndarray, np.ndarray]:
@@ -100,8 +110,10 @@ class LensGrid:
             return cls(kind=str(data["grid"]), pitch_px=float(data["pitch_px"]),
                        rotation_deg=float(data["rotation_deg"]),
                        origin_xy_px=tuple(float(v) for v in data["origin_xy_px"]),
-                       rows=int(data["rows"]), cols=int(data["cols"]),
+                       rows=float(data["rows"]), cols=float(data["cols"]),
                        residual_rms_px=float(data.get("residual_rms_px", 0.0)))
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise LfprocError(f"{source}: not a grid file written by 'lfproc calibrate' ({exc!r}); "
                               f"run lfproc calibrate again") from None
+        except LfprocError as exc:
+            raise LfprocError(f"{source}: {exc}; run lfproc calibrate again") from None
