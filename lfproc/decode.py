@@ -116,12 +116,20 @@ def to_channels(image: np.ndarray, cfa: str, method: str) -> np.ndarray:
     raise LfprocError(f"a sensor image must be 2-D or (H, W, C), got shape {data.shape}")
 
 
+def remap_maps(grid: LensGrid, m_hat: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The float32 ``cv2.remap`` maps of every view row ky, each ``(m̂·rows, cols)`` (see :func:`sample_positions`)."""
+    x, y = sample_positions(grid, m_hat)
+    shape = (m_hat * grid.rows, grid.cols)
+    return [(x[ky].reshape(shape).astype(np.float32), y[ky].reshape(shape).astype(np.float32))
+            for ky in range(m_hat)]
+
+
 def resample_views(image: np.ndarray, grid: LensGrid, m_hat: int, interpolation: str = "linear",
-                   positions: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                   maps: list | None = None) -> np.ndarray:
     """Read an ``(H, W, C)`` image at the sample positions: ``(m̂, m̂, rows, cols, C)`` float32.
 
-    Positions outside the image read 0. One ``cv2.remap`` per view row (OpenCV limits image sides
-    to 32767 pixels, which the whole map would exceed for large sensors).
+    Positions outside the image read 0. One ``cv2.remap`` per view row and block of lens rows
+    (OpenCV limits every image side, maps included, to 32767 pixels).
     """
     if interpolation not in INTERPOLATIONS:
         raise LfprocError(f"unknown interpolation {interpolation!r}; use one of {', '.join(INTERPOLATIONS)}")
@@ -129,20 +137,23 @@ def resample_views(image: np.ndarray, grid: LensGrid, m_hat: int, interpolation:
     flag = {"nearest": cv2.INTER_NEAREST, "linear": cv2.INTER_LINEAR, "cubic": cv2.INTER_CUBIC,
             "lanczos": cv2.INTER_LANCZOS4}[interpolation]
     h, w, channels = image.shape
-    if max(h, w) >= _CV_MAX_SIZE:
-        raise LfprocError(f"sensor image {w}x{h} is larger than OpenCV's remap limit of {_CV_MAX_SIZE} px")
-    x, y = positions if positions is not None else sample_positions(grid, m_hat)
+    if max(h, w, grid.cols) >= _CV_MAX_SIZE:
+        raise LfprocError(f"sensor image {w}x{h} ({grid.cols} lens columns) is beyond OpenCV's remap limit of "
+                          f"{_CV_MAX_SIZE} px")
+    maps = maps if maps is not None else remap_maps(grid, m_hat)
     out = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
     src = np.ascontiguousarray(image, dtype=np.float32)
-    for ky in range(m_hat):
-        map_x = x[ky].reshape(m_hat * grid.rows, grid.cols).astype(np.float32)
-        map_y = y[ky].reshape(m_hat * grid.rows, grid.cols).astype(np.float32)
-        for ch0 in range(0, channels, 4):  # remap handles up to 4 channels at once
-            ch1 = min(ch0 + 4, channels)
-            block = src[:, :, ch0:ch1] if channels > 1 else src[:, :, 0]
-            res = cv2.remap(np.ascontiguousarray(block), map_x, map_y, flag, borderMode=cv2.BORDER_CONSTANT,
-                            borderValue=0)
-            out[ky, :, :, :, ch0:ch1] = res.reshape(m_hat, grid.rows, grid.cols, ch1 - ch0)
+    flat = out.reshape(m_hat, m_hat * grid.rows, grid.cols, channels)  # a view: rows (kx, r) of view row ky
+    block = _CV_MAX_SIZE - 1
+    for ky, (map_x, map_y) in enumerate(maps):
+        for r0 in range(0, map_x.shape[0], block):
+            r1 = min(r0 + block, map_x.shape[0])
+            for ch0 in range(0, channels, 4):  # remap handles up to 4 channels at once
+                ch1 = min(ch0 + 4, channels)
+                plane = np.ascontiguousarray(src[:, :, ch0:ch1] if channels > 1 else src[:, :, 0])
+                res = cv2.remap(plane, map_x[r0:r1], map_y[r0:r1], flag, borderMode=cv2.BORDER_CONSTANT,
+                                borderValue=0)
+                flat[ky, r0:r1, :, ch0:ch1] = res.reshape(r1 - r0, grid.cols, ch1 - ch0)
     return out
 
 
@@ -209,28 +220,32 @@ class Decoder:
     cfa: str
     interpolation: str
     demosaic_method: str
-    positions: tuple
-    white_views: np.ndarray      # (m̂, m̂, rows, cols, C) resampled white image
-    inverse_white: np.ndarray    # 1 / white_views where it carries signal, else 0
-    dark_fraction: float
+    sensor_shape: tuple          # (H, W) of the white image, which every capture must share
+    channels: int
+    maps: list                   # float32 remap maps per view row, computed once
+    inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C): 1 / white views where they carry signal, else 0
+    output_grid: LensGrid        # lens positions of the decoded light field (rectangular, also for hex input)
 
-    @property
-    def output_grid(self) -> LensGrid:
-        """Lens positions of the decoded light field (rectangular, also for hexagonal input)."""
-        if self.grid.kind != "hexagonal":
-            return self.grid
-        return hex_to_rect(self.white_views[:1, :1], self.grid)[1]
+    def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
+        """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
 
-    def __call__(self, sensor: np.ndarray) -> np.ndarray:
-        """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image (same size and CFA as the white)."""
-        if np.issubdtype(np.asarray(sensor).dtype, np.floating) and not np.all(np.isfinite(sensor)):
+        ``cfa`` is the capture's colour filter when known: it must be the white image's.
+        """
+        sensor = np.asarray(sensor)
+        if sensor.shape[:2] != self.sensor_shape:
+            raise LfprocError(f"capture is {sensor.shape[1]}x{sensor.shape[0]} px but the white image is "
+                              f"{self.sensor_shape[1]}x{self.sensor_shape[0]}; use the white image of the same camera")
+        if cfa is not None and cfa != self.cfa and sensor.ndim == 2:
+            raise LfprocError(f"capture has colour filter {cfa} but the white image has {self.cfa}; "
+                              f"use a white image of the same camera and mode")
+        if np.issubdtype(sensor.dtype, np.floating) and not np.all(np.isfinite(sensor)):
             raise LfprocError("the capture contains NaN or infinite pixels; replace them (e.g. numpy.nan_to_num) "
                               "before decoding")
         image = to_channels(sensor, self.cfa, self.demosaic_method)
-        if image.shape[-1] != self.white_views.shape[-1]:
-            raise LfprocError(f"capture has {image.shape[-1]} channels but the white image has "
-                              f"{self.white_views.shape[-1]}; use a white image taken with the same camera settings")
-        views = resample_views(image, self.grid, self.m_hat, self.interpolation, self.positions)
+        if image.shape[-1] != self.channels:
+            raise LfprocError(f"capture has {image.shape[-1]} channels but the white image has {self.channels}; "
+                              f"use a white image taken with the same camera settings")
+        views = resample_views(image, self.grid, self.m_hat, self.interpolation, self.maps)
         views *= self.inverse_white
         if self.grid.kind == "hexagonal":
             views, _ = hex_to_rect(views, self.grid)
@@ -240,7 +255,7 @@ class Decoder:
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
                  interpolation: str = "linear", demosaic_method: str = "fast",
                  dark_fraction: float = 0.05) -> Decoder:
-    """Prepare a :class:`Decoder`: sample positions and the white image's views, computed once.
+    """Prepare a :class:`Decoder`: remap maps and the white image's inverse views, computed once.
 
     Parameters
     ----------
@@ -261,23 +276,22 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     white_img = to_channels(white, cfa, demosaic_method)
-    positions = sample_positions(grid, m_hat)
-    white_views = resample_views(white_img, grid, m_hat, interpolation, positions)
+    maps = remap_maps(grid, m_hat)
+    white_views = resample_views(white_img, grid, m_hat, interpolation, maps)
     bright = float(np.percentile(white_views, 99)) if white_views.size else 0.0
     if not bright > 0:
         raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
     signal = white_views > dark_fraction * bright
-    inverse = np.zeros_like(white_views)
+    inverse = white_views  # in place: the white views themselves are not needed afterwards
     np.divide(1.0, white_views, out=inverse, where=signal)
-    return Decoder(grid, int(m_hat), cfa, interpolation, demosaic_method, positions, white_views, inverse,
-                   float(dark_fraction))
+    inverse[~signal] = 0.0
+    output_grid = hex_to_rect(inverse[:1, :1], grid)[1] if grid.kind == "hexagonal" else grid
+    return Decoder(grid, int(m_hat), cfa, interpolation, demosaic_method, tuple(np.shape(white)[:2]),
+                   int(white_img.shape[-1]), maps, inverse, output_grid)
 
 
 def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):
     """Decode one sensor image into views ``(m̂, m̂, Ny, Nx, C)``; see :func:`make_decoder` for options."""
-    if np.shape(sensor)[:2] != np.shape(white)[:2]:
-        raise LfprocError(f"capture is {np.shape(sensor)[1]}x{np.shape(sensor)[0]} px but the white image is "
-                          f"{np.shape(white)[1]}x{np.shape(white)[0]}; use the white image of the same camera")
     return make_decoder(white, grid, m_hat, cfa, **options)(sensor)
 
 
@@ -285,10 +299,9 @@ def decode_capture(capture, white, grid: LensGrid, camera, **options):
     """Decode a :class:`lfproc.io.Capture` with its white image into a :class:`~lfproc.LightField`."""
     from .lightfield import LightField
 
-    if capture.data.shape[:2] != white.data.shape[:2]:
-        raise LfprocError(f"{capture.source} is {capture.data.shape[1]}x{capture.data.shape[0]} px but the white "
-                          f"image {white.source} is {white.data.shape[1]}x{white.data.shape[0]}; "
-                          f"use the white image of the same camera")
     decoder = make_decoder(white.data, grid, camera.m_hat, white.cfa, **options)
-    return LightField.from_views(decoder(capture.data), camera, decoder.output_grid)
-
+    try:
+        views = decoder(capture.data, capture.cfa)
+    except LfprocError as exc:
+        raise LfprocError(f"{capture.source}: {exc}") from None
+    return LightField.from_views(views, camera, decoder.output_grid)

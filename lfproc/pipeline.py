@@ -33,15 +33,19 @@ class DecodeSetup:
     _decoders: dict = field(default_factory=dict, repr=False)
 
     def decoder_for(self, shape: tuple, cfa: str):
-        """The (cached) decoder for captures of this sensor shape and CFA."""
+        """The (cached) decoder for captures of this sensor shape and CFA.
+
+        With a white image there is one decoder (it rejects captures of another size or CFA);
+        without one, a flat white of each capture's shape stands in.
+        """
         from .decode import make_decoder
 
-        key = (tuple(shape[:2]), cfa)
+        key = "white" if self.white is not None else (tuple(shape[:2]), cfa)
         if key not in self._decoders:
             if self.white is not None:
                 white, white_cfa = self.white.data, self.white.cfa
             else:
-                white, white_cfa = np.ones(shape, np.float32), cfa
+                white, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
             self._decoders[key] = make_decoder(white, self.grid, self.camera.m_hat, white_cfa,
                                                interpolation=self.interpolation,
                                                demosaic_method=self.demosaic_method)
@@ -96,16 +100,9 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
     from .io import read_capture
 
     capture = read_capture(path, setup.camera)
-    if setup.white is not None and capture.data.shape[:2] != setup.white.data.shape[:2]:
-        raise LfprocError(f"{path} is {capture.data.shape[1]}x{capture.data.shape[0]} px but the white image "
-                          f"{setup.white.source} is {setup.white.data.shape[1]}x{setup.white.data.shape[0]}; "
-                          f"use the white image of the same camera")
-    if setup.white is not None and capture.cfa != setup.white.cfa:
-        raise LfprocError(f"{path} has colour filter {capture.cfa} but the white image has {setup.white.cfa}; "
-                          f"use a white image of the same camera and mode")
     decoder = setup.decoder_for(capture.data.shape, capture.cfa)
     try:
-        views = decoder(capture.data)
+        views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{path}: {exc}") from None
     return LightField.from_views(views, setup.camera, decoder.output_grid)

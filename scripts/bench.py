@@ -322,7 +322,7 @@ def stage_decode_speed(raw: np.ndarray, white: np.ndarray, grid, camera, s: Sett
                                          memory=False).median_s,
     }
     if grid.kind == "hexagonal":
-        raw_views = decoder.white_views   # hexagonal-lattice views, the shape hex_to_rect receives
+        raw_views = decoder.inverse_white   # hexagonal-lattice views, the shape hex_to_rect receives
         components["hex_to_rect_s"] = bl.measure(lambda: hex_to_rect(raw_views, grid), s.cheap_repeats,
                                                  memory=False).median_s
     result = {"sensor_shape": list(raw.shape), "mpx": mpx, "lens_grid": [grid.rows, grid.cols, grid.kind],

@@ -217,3 +217,22 @@ def test_decode_cli_round_trip(capture, tmp_path):
     diff = lf.views[keep] - capture["lf"].views[keep]
     psnr = 10 * np.log10(capture["lf"].views[keep].max() ** 2 / np.mean(diff ** 2))
     assert psnr > 45.0 and np.abs(diff).max() < 0.05
+
+
+def test_rgb_capture_without_white_image_decodes_with_a_warning(capture, tmp_path):
+    """--calib whose recorded white image is gone: an RGB capture decodes (flat white), with a warning."""
+    import warnings
+
+    from lfproc.pipeline import prepare_decoding
+
+    folder, cam = capture["folder"], capture["camera"]
+    grid_json = dict(capture["sim"].grid.to_json_dict(), white_image=str(tmp_path / "gone.png"))
+    (tmp_path / "grid.json").write_text(json.dumps(grid_json))
+    rgb = np.repeat(capture["sim"].raw[:, :, None], 3, axis=2)
+    write_image(tmp_path / "rgb.tif", rgb)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        setup = prepare_decoding(cam, calib=str(tmp_path / "grid.json"))
+    assert any("devignetting" in str(w.message) for w in caught)
+    lf = load_lightfield(str(tmp_path / "rgb.tif"), setup)
+    assert lf.views.shape[-1] == 3 and np.all(np.isfinite(lf.views))
