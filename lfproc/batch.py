@@ -296,7 +296,11 @@ def lock_outdir(outdir: str):
     import fcntl
 
     path = os.path.join(outdir, LOCK_NAME)
-    with open(path, "a+", encoding="utf-8") as fh:
+    try:
+        fh = open(path, "a+", encoding="utf-8")
+    except OSError as exc:
+        raise LfprocError(f"{outdir}: cannot write in the output folder ({exc.strerror}); check -o OUTDIR") from None
+    with fh:
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:

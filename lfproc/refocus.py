@@ -1,6 +1,6 @@
 """Shift-and-sum refocusing (the paper's Eq. 9, centred), with numba kernels that read the views once.
 
-Semantics (contract, ``docs``/ARCHITECTURE): for a light field ``views[ky, kx, jy, jx, ch]`` with m̂ × m̂
+Semantics (the interface contract, ARCHITECTURE.md): for a light field ``views[ky, kx, jy, jx, ch]`` with m̂ × m̂
 views and central index c = (m̂ − 1)/2, the slice of parameter ``a`` is ::
 
     out[jy, jx] = mean over (ky, kx) of views[ky, kx, jy + a·(c − ky), jx + a·(c − kx)]
@@ -28,7 +28,8 @@ Interpolation (for positions between lenses; whole-lens positions read the lens 
     share a call with real ones take single unit-weight taps there, still without multiplications.
 Precision
     Views are read in their own dtype (float32, float64 and uint16 without any copy; 8-bit integers,
-    float16 and bool are converted to float32 first, other integers to float64). The m̂ views of one
+    float16 and bool are converted to float32 first, other integers and floats wider than 64 bits
+    (longdouble) to float64). The m̂ views of one
     view row are summed into a float32 row (float64 for float64 views) — exact for gathers of uint16
     data, whose sums of up to 256 views stay below 2**24 — and the view rows into float64 accumulators,
     so uint16 data near 65535 never overflows and hundreds of views lose nothing. The result is float32.
@@ -37,6 +38,8 @@ Non-finite input
     in float64. Otherwise non-finite input is not scanned up front (that would cost a full extra pass
     over the data). NaN or ±inf pixels that reach a slice make that slice non-finite, which is detected on the (m̂² times smaller) output and
     raised as :class:`~lfproc.errors.LfprocError`; non-finite pixels that no sample reads are harmless.
+    Finite float64 (or wider) views beyond the float32 range give a non-finite float32 result: that is
+    reported as such (rescale the views), not as NaN input.
 
 Performance: one call makes one pass over the views for all requested slices. Output rows are split
 into bands; each band is one call of a numba kernel (``cache=True``, ``nogil=True``) and the bands run
@@ -77,6 +80,10 @@ NATIVE_DTYPES = (np.dtype(np.float32), np.dtype(np.float64), np.dtype(np.uint16)
 #: float32 partial sums add half as much again): L2/L3-resident
 ACCUMULATOR_BUDGET_BYTES = 4 << 20
 
+#: the largest output (K·Ny'·Nx'·C float32 values) one call may produce, in bytes; an ``upsample`` that
+#: needs more raises LfprocError instead of running out of memory
+MAX_OUTPUT_BYTES = 16 << 30
+
 #: lower bound on band height, so that many slices in one call do not shrink bands to a few rows
 #: (each band also reads the rows its slices' shifts add on top: the shorter the band, the more)
 MIN_BAND_ROWS = 8
@@ -99,7 +106,8 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         ``upsample = 1``, which is a pure gather.
     upsample : int, optional
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
-        position (py/s, px/s). ``1`` (default) is the lens grid itself.
+        position (py/s, px/s). ``1`` (default) is the lens grid itself. The output of the call (all K
+        slices) may take at most :data:`MAX_OUTPUT_BYTES` (16 GiB).
 
     Returns
     -------
@@ -109,14 +117,16 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
     Raises
     ------
     LfprocError
-        Empty or non-finite ``a``, unknown ``interpolation``, bad ``upsample``, a malformed light field,
-        or non-finite pixels that reach a slice.
+        Empty or non-finite ``a``, unknown ``interpolation``, bad ``upsample`` (or an output above
+        :data:`MAX_OUTPUT_BYTES`), a malformed light field, non-finite pixels that reach a slice, or
+        finite float64 values beyond the float32 range.
     """
     views = _views_array(lf)
     slopes, scalar = _slopes(a)
     interpolation = _interpolation(interpolation)
     upsample = _upsample(upsample)
     m, _, ny, nx, channels = views.shape
+    _check_output_size(len(slopes), ny, nx, channels, upsample)
     plan_y = axis_plan(slopes, m, ny, upsample, interpolation)
     plan_x = axis_plan(slopes, m, nx, upsample, interpolation)
     out = _render(views, plan_y, plan_x, upsample)
@@ -128,6 +138,10 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
     if bad.any():
         first_bad = slopes[int(np.argmax(bad))]
+        if views.dtype == np.float64 and np.isfinite(views).all():
+            raise LfprocError(f"light field values exceed the float32 range; rescale them (largest magnitude "
+                              f"{float(np.abs(views).max()):.3g}, e.g. divide by it) before refocusing "
+                              f"(slice a={first_bad:g})")
         raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={first_bad:g}; "
                           "replace them (e.g. numpy.nan_to_num) before refocusing")
     out = out.reshape(len(slopes), plan_y.count.shape[1], plan_x.count.shape[1], channels)
@@ -150,11 +164,22 @@ def _views_array(lf) -> np.ndarray:
         pass
     elif kind in "iu":
         views = views.astype(np.float32 if views.dtype.itemsize == 1 else np.float64)
+    elif kind == "f" and views.dtype.itemsize > 8:
+        views = views.astype(np.float64)      # longdouble: keep the precision float64 can hold
     elif kind in "fb":
         views = views.astype(np.float32)
     else:
         raise LfprocError(f"refocus needs real-valued views, got dtype {views.dtype}; convert to float32")
     return np.ascontiguousarray(views)
+
+
+def _check_output_size(n_slices: int, ny: int, nx: int, channels: int, upsample: int) -> None:
+    """Refuse outputs above :data:`MAX_OUTPUT_BYTES` before allocating anything."""
+    size = n_slices * ((ny - 1) * upsample + 1) * ((nx - 1) * upsample + 1) * channels * 4
+    if size > MAX_OUTPUT_BYTES:
+        raise LfprocError(f"refocus: upsample={upsample} with {n_slices} slice(s) would produce "
+                          f"{size / 2**30:.1f} GiB of output (limit {MAX_OUTPUT_BYTES / 2**30:g} GiB); "
+                          "use a smaller upsample or fewer a values per call")
 
 
 def _slopes(a) -> tuple[tuple[float, ...], bool]:

@@ -67,8 +67,8 @@ class Uniform:
 
 @dataclass(frozen=True)
 class Checkerboard(_LowHigh):
-    """Checkerboard of period ``period_mm`` (squares of side ``period_mm / 2``); the square at the origin's
-    upper-right quadrant (0 ≤ x, y < period/2) is ``low``."""
+    """Checkerboard of period ``period_mm`` (squares of side ``period_mm / 2``): the square
+    0 ≤ x, y < period/2 (lower-right of the origin, since y grows downward) is ``low``."""
 
     period_mm: float
     low: float = 0.0
@@ -352,8 +352,12 @@ def _parse_render(table, source: str) -> RenderOptions:
             kw["rim_radius_mm"] = _number(rim, f"{where}: rim_radius_mm (a number, \"auto\" or \"none\")")
     if "shot_noise_photons" in table:
         photons = table["shot_noise_photons"]
-        kw["shot_noise_photons"] = None if photons in (False, "none", "off") else \
-            _number(photons, f"{where}: shot_noise_photons")
+        # `photons in (False, ...)` would also match 0 (0 == False): only the literal false turns noise off
+        off = photons is False or (isinstance(photons, str) and photons in ("none", "off"))
+        kw["shot_noise_photons"] = None if off else _number(photons, f"{where}: shot_noise_photons")
+        if not off and kw["shot_noise_photons"] <= 0:
+            raise LfprocError(f"{where}: shot_noise_photons must be a positive number of photons at full scale, "
+                              f"or \"none\", got {photons!r}")
     if "ideal_views" in table:
         if not isinstance(table["ideal_views"], bool):
             raise LfprocError(f"{where}: ideal_views must be true or false")
@@ -421,25 +425,18 @@ def _parse_texture(kind: str, table: dict, where: str, base_dir: str):
 
 
 def read_texture_image(path: str, encoding: str = "srgb") -> np.ndarray:
-    """Read an image file as linear RGB float32 (h, w, 3) in [0, 1] via OpenImageIO.
+    """Read an image file as linear RGB float32 (h, w, 3) >= 0, through :func:`lfproc.io.read_image`.
 
-    Integer files are scaled to [0, 1]; ``encoding="srgb"`` then undoes the sRGB transfer curve.
-    Grey images are replicated to three channels; a fourth (alpha) channel is dropped.
+    Integer files are scaled to [0, 1] (divided by their type's maximum); float files keep their
+    values, so a linear EXR may exceed 1. ``encoding="srgb"`` clips to [0, 1] and undoes the sRGB
+    transfer curve. Grey (and grey + alpha) images are replicated to three channels; channels after
+    the third (alpha) are dropped.
     """
-    import OpenImageIO as oiio
+    from .io import read_image
 
     if not os.path.isfile(path):
         raise LfprocError(f"{path}: texture image not found; check the plane's path (relative to the scene file)")
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise LfprocError(f"{path}: cannot read texture image ({oiio.geterror()}); use a PNG, TIFF or EXR file")
-    try:
-        pixels = inp.read_image(0, 0, 0, -1, oiio.FLOAT)
-    finally:
-        inp.close()
-    if pixels is None:
-        raise LfprocError(f"{path}: cannot decode texture image; use a PNG, TIFF or EXR file")
-    pixels = np.asarray(pixels, dtype=np.float32)
+    pixels = read_image(path)
     if pixels.ndim == 2:
         pixels = pixels[:, :, None]
     channels = pixels.shape[2]

@@ -43,6 +43,9 @@ from .scene import KIND_CHECKER, KIND_IMAGE, KIND_NOISE, KIND_SINUSOID, ImageTex
 
 #: Rec. 709 luminance weights: how an RGB scene is seen by a monochrome sensor
 LUMA_WEIGHTS = (0.2126, 0.7152, 0.0722)
+#: the most photons at full scale that shot noise accepts (numpy's Poisson sampler fails near 1e19;
+#: far beyond it the noise is below one DN anyway)
+MAX_SHOT_NOISE_PHOTONS = 1e12
 _STOP_TOLERANCE = 1.0 + 1e-12  # the same tolerance as geometry.views_inside_aperture
 
 
@@ -108,7 +111,8 @@ def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_de
     pixel_samples, aperture_samples : int
         Stratified samples per axis over each pixel and over each micro lens aperture.
     shot_noise_photons : float or None
-        Photons collected at full scale (Poisson noise); ``None`` = no shot noise.
+        Photons collected at full scale (Poisson noise), at most :data:`MAX_SHOT_NOISE_PHOTONS`;
+        ``None`` = no shot noise.
     read_noise_dn : float
         Standard deviation of Gaussian read noise, in DN.
     exposure : float
@@ -126,8 +130,7 @@ def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_de
     setup = _Setup.build(camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples,
                          aperture_samples)
     _check_noise(shot_noise_photons, read_noise_dn, exposure, seed)
-    if not isinstance(scene, Scene):
-        raise LfprocError(f"scene must be an lfproc.scene.Scene, got {type(scene).__name__}")
+    _check_scene(scene)
     arrays = SceneArrays.build(scene, camera)
     radiance = _render_sensor(setup, arrays, channels=3 if camera.cfa != "none" else 1)
     white_radiance = _render_sensor(setup, SceneArrays.uniform(1.0), channels=1)
@@ -173,11 +176,10 @@ def render_radiance(camera: Camera, scene: Scene | None, sensor_shape, *, rotati
     """
     setup = _Setup.build(camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples,
                          aperture_samples)
+    if scene is not None:
+        _check_scene(scene)
+    channels = _check_channels(channels, camera)
     arrays = SceneArrays.uniform(1.0) if scene is None else SceneArrays.build(scene, camera)
-    if channels is None:
-        channels = 3 if camera.cfa != "none" else 1
-    if channels not in (1, 3):
-        raise LfprocError(f"channels must be 1 or 3, got {channels!r}")
     return _render_sensor(setup, arrays, channels)
 
 
@@ -192,12 +194,13 @@ def render_ideal_views(camera: Camera, scene: Scene, sensor_shape, *, rotation_d
     aperture, and normalised by the rays that pass the stop and the rim, so it is pure scene radiance.
     ``weight`` is the fraction that passed. Where none passed (views outside the stop) the view holds
     the unblocked average instead, so it is never NaN. Hexagonal grids give views at the hexagonal
-    lens centres (the LensGrid's rows × cols).
+    lens centres (the LensGrid's rows × cols). ``channels`` (1 = luminance, :data:`LUMA_WEIGHTS`, or 3)
+    defaults to 3 for a CFA camera and 1 otherwise; anything else raises LfprocError.
     """
     setup = _Setup.build(camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples,
                          aperture_samples)
-    if channels is None:
-        channels = 3 if camera.cfa != "none" else 1
+    _check_scene(scene)
+    channels = _check_channels(channels, camera)
     views, weight = _render_ideal(setup, SceneArrays.build(scene, camera), channels)
     return views, weight, setup.grid
 
@@ -282,7 +285,12 @@ def radiance_to_dn(values: np.ndarray, camera: Camera, exposure: float = 0.8, sh
         rng = np.random.default_rng(0)
     if shot_noise_photons is not None:
         photons = float(shot_noise_photons)
-        signal = rng.poisson(np.clip(signal, 0.0, None) * photons) / photons
+        if not (0.0 < photons <= MAX_SHOT_NOISE_PHOTONS):
+            raise LfprocError(f"shot_noise_photons must be a positive number up to {MAX_SHOT_NOISE_PHOTONS:g} "
+                              f"(or None for no shot noise), got {shot_noise_photons!r}")
+        # clipped so that bright (signal >> 1) pixels stay within the Poisson sampler's range
+        lam = np.clip(signal * photons, 0.0, 1e18)
+        signal = rng.poisson(lam) / photons
     dn = camera.black_level + (camera.white_level - camera.black_level) * signal
     if read_noise_dn:
         dn = dn + rng.normal(0.0, float(read_noise_dn), size=dn.shape)
@@ -456,11 +464,28 @@ def _check_samples(value, what: str) -> int:
     return int(value)
 
 
+def _check_scene(scene) -> None:
+    if not isinstance(scene, Scene):
+        raise LfprocError(f"scene must be an lfproc.scene.Scene, got {type(scene).__name__}; build one with "
+                          f"lfproc.scene.Scene(planes, background) or load_scene_file")
+
+
+def _check_channels(channels, camera: Camera) -> int:
+    """The channel count to render: 3 for a CFA camera and 1 otherwise by default; only 1 or 3 exist."""
+    if channels is None:
+        return 3 if camera.cfa != "none" else 1
+    if isinstance(channels, bool) or not isinstance(channels, (int, np.integer)) or channels not in (1, 3):
+        raise LfprocError(f"channels must be 1 (luminance) or 3 (RGB), got {channels!r}")
+    return int(channels)
+
+
 def _check_noise(shot_noise_photons, read_noise_dn, exposure, seed) -> None:
     def bad(v):
         return isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
-    if shot_noise_photons is not None and (bad(shot_noise_photons) or shot_noise_photons <= 0):
-        raise LfprocError(f"shot_noise_photons must be a positive number or None, got {shot_noise_photons!r}")
+    if shot_noise_photons is not None and (bad(shot_noise_photons) or not
+                                           0 < shot_noise_photons <= MAX_SHOT_NOISE_PHOTONS):
+        raise LfprocError(f"shot_noise_photons must be a positive number up to {MAX_SHOT_NOISE_PHOTONS:g} or None, "
+                          f"got {shot_noise_photons!r}")
     if bad(read_noise_dn) or read_noise_dn < 0:
         raise LfprocError(f"read_noise_dn must be a number >= 0, got {read_noise_dn!r}")
     if bad(exposure) or exposure <= 0:
@@ -575,6 +600,8 @@ def _render_ideal(setup: _Setup, arrays: SceneArrays, channels: int) -> tuple[np
 
 # ============================================================================ numba kernels
 # Compiled on first call and cached on disk (cache=True); every kernel works in float64.
+# The luminance weights as module-level floats: numba freezes globals into the compiled code.
+_LUMA_R, _LUMA_G, _LUMA_B = LUMA_WEIGHTS
 
 @njit(cache=True, inline="always")
 def _nearest_lens_px(px, py, lattice):
@@ -704,7 +731,7 @@ def _scene_radiance(ux, uy, qx, qy, z, region, kind, par, center, tint, images, 
 @njit(cache=True, inline="always")
 def _store(out, y, x, r, g, b, scale):
     if out.shape[2] == 1:
-        out[y, x, 0] = (0.2126 * r + 0.7152 * g + 0.0722 * b) * scale
+        out[y, x, 0] = (_LUMA_R * r + _LUMA_G * g + _LUMA_B * b) * scale
     else:
         out[y, x, 0] = r * scale
         out[y, x, 1] = g * scale
@@ -793,7 +820,7 @@ def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pix
                     weight[ky, kx, row, col] = 0.0 if fallback else passed / total
                     scale = 1.0 / passed
                     if channels == 1:
-                        views[ky, kx, row, col, 0] = (0.2126 * r + 0.7152 * g + 0.0722 * b) * scale
+                        views[ky, kx, row, col, 0] = (_LUMA_R * r + _LUMA_G * g + _LUMA_B * b) * scale
                     else:
                         views[ky, kx, row, col, 0] = r * scale
                         views[ky, kx, row, col, 1] = g * scale

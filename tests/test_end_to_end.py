@@ -236,3 +236,15 @@ def test_rgb_capture_without_white_image_decodes_with_a_warning(capture, tmp_pat
     assert any("devignetting" in str(w.message) for w in caught)
     lf = load_lightfield(str(tmp_path / "rgb.tif"), setup)
     assert lf.views.shape[-1] == 3 and np.all(np.isfinite(lf.views))
+
+
+@pytest.mark.parametrize("command", ["refocus", "views"])
+def test_output_folder_that_is_a_file_is_a_clean_error(capture, tmp_path, command):
+    folder = capture["folder"]
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file")
+    extra = ["--a", "1"] if command == "refocus" else []
+    proc = run_cli(command, folder / "capture.png", "--camera", folder / "camera.toml", "--white",
+                   folder / "white.png", "-o", blocker, *extra)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "cannot write there" in proc.stderr

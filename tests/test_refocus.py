@@ -242,18 +242,37 @@ def test_uint16_near_full_scale_never_overflows():
     np.testing.assert_allclose(lfproc.refocus(views, 2), reference(views, 2), rtol=6e-8, atol=0)
 
 
+def _cancelling_row(dtype):
+    """View row 0 holds 1e8, 0.5 and −1e8: its sum is 0.5 in float64 but 0.0 in float32 (1e8 + 0.5 rounds
+    to 1e8), so the a = 0 mean over the 25 views is 0.02 only when the row is summed in float64."""
+    views = np.zeros((5, 5, 3, 4, 1), dtype=dtype)
+    views[0, 0] = 1e8
+    views[0, 1] = 0.5
+    views[0, 2] = -1e8
+    return views
+
+
 def test_float64_input_is_summed_in_float64():
-    """Values whose float32 sum would lose the small part: 1e8 + k·1e-1 views."""
-    m = 5
-    views = np.zeros((m, m, 3, 4, 1))
-    views[...] = 1e8
-    views[1, 2] += 0.5
-    out = lfproc.refocus(views, 0)
+    assert np.float32(np.float32(1e8) + np.float32(0.5)) - np.float32(1e8) == 0.0   # the trap is real
+    out = lfproc.refocus(_cancelling_row(np.float64), 0)
     assert out.dtype == np.float32
-    # mean = 1e8 + 0.5/25 = 1e8 + 0.02 → float32(1e8 + 0.02) == float32(1e8); check via subtraction instead
-    views -= 1e8
+    np.testing.assert_allclose(out, 0.5 / 25, rtol=1e-6)
+
+
+def test_longdouble_input_is_read_as_float64():
+    views = _cancelling_row(np.longdouble)
+    assert rf._views_array(views).dtype == np.float64
     np.testing.assert_allclose(lfproc.refocus(views, 0), 0.5 / 25, rtol=1e-6)
-    close(out, np.full_like(out, 1e8))
+
+
+def test_finite_float64_beyond_float32_range_says_rescale():
+    views = np.full((3, 3, 4, 4, 1), 1e300)
+    with pytest.raises(LfprocError, match="exceed the float32 range; rescale") as info:
+        lfproc.refocus(views, 0)
+    assert "NaN" not in str(info.value)
+    views[0, 0, 1, 1, 0] = np.nan      # really non-finite input keeps the NaN message
+    with pytest.raises(LfprocError, match="NaN or infinite"):
+        lfproc.refocus(views, 0)
 
 
 def test_other_input_dtypes_and_lightfield_agree():
@@ -330,11 +349,23 @@ def test_bad_arguments_are_user_errors():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(LfprocError, match="upsample"):
             lfproc.refocus(views, 1, upsample=bad)
+    with pytest.raises(LfprocError, match="GiB"):            # ~36 TB of output: refused before allocating
+        lfproc.refocus(views, 1, upsample=10**6)
     for shape in ((3, 3, 4, 4), (2, 2, 4, 4, 1), (3, 5, 4, 4, 1), (3, 3, 0, 4, 1)):
         with pytest.raises(LfprocError, match="shaped"):
             lfproc.refocus(np.zeros(shape, np.float32), 1)
     with pytest.raises(LfprocError, match="real-valued"):
         lfproc.refocus(np.zeros((3, 3, 4, 4, 1), np.complex64), 1)
+
+
+def test_output_size_limit_is_exact(monkeypatch):
+    """K·Ny'·Nx'·C·4 bytes: 2 slices × 7 × 9 × 1 × 4 = 504 bytes for (4, 5) lenses at upsample 2."""
+    views = random_views(3, 4, 5, 1)
+    monkeypatch.setattr(rf, "MAX_OUTPUT_BYTES", 504)
+    assert lfproc.refocus(views, [0, 1], upsample=2).nbytes == 504
+    monkeypatch.setattr(rf, "MAX_OUTPUT_BYTES", 503)
+    with pytest.raises(LfprocError, match="upsample=2"):
+        lfproc.refocus(views, [0, 1], upsample=2)
 
 
 def test_non_finite_pixels_that_reach_a_slice_are_a_user_error():

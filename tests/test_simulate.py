@@ -268,6 +268,52 @@ def test_mono_camera_sees_luminance_and_mosaic_is_exact():
     assert raw[1, 1] == rgb[1, 1, 1] and raw[3, 5] == rgb[3, 5, 1]
 
 
+def test_mono_kernels_weight_a_coloured_scene_by_rec709_luminance():
+    """channels=1 inside both kernels is the Rec. 709 luminance of what channels=3 renders."""
+    rec709 = np.array([0.2126, 0.7152, 0.0722])     # the standard's numbers, not the module's tuple
+    assert simulate.LUMA_WEIGHTS == tuple(rec709)
+    cam, scene, shape = camera(m=5, f_number=2.0), Scene((), background=(0.9, 0.1, 0.4)), (40, 50)
+    rgb = simulate.render_radiance(cam, scene, shape, channels=3).astype(np.float64)
+    mono = simulate.render_radiance(cam, scene, shape, channels=1)
+    assert rgb[..., 0].max() > 0.5 > rgb[..., 1].max()      # really coloured
+    np.testing.assert_allclose(mono[..., 0], rgb @ rec709, rtol=1e-6, atol=1e-7)
+    views_rgb, weight_rgb, _ = simulate.render_ideal_views(cam, scene, shape, channels=3)
+    views_mono, weight_mono, _ = simulate.render_ideal_views(cam, scene, shape, channels=1)
+    np.testing.assert_array_equal(weight_mono, weight_rgb)
+    np.testing.assert_allclose(views_mono[..., 0], views_rgb.astype(np.float64) @ rec709, rtol=1e-6)
+    np.testing.assert_allclose(views_mono, 0.9 * 0.2126 + 0.1 * 0.7152 + 0.4 * 0.0722, rtol=1e-6)
+
+
+@pytest.mark.parametrize("channels", [0, 2, 4, -1, 1.0, True, "3"])
+def test_bad_channels_are_user_errors(channels):
+    cam = camera(m=5, f_number=2.0)
+    for render in (simulate.render_ideal_views, simulate.render_radiance):
+        with pytest.raises(LfprocError, match="channels must be 1"):
+            render(cam, Scene(), (40, 50), channels=channels)
+
+
+@pytest.mark.parametrize("scene", [None, "scene.toml", (), 0.5])
+def test_ideal_views_need_a_scene(scene):
+    with pytest.raises(LfprocError, match="scene must be an lfproc.scene.Scene"):
+        simulate.render_ideal_views(camera(m=5, f_number=2.0), scene, (40, 50))
+    if scene is not None:  # render_radiance documents None as the white image
+        with pytest.raises(LfprocError, match="scene must be an lfproc.scene.Scene"):
+            simulate.render_radiance(camera(m=5, f_number=2.0), scene, (40, 50))
+
+
+def test_shot_noise_photons_beyond_the_limit_are_user_errors():
+    cam = camera(m=7, f_number=2.0)
+    for photons in (1e20, simulate.MAX_SHOT_NOISE_PHOTONS * 1.01, 0, 0.0, -5.0, float("nan")):
+        with pytest.raises(LfprocError, match="shot_noise_photons"):
+            simulate.render_white(cam, (50, 60), shot_noise_photons=photons)
+        with pytest.raises(LfprocError, match="shot_noise_photons"):
+            simulate.radiance_to_dn(np.ones((2, 2)), cam, shot_noise_photons=photons)
+    # at the limit the noise is far below one DN, and very bright values still sample (lam clipped)
+    dn = simulate.radiance_to_dn(np.array([[0.5, 1e9]]), cam, exposure=1.0,
+                                 shot_noise_photons=simulate.MAX_SHOT_NOISE_PHOTONS)
+    assert dn.tolist() == [[round(0.5 * 65535), 65535]]
+
+
 def test_16_bit_levels_clip_at_black_and_white():
     cam = camera(m=7, f_number=12.0, black_level=64.0, white_level=4095.0)
     scene = Scene((Plane(500.0, Uniform(1.0), region_mm=(0.0, 100.0, -100.0, 100.0)),), background=0.3)
@@ -322,6 +368,43 @@ def test_texture_orientation_checkerboard_and_image_are_upright_in_the_central_v
     far_from_edges = np.min(np.abs(xy / 20.0 - np.rint(xy / 20.0)), axis=-1) > 0.1
     np.testing.assert_allclose(board[far_from_edges], expected[far_from_edges], atol=1e-6)
     assert far_from_edges.sum() > 0.5 * far_from_edges.size
+
+
+@pytest.mark.parametrize("channels", ["RGB", "RGBA"])
+def test_image_texture_file_keeps_its_colour(tmp_path, channels):
+    """A pure-red PNG read through the scene file renders red: G = B = 0 in the ideal views."""
+    import OpenImageIO as oiio
+
+    pixels = np.zeros((8, 12, len(channels)), np.uint8)
+    pixels[..., 0] = 255
+    if channels == "RGBA":
+        pixels[..., 3] = 255
+    out = oiio.ImageOutput.create(str(tmp_path / "red.png"))
+    assert out.open(str(tmp_path / "red.png"), oiio.ImageSpec(12, 8, len(channels), oiio.UINT8))
+    assert out.write_image(pixels)
+    out.close()
+    texture_pixels = __import__("lfproc.scene", fromlist=["x"]).read_texture_image(str(tmp_path / "red.png"))
+    np.testing.assert_array_equal(texture_pixels, np.broadcast_to([1.0, 0.0, 0.0], (8, 12, 3)))
+    parsed = parse_scene_dict({"camera": str(ROOT / "samples" / "cameras" / "paper-f100.toml"), "background": 0.5,
+                               "plane": [{"distance_mm": 600.0, "texture": "image", "path": "red.png",
+                                          "width_mm": 60.0}]}, base_dir=str(tmp_path))
+    cam = camera(m=5, f_number=2.0)
+    views, _, _ = simulate.render_ideal_views(cam, parsed.scene, (120, 160), rim_radius_mm=None, channels=3)
+    assert views[..., 0].min() > 0.99        # everything the sensor sees lies inside the 60 mm image
+    assert views[..., 1].max() == 0.0 and views[..., 2].max() == 0.0
+
+
+def test_scene_file_shot_noise_zero_is_an_error_and_none_is_off(tmp_path):
+    cam = f"camera = '{ROOT / 'samples' / 'cameras' / 'paper-f100.toml'}'"
+    for value, expected in (("0", None), ("0.0", None), ("false", "off"), ("'none'", "off"), ("'off'", "off"),
+                            ("100", 100.0)):
+        (tmp_path / "scene.toml").write_text(f"{cam}\n[render]\nshot_noise_photons = {value}\n")
+        if expected is None:
+            with pytest.raises(LfprocError, match="shot_noise_photons"):
+                load_scene_file(tmp_path / "scene.toml")
+        else:
+            photons = load_scene_file(tmp_path / "scene.toml").options.shot_noise_photons
+            assert photons == (None if expected == "off" else expected)
 
 
 def test_noise_texture_is_deterministic_bounded_and_smooth():

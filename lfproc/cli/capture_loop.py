@@ -19,16 +19,22 @@ def add_decode_options(p) -> None:
                    help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
 
 
-def setup_from_args(args):
-    """Camera, grid and white image from the parsed options (errors before any work is done)."""
+def setup_from_args(args, camera=None):
+    """Camera, grid and white image from the parsed options (errors before any capture is read)."""
     from ..camera import Camera
     from ..pipeline import prepare_decoding
 
-    camera = Camera.from_toml(args.camera)
-    if not args.calib and not args.white:
-        raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
+    camera = camera or Camera.from_toml(args.camera)
     return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
                             demosaic_method=args.demosaic)
+
+
+def require_output_folder(path: str) -> None:
+    """Fail before any work when OUTDIR exists but is not a folder (creating it is left to the writers)."""
+    import os
+
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise LfprocError(f"{path}: cannot write there (it is a file, not a folder); choose another -o OUTDIR")
 
 
 def for_each_capture(command: str, paths: list[str], work, total_steps: int | None = None) -> int:
@@ -49,7 +55,7 @@ def for_each_capture(command: str, paths: list[str], work, total_steps: int | No
                 done += 1
             except LfprocError as exc:
                 failed.append(path)
-                progress.write(f"lfproc {command}: error: {exc}")
+                progress.write(f"lfproc {command}: error: {exc}", file=sys.stderr)
     elapsed = time.perf_counter() - start
     summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"
     if failed:

@@ -86,6 +86,8 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
             listed = ", ".join(f"{lo:.1f}..{hi:.1f}" for lo, hi in holes)
             print(f"lfproc: note: no slice is in focus at {listed} mm", file=sys.stderr)
         return [float(a) for a in a_values]
-    if at_mm is None or math.isnan(at_mm):
+    if at_mm is None:
         raise LfprocError("give one of --a, --depth-range or --at")
+    if not math.isfinite(at_mm):
+        raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
     return [float(geometry.refocus_parameter(camera, at_mm))]

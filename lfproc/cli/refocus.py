@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
-from .capture_loop import add_decode_options, for_each_capture, setup_from_args
+from .capture_loop import add_decode_options, for_each_capture, require_output_folder, setup_from_args
 from .common import add_slice_planning_options, slice_parameters
 
 
@@ -32,6 +32,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    from ..camera import Camera
     from ..outputs import write_slices
     from ..pipeline import load_lightfield, unique_stems
     from ..refocus import refocus
@@ -40,14 +41,15 @@ def run(args) -> int:
         raise LfprocError(f"--upsample must be an integer >= 1, got {args.upsample}")
     if (args.max_gap or args.integer) and args.depth_range is None:
         raise LfprocError("--max-gap and --integer apply to --depth-range only")
-    setup = setup_from_args(args)
-    a_values = slice_parameters(setup.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer)
+    require_output_folder(args.outdir)
+    camera = Camera.from_toml(args.camera)
+    a_values = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer)
+    setup = setup_from_args(args, camera)  # calibration last: every cheap check fails first
     stems = unique_stems(args.raw)
 
     def work(path, progress):
         lf = load_lightfield(path, setup)
         stack = refocus(lf, a_values, interpolation=args.interpolation, upsample=args.upsample)
-        os.makedirs(args.outdir, exist_ok=True)
         write_slices(args.outdir, stems[path], os.path.abspath(path), setup.camera, a_values, stack, args.format)
         progress.update(len(a_values))
 

@@ -50,11 +50,10 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
 
     from ..atomic import atomic_path, write_json_atomic, write_text_atomic
     from ..geometry import refocus_parameter
-    from .common import json_safe
+    from ..io import write_image
 
-    os.makedirs(folder, exist_ok=True)
-    write_uint16_png(os.path.join(folder, "capture.png"), capture.raw)
-    write_uint16_png(os.path.join(folder, "white.png"), capture.white)
+    write_image(os.path.join(folder, "capture.png"), capture.raw)   # uint16: written exactly, 16-bit PNG
+    write_image(os.path.join(folder, "white.png"), capture.white)
     write_text_atomic(os.path.join(folder, "camera.toml"), capture.camera.to_toml())
     arrays = {"plane_label": capture.plane_label}
     if capture.ideal_views is not None:
@@ -84,27 +83,4 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
         "ideal_views": "ground_truth.npz: ideal_views (m, m, rows, cols, C), ideal_weight (m, m, rows, cols), "
                        "plane_label (rows, cols; -1 = background)",
     }
-    write_json_atomic(os.path.join(folder, "ground_truth.json"), json_safe(truth))
-
-
-def write_uint16_png(path: str, image) -> None:
-    """Write a (H, W) uint16 array as a 16-bit greyscale PNG via OpenImageIO, atomically."""
-    import numpy as np
-    import OpenImageIO as oiio
-
-    from ..atomic import atomic_path
-    from ..errors import LfprocError
-
-    image = np.ascontiguousarray(image, dtype=np.uint16)
-    height, width = image.shape
-    with atomic_path(path) as tmp:
-        out = oiio.ImageOutput.create(tmp)
-        if out is None:
-            raise LfprocError(f"{path}: OpenImageIO cannot write PNG ({oiio.geterror()})")
-        spec = oiio.ImageSpec(width, height, 1, oiio.UINT16)
-        if not out.open(tmp, spec):
-            raise LfprocError(f"{path}: cannot open for writing ({out.geterror()}); check the output folder")
-        ok = out.write_image(image[:, :, None])
-        out.close()
-        if not ok:
-            raise LfprocError(f"{path}: writing failed ({out.geterror()}); check the disk space")
+    write_json_atomic(os.path.join(folder, "ground_truth.json"), truth)

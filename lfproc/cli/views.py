@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 
-from .capture_loop import add_decode_options, for_each_capture, setup_from_args
+from .capture_loop import add_decode_options, for_each_capture, require_output_folder, setup_from_args
 
 
 def register(sub) -> None:
@@ -24,17 +24,22 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from .. import geometry
+    from ..camera import Camera
+    from ..errors import LfprocError
     from ..outputs import write_view_gif, write_view_mosaic, write_views
     from ..pipeline import load_lightfield, unique_stems
 
-    setup = setup_from_args(args)
+    require_output_folder(args.outdir)
+    camera = Camera.from_toml(args.camera)
+    if args.inside_aperture and camera.f_number is None:
+        raise LfprocError(f"{args.camera}: --inside-aperture needs main_lens.f_number in the camera file")
+    setup = setup_from_args(args, camera)
     keep = geometry.views_inside_aperture(setup.camera)
     stems = unique_stems(args.raw)
     per_capture = int(keep.sum()) if args.inside_aperture else setup.camera.m_hat ** 2
 
     def work(path, progress):
         lf = load_lightfield(path, setup)
-        os.makedirs(args.outdir, exist_ok=True)
         source = os.path.abspath(path)
         write_views(args.outdir, stems[path], source, setup.camera, lf.views, args.format,
                     keep if args.inside_aperture else None)
