@@ -23,6 +23,14 @@ GRIDS = ("rectangular", "hexagonal")
 CFA_PATTERNS = ("none", "RGGB", "BGGR", "GRBG", "GBRG")
 _ODD_TOLERANCE = 1e-6
 #: dataclass field -> the key a user writes in the camera file (for error messages)
+#: every key a camera file may hold, per table (anything else is a typo and refused)
+KNOWN_KEYS = {
+    "": {"name", "sensor", "mla", "main_lens", "decode"},
+    "sensor": {"pixel_pitch_mm", "cfa", "black_level", "white_level"},
+    "mla": {"pitch_mm", "focal_length_mm", "principal_plane_gap_mm", "grid"},
+    "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number"},
+    "decode": {"micro_image_px"},
+}
 TOML_KEYS = {
     "pixel_pitch_mm": "sensor.pixel_pitch_mm", "black_level": "sensor.black_level",
     "white_level": "sensor.white_level", "mla_pitch_mm": "mla.pitch_mm",
@@ -179,6 +187,13 @@ class Camera:
         reader = _TableReader(data, source)
         sensor, mla, main, decode = (reader.table(t, required=t != "decode") for t in
                                      ("sensor", "mla", "main_lens", "decode"))
+        for table, known in KNOWN_KEYS.items():
+            given = data if not table else data.get(table, {})
+            unknown = sorted(set(given) - known) if isinstance(given, dict) else []
+            if unknown:
+                where = f"[{table}]" if table else "the top level"
+                raise LfprocError(f"{source}: unknown key {unknown[0]!r} in {where}; the keys there are "
+                                  f"{', '.join(sorted(known))}")
         f_u = reader.number(main, "main_lens", "focal_length_mm")
         main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
         f_s = reader.number(mla, "mla", "focal_length_mm")

@@ -83,8 +83,9 @@ def sample_positions(grid: LensGrid, m_hat: int) -> tuple[np.ndarray, np.ndarray
 def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
     """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
 
-    The data are scaled into 16 bits for OpenCV (its demosaicing works on integers) and back, so
-    linear values keep 1/65535 of their maximum as precision.
+    The data are shifted and scaled into 16 bits for OpenCV (its demosaicing works on integers) and
+    back, so linear values keep 1/65535 of their range as precision; negative values (noise below the
+    black level) are kept, not clipped.
     """
     if cfa not in _CV_BAYER:
         raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
@@ -95,12 +96,16 @@ def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
     if not np.all(np.isfinite(data)):   # the 16-bit conversion below would turn them into silent zeros
         raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
                           "(e.g. numpy.nan_to_num) before decoding")
-    top = float(data.max()) if data.size else 0.0
+    # offset by the minimum so negative (noise below black) values survive: bilinear weights sum to 1,
+    # so adding the offset back afterwards is exact
+    low = min(float(data.min()), 0.0) if data.size else 0.0
+    top = float(data.max()) - low if data.size else 0.0
     scale = 65535.0 / top if top > 0 else 1.0
-    as_u16 = np.clip(data * scale + 0.5, 0, 65535).astype(np.uint16)
+    as_u16 = np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16)
     code = getattr(cv2, f"COLOR_{_CV_BAYER[cfa]}2RGB" + ("_EA" if method == "careful" else ""))
     rgb = cv2.cvtColor(as_u16, code).astype(np.float32)
     rgb *= np.float32(1.0 / scale)
+    rgb += np.float32(low)
     return rgb
 
 

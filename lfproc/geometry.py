@@ -309,6 +309,8 @@ def integer_slice_gaps(camera: Camera, a_values) -> list[tuple[float, float, flo
     geo = slice_geometry(camera, a_sorted)
     gaps = []
     for k in range(len(a_sorted) - 1):
+        if a_sorted[k + 1] != a_sorted[k] + 1:  # only neighbouring integer slices bound a gap between them
+            continue
         nearer_far, farther_near = geo.far_mm[k + 1], geo.near_mm[k]
         if nearer_far < farther_near:
             gaps.append((float(a_sorted[k]), float(nearer_far), float(farther_near)))

@@ -270,7 +270,6 @@ image_distance_mm = 99.5145
 
 
 def test_cli_writes_the_contract_grid_json_and_plot(tmp_path):
-    pytest.importorskip("lfproc.io")  # the reader is another module's; skip only while it is not there
     import tifffile
     image, true = case("paper-hex-vignetted")
     white = tmp_path / "white.tif"
@@ -296,7 +295,6 @@ def test_cli_writes_the_contract_grid_json_and_plot(tmp_path):
 
 
 def test_cli_refuses_a_camera_whose_pitch_does_not_match(tmp_path):
-    pytest.importorskip("lfproc.io")  # the reader is another module's; skip only while it is not there
     import tifffile
     image, _ = case("paper-rect")
     white = tmp_path / "white.tif"

@@ -68,6 +68,9 @@ BASE = (SAMPLES / "cameras" / "paper-f100.toml").read_text()
     (lambda t: t.replace("focal_length_mm = 2.749\n", ""), "missing mla.focal_length_mm"),
     (lambda t: t.replace("image_distance_mm = 99.5145", "focus_distance_mm = 150.0"), "closer than this lens"),
     (lambda t: t.replace("f_number = 4.0", "f_number = 0"), "f_number"),
+    (lambda t: t.replace("principal_plane_gap_mm = -33.184", "principal_plane_gap = -33.184"),
+     "unknown key 'principal_plane_gap' in [main_lens]"),
+    (lambda t: "colour = 1\n" + t, "unknown key 'colour' in the top level"),
 ])
 def test_bad_camera_files(tmp_path, mutate, mention):
     path = tmp_path / "bad.toml"

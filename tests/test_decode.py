@@ -20,7 +20,7 @@ def test_aligned_integer_pitch_is_a_plain_reshape(m, interpolation):
     rows, cols = 4, 5
     rng = np.random.default_rng(m)
     sensor = rng.random((rows * m, cols * m)).astype(np.float32)
-    views = decode(sensor, np.ones_like(sensor), aligned_grid(m, rows, cols), m)
+    views = decode(sensor, np.ones_like(sensor), aligned_grid(m, rows, cols), m, interpolation=interpolation)
     # independent reference: micro image (r, q) is sensor[r*m:(r+1)*m, q*m:(q+1)*m]; its pixel (ky, kx) is view (ky, kx)
     ref = sensor.reshape(rows, m, cols, m).transpose(1, 3, 0, 2)[..., None]
     assert views.shape == (m, m, rows, cols, 1) and views.dtype == np.float32
@@ -124,3 +124,11 @@ def test_non_finite_captures_are_refused(bad):
     sensor[2, 3] = bad
     with pytest.raises(LfprocError, match="NaN or infinite"):
         decode(sensor, np.ones((6, 6), np.float32), grid, 3)
+
+
+def test_demosaic_keeps_noise_below_black_unbiased():
+    rng = np.random.default_rng(4)
+    mosaic = rng.normal(0.0, 0.01, (64, 64)).astype(np.float32)
+    rgb = demosaic(mosaic, "RGGB", "fast")
+    assert abs(float(rgb[4:-4, 4:-4].mean())) < 0.001  # clipping at 0 would bias it to about +0.004
+    assert rgb.min() < 0

@@ -225,7 +225,7 @@ def test_rgb_capture_without_white_image_decodes_with_a_warning(capture, tmp_pat
 
     from lfproc.pipeline import prepare_decoding
 
-    folder, cam = capture["folder"], capture["camera"]
+    cam = capture["camera"]
     grid_json = dict(capture["sim"].grid.to_json_dict(), white_image=str(tmp_path / "gone.png"))
     (tmp_path / "grid.json").write_text(json.dumps(grid_json))
     rgb = np.repeat(capture["sim"].raw[:, :, None], 3, axis=2)

@@ -336,3 +336,9 @@ def test_integer_plan_never_wastes_a_slice_beyond_the_range():
     geo = g.slice_geometry(cam, a)
     assert 0.0 not in a
     assert np.all(geo.near_mm < 3000.0)  # every planned slice covers something inside the range
+
+
+def test_gaps_only_between_neighbouring_integers():
+    cam = load("paper-f100")
+    assert g.integer_slice_gaps(cam, [0, 2, 4]) == []
+    assert [gap[0] for gap in g.integer_slice_gaps(cam, [0, 1, 3, 4])] == [0, 3]
