@@ -107,7 +107,8 @@ def file_stamp(path: str | None) -> list | None:
 
 
 def expand_inputs(inputs: list[str]) -> list[str]:
-    """Files, folders (their capture files, sorted) and glob patterns → sorted absolute paths, no duplicates."""
+    """Files, folders (their capture files, sorted by name) and glob patterns (sorted matches) → absolute
+    paths in the order given, without duplicates."""
     found = []
     for item in inputs:
         if os.path.isdir(item):
@@ -333,9 +334,9 @@ def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -
     Each pool process starts with this process's decode setups for the jobs (see :func:`decode_setup`),
     so the white image is calibrated once, not once per process. At most ``workers`` captures are in
     flight, which bounds memory. A worker process that dies (out of memory, killed) breaks the pool:
-    the captures then in flight are suspects and are retried, each alone in a fresh pool (so a capture
-    that kills its worker cannot take others down with it), up to ``max_attempts`` in all, then
-    reported as failed; captures not yet started are not charged.
+    the captures then in flight are suspects and are retried one at a time in the next pool (so a
+    capture that kills its worker cannot take others down with it), up to ``max_attempts`` in all,
+    then reported as failed; captures not yet started are not charged.
 
     On ``KeyboardInterrupt`` no new capture starts; those in progress finish (the pool processes
     ignore Ctrl-C) and are reported, then the interrupt propagates.

@@ -17,9 +17,28 @@ from .viewpoints import circular_walk, mosaic, viewpoint_geometry
 FORMATS = {"tiff": ".tif", "png16": ".png", "jpeg": ".jpg", "exr": ".exr"}
 
 
-def slice_name(stem: str, a: float) -> str:
-    """``STEM_a+1.500``: sign and three decimals, so names sort by a within a sign."""
-    return f"{stem}_a{a:+.3f}"
+def slice_name(stem: str, a: float, decimals: int = 3) -> str:
+    """``STEM_a+1.500``: sign and (at least) three decimals; -0 is written as +0."""
+    return f"{stem}_a{a + 0.0:+.{decimals}f}"
+
+
+def slice_names(stem: str, a_values) -> list[str]:
+    """Names for every slice, with as many decimals (3 to 12) as it takes to keep them apart.
+
+    Raises
+    ------
+    LfprocError
+        When two values of ``a`` are equal to 12 decimals: they would overwrite each other's file.
+    """
+    from .errors import LfprocError
+
+    values = [float(a) for a in a_values]
+    for decimals in range(3, 13):
+        names = [slice_name(stem, a, decimals) for a in values]
+        if len(set(names)) == len(names):
+            return names
+    raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
+                      "remove the duplicate from the list")
 
 
 def view_name(stem: str, ky: int, kx: int) -> str:
@@ -37,8 +56,9 @@ def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: 
     from .io import write_image, write_sidecar
 
     paths = []
-    for meta, image in zip(slice_metadata(source, camera, a_values), images):
-        path = os.path.join(outdir, slice_name(stem, meta["a"]) + FORMATS[fmt])
+    names = slice_names(stem, a_values)
+    for name, meta, image in zip(names, slice_metadata(source, camera, a_values), images):
+        path = os.path.join(outdir, name + FORMATS[fmt])
         write_image(path, image, meta, fmt)
         write_sidecar(path, meta)
         paths.append(path)
@@ -94,7 +114,7 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray) -> str:
-    """An animation running through a focal stack, far to near and back."""
+    """An animation running through a focal stack in the given order and back."""
     from .io import write_gif
 
     frames = np.concatenate([images, images[-2:0:-1]]) if len(images) > 2 else images

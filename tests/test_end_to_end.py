@@ -122,12 +122,14 @@ def test_refocus_cli_tags_slices_and_embeds_metadata(capture, tmp_path):
         assert set(side) >= {"source", "a", "distance_mm", "near_mm", "far_mm", "dof_mm"}
         assert side["source"] == str((folder / "capture.png").resolve())
         expect = geometry.slice_geometry(cam, side["a"])
-        assert side["distance_mm"] == pytest.approx(expect.distance_mm, rel=1e-12)
-        assert side["near_mm"] == pytest.approx(expect.near_mm, rel=1e-12)
+        for key in ("distance_mm", "near_mm", "far_mm", "dof_mm"):
+            assert side[key] == pytest.approx(getattr(expect, key), rel=1e-12)
         embedded = read_metadata(out / name)  # read back through OpenImageIO
         for key in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm", "source"):
             assert embedded[key] == side[key]
         covered.append((side["near_mm"], side["far_mm"]))
+    sides = [json.loads((out / n.replace(".tif", ".json")).read_text()) for n in images]
+    assert sorted(side["a"] for side in sides) == pytest.approx(sorted(a_planned), rel=1e-12)
     covered.sort()
     assert covered[0][0] <= 300 and covered[-1][1] >= 2000
     assert all(lo_next <= hi for (_, hi), (lo_next, _) in zip(covered, covered[1:]))
@@ -248,3 +250,13 @@ def test_output_folder_that_is_a_file_is_a_clean_error(capture, tmp_path, comman
                    folder / "white.png", "-o", blocker, *extra)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "cannot write there" in proc.stderr
+
+
+def test_slice_names_stay_apart():
+    from lfproc import LfprocError
+    from lfproc.outputs import slice_names
+
+    assert slice_names("c", [1.0, -0.0, 0.5]) == ["c_a+1.000", "c_a+0.000", "c_a+0.500"]
+    assert slice_names("c", [1.0001, 1.0002]) == ["c_a+1.0001", "c_a+1.0002"]
+    with pytest.raises(LfprocError, match="equal"):
+        slice_names("c", [2.0, 2.0])

@@ -31,13 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     for name in COMMANDS:
-        try:
-            module = import_module(f"{__name__}.{name}")
-        except ModuleNotFoundError as exc:  # a command not yet built in this checkout
-            if exc.name == f"{__name__}.{name}":
-                continue
-            raise
-        module.register(sub)
+        import_module(f"{__name__}.{name}").register(sub)
     return parser
 
 

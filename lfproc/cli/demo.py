@@ -46,11 +46,9 @@ def run(args) -> int:
         raise LfprocError(f"{sample}: the bundled sample is missing {', '.join(missing)}; run the demo from a source "
                           f"checkout (pip install -e .) or regenerate it with python scripts/make_samples.py")
     out = Path(args.outdir)
-    lines = []
     t0 = time.perf_counter()
 
     def step(text):
-        lines.append(text)
         print(text, flush=True)
 
     camera = Camera.from_toml(sample / "camera.toml")
