@@ -294,7 +294,7 @@ def test_bad_setups_fail_at_once_with_one_line(data, tmp_path):
     argv = batch_argv(data, tmp_path / "out")
     argv[argv.index("--white") + 1] = str(broken_white)
     assert_clean_error(run_cli(*argv), str(broken_white))
-    assert not os.path.exists(tmp_path / "out" / batch.MANIFEST_NAME)
+    assert not os.path.exists(tmp_path / "out")  # nothing written: no folder, no lock, no manifest
     assert_clean_error(run_cli(*batch_argv(data, tmp_path / "out", "--workers", "0")), "--workers")
     assert_clean_error(run_cli(*batch_argv(data, tmp_path / "out", "--workers", "2", "--scheduler", "tcp://x:1")),
                        "--scheduler")
@@ -317,5 +317,28 @@ def test_default_workers_follow_cores_and_memory(data, monkeypatch):
     assert batch.default_workers(sample) == 64           # the cores
     monkeypatch.setattr(batch, "available_memory_bytes", lambda: 1.0)
     assert batch.default_workers(sample) == 1            # never fewer than one
-    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 2 * 5.5 * per_process)
-    assert batch.default_workers(None) == 1              # unknown size: a 40-megapixel sensor is assumed
+    assumed = batch.PROCESS_BASE_BYTES + 40e6 * batch.BYTES_PER_SENSOR_PIXEL
+    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 2 * 3.5 * assumed)
+    assert batch.default_workers(None) == 3              # unknown size: a 40-megapixel sensor is assumed
+
+
+def test_calib_only_fingerprints_the_recorded_white_image(data, tmp_path):
+    """With --calib alone the white image named in GRID.json is used, so replacing it redoes the captures."""
+    import shutil
+
+    white = tmp_path / "white.png"
+    shutil.copy(data / "white.png", white)
+    grid_path = tmp_path / "grid.json"
+    proc = run_cli("calibrate", white, "--camera", data / "camera.toml", "-o", grid_path)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "out"
+    argv = ["batch", data / "captures" / "cap0.png", "--camera", data / "camera.toml", "--calib", grid_path,
+            "--refocus", "1", "-o", out, "--workers", "1"]
+    assert run_cli(*argv).returncode == 0
+    manifest = json.loads((out / batch.MANIFEST_NAME).read_text())
+    assert manifest["parameters"]["white"] == str(white)
+    assert run_cli(*argv).returncode == 0
+    assert json.loads((out / batch.MANIFEST_NAME).read_text())["summary"]["skipped"] == 1
+    os.utime(white, ns=(1, 1))  # the recorded white image changed: the capture is redone
+    assert run_cli(*argv).returncode == 0
+    assert json.loads((out / batch.MANIFEST_NAME).read_text())["summary"]["done"] == 1

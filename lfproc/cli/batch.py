@@ -9,6 +9,7 @@ import sys
 import time
 
 from ..errors import LfprocError
+from .capture_loop import add_decode_options
 from .common import add_slice_planning_options
 
 
@@ -21,10 +22,7 @@ def register(sub) -> None:
                                    "fails is recorded with its error and the rest complete; the exit status is 2 "
                                    "if any failed, 130 if interrupted (rerun to resume). See docs/batch.md.")
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="capture files, folders or glob patterns")
-    p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
-    p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
-    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) and "
-                                                    "corrects vignetting")
+    add_decode_options(p)
     p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
     which = p.add_mutually_exclusive_group()
     which.add_argument("--refocus", metavar="LIST", help="refocus parameters a: numbers and ranges START:STOP[:STEP]")
@@ -36,10 +34,6 @@ def register(sub) -> None:
                    help="tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, exr")
     p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
                    help="interpolation between lenses for real a (default linear)")
-    p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
-                   help="resampling of the sensor into micro images (default linear)")
-    p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
-                   help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
     p.add_argument("--workers", type=int, metavar="N",
                    help="local worker processes (default: from the cores and the memory a capture needs; "
                         "1 = in this process, with multi-threaded refocusing)")
@@ -78,14 +72,23 @@ def run(args) -> int:
                                           what="--refocus"))
     else:
         a_values = ()
+    white = _abs(args.white)
+    if args.calib and not args.white:  # decode with the white image the grid file recorded (as lfproc refocus
+        from ..pipeline import read_grid  # does), and let its file stamp into every capture's fingerprint
+
+        _, recorded = read_grid(args.calib)
+        white = os.path.abspath(recorded) if recorded and os.path.isfile(recorded) else None
     sources = batch.expand_inputs(args.inputs)
     stems = unique_stems(sources)
     outdir = os.path.abspath(args.outdir)
     with open(args.camera, encoding="utf-8") as fh:
         camera_toml = fh.read()
-    jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), _abs(args.white), a_values,
+    jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic)
             for src in sources]
+    if not os.path.isdir(outdir):
+        # a first run: check the camera, white image and grid before anything is written (exit 2, nothing left)
+        batch.decode_setup(jobs[0])
     try:
         os.makedirs(outdir, exist_ok=True)
     except OSError as exc:
@@ -94,7 +97,7 @@ def run(args) -> int:
     with batch.lock_outdir(outdir), _sigterm_as_interrupt():
         batch.remove_stale_partial_files(outdir)
         manifest = batch.Manifest(outdir, {
-            "camera": os.path.abspath(args.camera), "calib": _abs(args.calib), "white": _abs(args.white),
+            "camera": os.path.abspath(args.camera), "calib": _abs(args.calib), "white": white,
             "refocus_a": list(a_values), "views": bool(args.views), "format": args.format,
             "interpolation": args.interpolation, "decode_interpolation": args.decode_interpolation,
             "demosaic": args.demosaic, "scheduler": args.scheduler})
