@@ -9,9 +9,9 @@ on numpy arrays:
 1. **Monochrome.** Channels are averaged; a Bayer mosaic is low-passed by [1, 2, 1]/4 along each axis (two
    2 × 2 box averages, hence centred), which removes the period-2 colour pattern exactly. Isolated hot or
    dead pixels are replaced by their neighbours' median.
-2. **Lattice guess.** The nearest peak of the autocorrelation (FFT) is a nearest-neighbour lattice vector:
-   a first pitch and rotation, with no assumption on the micro image shape. The camera file's pitch is
-   used only where the autocorrelation shows no lattice.
+2. **Pitch guess.** The nearest peak of the autocorrelation (FFT) is a nearest-neighbour lattice vector:
+   its length is a first pitch, with no assumption on the micro image shape (the rotation comes from
+   step 5). The camera file's pitch is used only where the autocorrelation shows no lattice.
 3. **Flattening and candidates.** The slowly varying floor (the gaps between micro images) and envelope
    (vignetting) are divided out; in the result every micro image is equally bright, and the lit points
    farthest from any dark pixel are one candidate centre per micro image.
