@@ -134,6 +134,7 @@ def expand_inputs(inputs: list[str]) -> list[str]:
 # ------------------------------------------------------------------------------ the worker side
 #: per process: setup key -> DecodeSetup (the calibrated grid and white image), oldest first
 _SETUP_CACHE: dict = {}
+_GRID_SEEDS: dict = {}  # setup key -> LensGrid fitted by the parent process (see seed_grids)
 _SETUP_CACHE_SIZE = 4
 
 
@@ -155,11 +156,17 @@ def decode_setup(job: Job):
 
         camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
         setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
-                                 demosaic_method=job.demosaic)
+                                 demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key))
         while len(_SETUP_CACHE) >= _SETUP_CACHE_SIZE:
             _SETUP_CACHE.pop(next(iter(_SETUP_CACHE)))
         _SETUP_CACHE[key] = setup
     return setup
+
+
+def seed_grids(grids: dict) -> None:
+    """Grids calibrated by the process that started the batch, keyed by :func:`setup_key`: a Dask
+    worker builds its setups from them instead of calibrating the white image again."""
+    _GRID_SEEDS.update(grids)
 
 
 def _portable_setups(jobs: list[Job]) -> dict:
@@ -422,6 +429,10 @@ def run_dask(jobs: list[Job], scheduler, on_result) -> None:
         client = scheduler
     futures = []
     try:
+        keys = {setup_key(job) for job in jobs}
+        grids = {key: setup.grid for key, setup in _SETUP_CACHE.items() if key in keys}
+        if grids:  # the workers there now skip the calibration; any that join later calibrate themselves
+            client.run(seed_grids, grids)
         by_key = {}
         for job in jobs:
             # a unique key: two batches of one capture into different OUTDIRs must not share a task

@@ -76,18 +76,26 @@ def calibrate_white(white, camera: Camera) -> LensGrid:
 
 
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
-                     interpolation: str = "linear", demosaic_method: str = "fast") -> DecodeSetup:
-    """Resolve ``--calib``/``--white`` into a :class:`DecodeSetup` (see the module docstring)."""
+                     interpolation: str = "linear", demosaic_method: str = "fast",
+                     grid: LensGrid | None = None) -> DecodeSetup:
+    """Resolve ``--calib``/``--white`` into a :class:`DecodeSetup` (see the module docstring).
+
+    ``grid``, when given, is the grid these files were already calibrated to (by another process):
+    it is used as is, and the white image is only read for devignetting.
+    """
     from .io import read_capture
 
     if calib is None and white is None:
         raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
     recorded_white = None
+    known_grid = grid
     if calib is not None:
         grid, recorded_white = read_grid(calib)
     white_path = white or (recorded_white if recorded_white and os.path.exists(recorded_white) else None)
     white_capture = read_capture(white_path, camera) if white_path else None
-    if calib is None:
+    if known_grid is not None:
+        grid = known_grid
+    elif calib is None:
         grid = calibrate_white(white_capture, camera)
     elif white_capture is None:
         warnings.warn(f"{calib}: no white image available (recorded: {recorded_white}); decoding without "

@@ -134,11 +134,18 @@ def test_batch_outputs_are_those_of_lfproc_refocus(data, reference, tmp_path):
     assert single == {name: reference[1][name] for name in single}
 
 
+def _seeded_grids():
+    from lfproc import batch as worker_batch
+    return len(worker_batch._GRID_SEEDS)
+
+
 def test_dask_cluster_gives_byte_identical_outputs(data, reference, cluster, tmp_path):
-    lc, _ = cluster
+    lc, client = cluster
     proc = run_cli(*batch_argv(data, tmp_path, "--scheduler", lc.scheduler_address))
     assert proc.returncode == 0, proc.stderr
     assert tree_bytes(tmp_path) == reference[1]
+    # the workers built their setups from the grid the batch process fitted, not by calibrating again
+    assert all(n >= 1 for n in client.run(_seeded_grids).values())
     assert without_timing(manifest(tmp_path)["captures"]) == without_timing(manifest(reference[0])["captures"])
 
 
