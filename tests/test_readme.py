@@ -18,3 +18,22 @@ def test_readme_first_screen_has_both_commands():
     first_screen = "\n".join(README.splitlines()[:40])
     assert re.search(r"^python3 -m venv .*lfproc demo$", first_screen, re.M)
     assert re.search(r"^python3 -m venv .*pytest.*$", first_screen, re.M)
+
+
+def _blocks(language):
+    return re.findall(rf"```{language}\n(.*?)```", README, re.S)
+
+
+def test_python_example_runs(monkeypatch, capsys):
+    (code,) = _blocks("python")
+    monkeypatch.chdir(ROOT)
+    exec(compile(code, "README.md", "exec"), {})
+    assert "distance_mm" in capsys.readouterr().out
+
+
+def test_camera_file_example_is_the_paper_camera():
+    from lfproc import Camera
+
+    toml = next(block for block in _blocks("toml") if "[main_lens]" in block)
+    text = "\n".join(line.strip() for line in toml.splitlines())
+    assert Camera.from_toml_string(text) == Camera.from_toml(ROOT / "samples" / "cameras" / "paper-f100.toml")
