@@ -28,7 +28,8 @@ KNOWN_KEYS = {
     "": {"name", "sensor", "mla", "main_lens", "decode"},
     "sensor": {"pixel_pitch_mm", "cfa", "black_level", "white_level"},
     "mla": {"pitch_mm", "focal_length_mm", "principal_plane_gap_mm", "grid"},
-    "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number"},
+    "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number",
+                  "exit_pupil_distance_mm"},
     "decode": {"micro_image_px"},
 }
 TOML_KEYS = {
@@ -38,6 +39,7 @@ TOML_KEYS = {
     "main_focal_length_mm": "main_lens.focal_length_mm",
     "main_principal_plane_gap_mm": "main_lens.principal_plane_gap_mm",
     "image_distance_mm": "main_lens.image_distance_mm", "f_number": "main_lens.f_number",
+    "exit_pupil_distance_mm": "main_lens.exit_pupil_distance_mm",
 }
 
 
@@ -77,8 +79,15 @@ class Camera:
         Main lens f-number, for the Airy limit (Eq. 22) and aperture checks.
     grid : {"rectangular", "hexagonal"}
     cfa : {"none", "RGGB", "BGGR", "GRBG", "GBRG"}
-    black_level, white_level : float
-        Raw levels for TIFF/PNG captures.
+    black_level : float
+        Raw black level for TIFF/PNG captures (0 by default).
+    white_level : float or None
+        Raw white level for TIFF/PNG captures; ``None`` (the default) takes the file's own maximum
+        (255 for 8-bit files, 65535 for 16-bit ones; camera raws always carry their own levels).
+    exit_pupil_distance_mm : float
+        d_A, the distance from the micro lens array to the main lens's exit pupil, towards the object.
+        ``inf`` (the default) is the image-side telecentric case of the 2014 paper; a finite value
+        shifts micro image centres outwards from their lenses (Hahne et al. 2018, PlenoptiSign's dA).
     micro_image_px : int or None
         Odd micro image size m̂ after resampling; ``None`` picks the largest odd integer not above
         ``mla_pitch_mm / pixel_pitch_mm``. Always an ``int`` once constructed.
@@ -97,7 +106,8 @@ class Camera:
     grid: str = "rectangular"
     cfa: str = "none"
     black_level: float = 0.0
-    white_level: float = 65535.0
+    white_level: float | None = None
+    exit_pupil_distance_mm: float = math.inf
     micro_image_px: int | None = None
     name: str = ""
     source: str = field(default="", compare=False, repr=False)
@@ -107,8 +117,14 @@ class Camera:
         for key in ("pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm", "main_focal_length_mm"):
             _require_positive(getattr(self, key), key, where)
         for key in ("image_distance_mm", "mla_principal_plane_gap_mm", "main_principal_plane_gap_mm",
-                    "black_level", "white_level"):
+                    "black_level"):
             _require_finite(getattr(self, key), key, where)
+        if self.white_level is not None:
+            _require_finite(self.white_level, "white_level", where)
+        d_a = self.exit_pupil_distance_mm
+        if isinstance(d_a, bool) or not isinstance(d_a, (int, float)) or math.isnan(d_a) or d_a <= 0:
+            raise LfprocError(f"{where}: main_lens.exit_pupil_distance_mm must be a positive distance or inf, "
+                              f"got {d_a!r}")
         if self.f_number is not None:
             _require_positive(self.f_number, "f_number", where)
         if self.image_distance_mm < self.main_focal_length_mm:
@@ -120,7 +136,7 @@ class Camera:
             raise LfprocError(f"{where}: unknown mla.grid {self.grid!r}; use one of {', '.join(GRIDS)}")
         if self.cfa not in CFA_PATTERNS:
             raise LfprocError(f"{where}: unknown sensor.cfa {self.cfa!r}; use one of {', '.join(CFA_PATTERNS)}")
-        if self.white_level <= self.black_level:
+        if self.white_level is not None and self.white_level <= self.black_level:
             raise LfprocError(f"{where}: white_level {self.white_level} must exceed black_level {self.black_level}")
         ratio = self.mla_pitch_mm / self.pixel_pitch_mm
         if self.micro_image_px is None:
@@ -155,6 +171,19 @@ class Camera:
         """f_s + H1sH2s + b_U + H1UH2U: the constant path of Eqs. 21 and 31 (sensor to H1U)."""
         return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
                 + self.main_principal_plane_gap_mm)
+
+    @property
+    def telecentric(self) -> bool:
+        """True when the exit pupil is at infinity (the 2014 paper's model)."""
+        return math.isinf(self.exit_pupil_distance_mm)
+
+    def raw_levels(self, type_max: float) -> tuple[float, float]:
+        """(black, white) for a file whose integer type saturates at ``type_max``.
+
+        The white level given in the camera file wins; without one, the file's own maximum.
+        """
+        white = float(type_max) if self.white_level is None else float(self.white_level)
+        return float(self.black_level), white
 
     @property
     def pitch_px(self) -> float:
@@ -215,6 +244,7 @@ class Camera:
                 micro = int(micro)
             else:
                 raise LfprocError(f"{source}: decode.micro_image_px must be an odd integer, got {micro!r}")
+        exit_pupil = reader.number(main, "main_lens", "exit_pupil_distance_mm", default=math.inf, allow_inf=True)
         f_number = main.get("f_number")
         if f_number is not None:
             f_number = reader.number(main, "main_lens", "f_number")
@@ -233,7 +263,8 @@ class Camera:
             grid=reader.string(mla, "mla", "grid", "rectangular"),
             cfa=reader.string(sensor, "sensor", "cfa", "none"),
             black_level=reader.number(sensor, "sensor", "black_level", default=0.0),
-            white_level=reader.number(sensor, "sensor", "white_level", default=65535.0),
+            white_level=(reader.number(sensor, "sensor", "white_level") if "white_level" in sensor else None),
+            exit_pupil_distance_mm=exit_pupil,
             micro_image_px=micro,
             name=name,
             source=source,
@@ -245,14 +276,18 @@ class Camera:
         if self.name:
             lines.append(f"name = {_toml_str(self.name)}")
         lines += ["[sensor]", f"pixel_pitch_mm = {self.pixel_pitch_mm!r}", f"cfa = {_toml_str(self.cfa)}",
-                  f"black_level = {float(self.black_level)!r}", f"white_level = {float(self.white_level)!r}",
-                  "[mla]", f"pitch_mm = {self.mla_pitch_mm!r}", f"focal_length_mm = {self.mla_focal_length_mm!r}",
+                  f"black_level = {float(self.black_level)!r}"]
+        if self.white_level is not None:
+            lines.append(f"white_level = {float(self.white_level)!r}")
+        lines += ["[mla]", f"pitch_mm = {self.mla_pitch_mm!r}", f"focal_length_mm = {self.mla_focal_length_mm!r}",
                   f"principal_plane_gap_mm = {self.mla_principal_plane_gap_mm!r}", f"grid = {_toml_str(self.grid)}",
                   "[main_lens]", f"focal_length_mm = {self.main_focal_length_mm!r}",
                   f"principal_plane_gap_mm = {self.main_principal_plane_gap_mm!r}",
                   f"image_distance_mm = {self.image_distance_mm!r}"]
         if self.f_number is not None:
             lines.append(f"f_number = {self.f_number!r}")
+        if not self.telecentric:
+            lines.append(f"exit_pupil_distance_mm = {self.exit_pupil_distance_mm!r}")
         lines += ["[decode]", f"micro_image_px = {self.m_hat}"]
         return "\n".join(lines) + "\n"
 

@@ -297,8 +297,7 @@ def _read_oiio_capture(path: str, camera=None) -> Capture:
     pixels = _colour_channels(pixels, spec, path)
     if np.issubdtype(pixels.dtype, np.integer):
         type_max = float(np.iinfo(pixels.dtype).max)
-        black = float(camera.black_level) if camera is not None else 0.0
-        white = float(camera.white_level) if camera is not None else type_max
+        black, white = camera.raw_levels(type_max) if camera is not None else (0.0, type_max)
         if white > type_max:
             raise LfprocError(f"{path}: the camera's sensor.white_level {white:g} exceeds this "
                               f"{8 * pixels.dtype.itemsize}-bit file's maximum {type_max:g}; "

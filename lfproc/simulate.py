@@ -291,10 +291,11 @@ def radiance_to_dn(values: np.ndarray, camera: Camera, exposure: float = 0.8, sh
         # clipped so that bright (signal >> 1) pixels stay within the Poisson sampler's range
         lam = np.clip(signal * photons, 0.0, 1e18)
         signal = rng.poisson(lam) / photons
-    dn = camera.black_level + (camera.white_level - camera.black_level) * signal
+    black, white = camera.raw_levels(65535.0)
+    dn = black + (white - black) * signal
     if read_noise_dn:
         dn = dn + rng.normal(0.0, float(read_noise_dn), size=dn.shape)
-    return np.clip(np.rint(dn), 0.0, camera.white_level).astype(np.uint16)
+    return np.clip(np.rint(dn), 0.0, white).astype(np.uint16)
 
 
 def central_plane_labels(setup: "_Setup", arrays: "SceneArrays") -> np.ndarray:
@@ -335,7 +336,7 @@ class _Setup:
             raise LfprocError(f"rotation_deg must be a finite number of degrees, got {rotation_deg!r}")
         n_pix = _check_samples(pixel_samples, "pixel_samples")
         n_ap = _check_samples(aperture_samples, "aperture_samples")
-        if camera.white_level > 65535:
+        if camera.raw_levels(65535.0)[1] > 65535:
             raise LfprocError(f"camera white_level {camera.white_level} exceeds the 16-bit range of simulated raws; "
                               f"use white_level <= 65535")
         grid = default_grid(camera, shape, float(rotation_deg), offset_px)

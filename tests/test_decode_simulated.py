@@ -32,7 +32,8 @@ def psnr_db(views, ideal, weight, rings_excluded=1):
 
 def normalised(sim):
     cam = sim.camera
-    scale = 1.0 / (cam.white_level - cam.black_level)
+    black, white = cam.raw_levels(65535.0)
+    scale = 1.0 / (white - black)
     return ((sim.raw.astype(np.float32) - cam.black_level) * scale,
             (sim.white.astype(np.float32) - cam.black_level) * scale)
 

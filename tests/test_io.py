@@ -213,7 +213,17 @@ def test_white_level_above_8bit_range_is_refused(tmp_path):
     path = tmp_path / "cap8.png"
     oiio_write(path, np.zeros((2, 2), np.uint8), "uint8")
     with pytest.raises(LfprocError, match="white_level"):
-        lio.read_capture(path, camera=make_camera())       # default white_level 65535 > 255
+        lio.read_capture(path, camera=make_camera(white_level=65535))   # given explicitly and > 255
+
+
+def test_levels_default_to_the_files_own_range(tmp_path):
+    """Issue 14: a camera file without levels reads an 8-bit PNG against 255 and a 16-bit one against 65535."""
+    for dtype, top in ((np.uint8, 255), (np.uint16, 65535)):
+        path = tmp_path / f"cap{top}.png"
+        pixels = np.array([[0, top // 5], [top // 2, top]], dtype)
+        oiio_write(path, pixels, "uint8" if top == 255 else "uint16")
+        capture = lio.read_capture(path, camera=make_camera())
+        np.testing.assert_allclose(capture.data, pixels.astype(np.float64) / top, atol=1e-6)
 
 
 def test_read_image_is_as_stored(tmp_path):
