@@ -35,7 +35,7 @@ def run(args) -> int:
     from ..camera import Camera
     from ..atomic import write_json_atomic
     from ..io import read_capture
-    from ..outputs import write_slice_gif, write_slices, write_view_gif, write_view_mosaic
+    from ..outputs import write_mosaic_preview, write_slice_gif, write_slices, write_view_gif, write_view_mosaic
     from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
     from ..refocus import refocus
     from ..viewpoints import viewpoints
@@ -78,7 +78,7 @@ def run(args) -> int:
     source = str((sample / "capture.png").resolve())
     refocus_dir = out / "refocus"
     paths = write_slices(str(refocus_dir), "sample", source, camera, a_values, stack, "tiff")
-    gif = write_slice_gif(str(out), "sample", stack[::-1])
+    gif = write_slice_gif(str(out), "sample", stack[::-1], camera, a_values[::-1])  # near to far, labelled
     step(f"refocused {len(a_values)} slices covering {near:.0f}..{far:.0f} mm -> {refocus_dir}/ (+ sidecars), {gif}")
     geo = geometry.slice_geometry(camera, a_values)
     for d in distances:
@@ -87,9 +87,11 @@ def run(args) -> int:
         step(f"  plane at {d:.0f} mm is in focus in slice {', '.join(hits) or '(none)'}")
 
     inside = viewpoints(lf, inside_aperture=True)  # views outside the main lens stop are black
-    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, inside, "tiff")
-    view_gif = write_view_gif(str(out), "sample", inside, geometry.views_inside_aperture(camera))
-    step(f"views: {int(geometry.views_inside_aperture(camera).sum())} of {m * m} inside the aperture; "
-         f"mosaic {mosaic_path}, animation {view_gif}")
+    keep = geometry.views_inside_aperture(camera)
+    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, inside, "tiff", keep)
+    preview = write_mosaic_preview(str(out), "sample", inside, keep)
+    view_gif = write_view_gif(str(out), "sample", inside, keep, camera)
+    step(f"views: {int(keep.sum())} of {m * m} inside the aperture; mosaic {mosaic_path} (preview {preview}), "
+         f"animation {view_gif}")
     step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations in {out}/")
     return 0

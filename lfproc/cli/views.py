@@ -18,7 +18,8 @@ def register(sub) -> None:
     p.add_argument("--mosaic", action="store_true", help="also one image tiling all views")
     p.add_argument("--gif", action="store_true", help="also an animation walking the views along a circle")
     p.add_argument("--inside-aperture", action="store_true",
-                   help="only the views inside the main lens aperture (needs main_lens.f_number)")
+                   help="only the views inside the main lens aperture (needs main_lens.f_number); "
+                        "the mosaic shows the others black")
     p.set_defaults(func=run)
 
 
@@ -44,7 +45,8 @@ def run(args) -> int:
         write_views(args.outdir, stems[path], source, setup.camera, lf.views, args.format,
                     keep if args.inside_aperture else None)
         if args.mosaic:
-            write_view_mosaic(args.outdir, stems[path], source, setup.camera, lf.views, args.format)
+            write_view_mosaic(args.outdir, stems[path], source, setup.camera, lf.views, args.format,
+                              keep if args.inside_aperture else None)
         if args.gif:
             write_view_gif(args.outdir, stems[path], lf.views, keep)
         progress.update(per_capture)

@@ -1,0 +1,26 @@
+"""Outputs: file names, the linear data products with their metadata, and previews for people.
+
+Data products (contract): each refocused slice and view is one image plus a sidecar ``NAME.json``
+with the same fields embedded in the image (:func:`write_slices`, :func:`write_views`,
+:func:`write_view_mosaic`). Previews are 8-bit sRGB pictures for looking at — animations, mosaic
+previews, the viewer's images — tone-mapped with one documented exposure (:class:`ToneMap`),
+enlarged to at least 512 px on the long side (:func:`upscale`) and labelled in metres.
+
+Modules: ``_names`` (file names), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
+and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
+``_colours`` (the depth colour scale). Pillow and OpenImageIO load only when something is written.
+"""
+
+from ._colours import DEPTH_COLOURS, colour_scale
+from ._display import MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
+from ._names import FORMATS, slice_name, slice_names, view_name
+from ._previews import (display_frames, write_gif_frames, write_mosaic_preview, write_png_preview, write_slice_gif,
+                        write_view_gif)
+from ._products import masked_views, slice_metadata, write_slices, write_view_mosaic, write_views
+from ._tone import ToneMap
+
+__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata", "write_slices", "write_views",
+           "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX", "UPSCALE_METHODS", "upscale",
+           "upscale_factor", "add_label", "metres", "slice_label", "display_frames", "write_gif_frames",
+           "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview", "DEPTH_COLOURS",
+           "colour_scale"]

@@ -1,0 +1,181 @@
+"""One viewer page: the refocused stack, the views, the depth map and the geometry of a light field.
+
+Layout of a page folder::
+
+    index.html        the page: HTML, CSS, JavaScript and its data inline (works from file://)
+    geometry.json     the same data minus the per-lens maps: slices, views, camera, calibration
+    slices/STEM_a+1.017.png …   one 8-bit sRGB image per slice (names as lfproc refocus)
+    views/STEM_view_05_05.png … one per view inside the main lens aperture
+    depth.png         the depth map, coloured (legend in metres on the page)
+
+``index.html`` is written last, so a page exists only when all its images do.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import geometry
+from ..atomic import write_json_atomic, write_text_atomic
+from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, upscale_factor, view_name
+from ._focus import depth_from_focus
+from ._images import depth_colours, image_extension, write_all
+from ._page import encode_array, render_page
+from ._plan import MIN_CONFIDENCE, scene_slices, sharpest_slice, slice_intervals_a
+
+
+@dataclass(frozen=True)
+class PageOptions:
+    """How a page shows its images: enlarged to ``min_long_side`` px by ``upscale`` (nearest or smooth)."""
+
+    min_long_side: int = MIN_LONG_SIDE_PX
+    upscale: str = "nearest"
+
+
+def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibration: dict | None = None,
+               index_href: str | None = None, options: PageOptions = PageOptions()) -> str:
+    """Write a viewer page for ``lf`` into ``outdir``; returns the path of its ``index.html``.
+
+    Parameters
+    ----------
+    lf : LightField
+        Decoded, with its camera.
+    source : str
+        The capture's path (shown and recorded).
+    stem : str
+        Prefix of the image names.
+    a_values : sequence of float, optional
+        The slices to show; default: planned for the scene (:func:`scene_slices`).
+    calibration : dict, optional
+        Grid summary for the page (``kind``, ``pitch_px``, ``rotation_deg``, ``residual_rms_px``, …).
+    index_href : str, optional
+        Link back to an index of several captures.
+    """
+    from ..refocus import refocus
+
+    camera = lf.camera
+    focus = depth_from_focus(lf, a_values)
+    a_values = scene_slices(camera, focus) if a_values is None else np.asarray(a_values, dtype=np.float64)
+    stack = refocus(lf, a_values)
+    tone = ToneMap.for_images(stack)
+    extension = image_extension(lf.lens_shape)
+    jobs, slices = [], []
+    names = slice_names(stem, a_values)
+    for k, record in enumerate(geometry.slice_geometry(camera, a_values).records()):
+        path = f"slices/{names[k]}{extension}"
+        jobs.append((os.path.join(outdir, path), lambda k=k: tone(stack[k])))
+        slices.append(dict(record, image=path))
+    views = _view_records(camera, stem, extension)
+    for item in views["items"]:
+        ky, kx = item["view"]
+        jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
+    intervals = slice_intervals_a(camera, a_values)
+    a_far, a_near = float(intervals.min()), float(intervals.max())
+    jobs.append((os.path.join(outdir, "depth.png"),
+                 lambda: depth_colours(focus.a, focus.confidence, a_far, a_near, MIN_CONFIDENCE)))
+    write_all(jobs)
+    slice_index = sharpest_slice(camera, a_values, focus.a)
+    data = {
+        "format": "lfproc-viewer-1",
+        "source": source,
+        "stem": stem,
+        "lens_shape": list(lf.lens_shape),
+        "display": {"scale": upscale_factor(lf.lens_shape, options.min_long_side), "upscale": options.upscale,
+                    "tone_map": {"black": tone.black, "white": tone.white, "description": tone.describe()}},
+        "slices": slices,
+        "views": views,
+        "depth": _depth_record(camera, focus, a_far, a_near),
+        "camera": camera_summary(camera),
+        "calibration": calibration or {},
+        "index_href": index_href,
+    }
+    write_json_atomic(os.path.join(outdir, "geometry.json"), data)
+    maps = {"slice_index": encode_array(slice_index), "distance_mm": encode_array(focus.distance_mm),
+            "confidence": encode_array(np.round(focus.confidence * 255).astype(np.uint8))}
+    page = os.path.join(outdir, "index.html")
+    write_text_atomic(page, render_page(data, maps))
+    return page
+
+
+def _view_records(camera, stem: str, extension: str) -> dict:
+    """The views inside the aperture with their virtual cameras (Eqs. 17, 33, 34) and image paths."""
+    from ..viewpoints import viewpoint_geometry
+
+    keep = geometry.views_inside_aperture(camera)
+    items = [dict(vg.metadata(), image=f"views/{view_name(stem, *vg.view)}{extension}")
+             for row in viewpoint_geometry(camera) for vg in row if keep[vg.view]]
+    return {"m_hat": camera.m_hat, "center": camera.center_index, "baseline_mm": geometry.baseline_mm(camera, 1),
+            "aperture_radius_mm": (camera.main_focal_length_mm / (2 * camera.f_number)) if camera.f_number else None,
+            "items": items}
+
+
+def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
+    """The depth map's image, method and colour legend (ticks in metres at their place on the scale)."""
+    from ..outputs import DEPTH_COLOURS
+
+    ticks = []
+    for t in np.linspace(0.0, 1.0, 5):
+        a = a_far + t * (a_near - a_far)
+        distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
+        ticks.append({"t": float(t), "distance_mm": distance, "label": metres(distance)})
+    return {"image": "depth.png", "method": f"{focus.method} over {len(focus.sweep_a)} slices "
+                                            f"(a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})",
+            "min_confidence": MIN_CONFIDENCE, "colours": [list(c) for c in DEPTH_COLOURS], "ticks": ticks,
+            "colour_scale": "linear in a (disparity), far = first colour, near = last; grey = low confidence"}
+
+
+def camera_summary(camera) -> list[list[str]]:
+    """(label, value) rows describing the camera for people."""
+    focus_mm = geometry.slice_distance_mm(camera, 0.0)
+    rows = [
+        ("camera", camera.name or "(unnamed)"),
+        ("main lens", f"f = {camera.main_focal_length_mm:g} mm" + (f", f/{camera.f_number:g}" if camera.f_number else "")),
+        ("focused at (a = 0)", metres(focus_mm)),
+        ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, f = {camera.mla_focal_length_mm:g} mm"),
+        ("pixels", f"{camera.pixel_pitch_mm * 1000:g} µm ({camera.effective_pixel_pitch_mm * 1000:.3f} µm after "
+                   f"resampling to {camera.m_hat} x {camera.m_hat} views)"),
+        ("baseline of adjacent views", f"{geometry.baseline_mm(camera, 1):.3f} mm"),
+    ]
+    exit_pupil = getattr(camera, "exit_pupil_distance_mm", math.inf)
+    rows.append(("exit pupil", "telecentric (at infinity)" if not math.isfinite(exit_pupil) else f"{exit_pupil:g} mm"))
+    return [list(r) for r in rows]
+
+
+def calibration_summary(grid, white: str | None = None) -> dict:
+    """The lens grid as the page shows it."""
+    if grid is None:
+        return {}
+    summary = {"lattice": grid.kind, "lenses": f"{grid.rows} x {grid.cols}", "pitch_px": round(grid.pitch_px, 4),
+               "rotation_deg": round(grid.rotation_deg, 4), "residual_rms_px": round(grid.residual_rms_px, 4)}
+    if white:
+        summary["white_image"] = white
+    return summary
+
+
+def write_index(outdir: str, pages: list[dict]) -> str:
+    """``OUTDIR/index.html`` linking the pages of several captures; ``pages`` as returned by
+    :func:`page_entry`. Returns its path."""
+    from ._page import render_index
+
+    path = os.path.join(outdir, "index.html")
+    write_text_atomic(path, render_index(pages))
+    return path
+
+
+def page_entry(outdir: str, page_dir: str) -> dict:
+    """The index card of a page written by :func:`build_page` into ``page_dir`` (read from its geometry.json)."""
+    import json
+
+    with open(os.path.join(page_dir, "geometry.json"), encoding="utf-8") as fh:
+        data = json.load(fh)
+    relative = os.path.relpath(page_dir, outdir).replace(os.sep, "/")
+    middle = data["slices"][len(data["slices"]) // 2]
+    distances = [s["distance_mm"] for s in data["slices"]]
+    span = f"{metres(min(d for d in distances if d is not None))} to " \
+           f"{metres(max(distances) if None not in distances else None)}"
+    return {"stem": data["stem"], "href": f"{relative}/index.html", "thumbnail": f"{relative}/{middle['image']}",
+            "source": data["source"], "slices": len(data["slices"]), "range": span}

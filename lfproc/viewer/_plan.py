@@ -1,0 +1,56 @@
+"""Which slices a viewer page shows, and which of them is sharpest at each lens."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import geometry
+
+#: most slices on one page (a wider plan is thinned evenly in a)
+MAX_SLICES = 48
+#: lenses below this confidence do not set the scene's depth range
+MIN_CONFIDENCE = 0.3
+
+
+def scene_slices(camera, focus, min_confidence: float = MIN_CONFIDENCE, max_slices: int = MAX_SLICES) -> np.ndarray:
+    """The fewest slices whose DOFs cover the scene (:func:`lfproc.geometry.plan_slices`, as ``--depth-range``).
+
+    The scene's range is the 2nd to 98th percentile of the refocus parameter of the lenses whose
+    depth-from-focus confidence reaches ``min_confidence`` (the whole sweep if fewer than 10 do),
+    widened by half a slice's DOF at each end.
+    """
+    confident = focus.confidence >= min_confidence
+    a = focus.a[confident] if confident.sum() >= 10 else focus.sweep_a
+    a_lo, a_hi = (float(v) for v in np.percentile(a, [2, 98]))
+    c = max(camera.center_index, 1)  # widened by half a DOF, about (1 + |a|)/(2c) in a, against estimate errors
+    a_lo, a_hi = a_lo - (1 + abs(a_lo)) / (2 * c), a_hi + (1 + abs(a_hi)) / (2 * c)
+    a_inf = geometry.infinity_parameter(camera)
+    far = math.inf if a_lo <= a_inf else geometry.slice_distance_mm(camera, a_lo)
+    near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
+    near = min(near, far) if math.isfinite(near) else geometry.slice_distance_mm(camera, a_inf + 1.0)
+    planned = geometry.plan_slices(camera, near, far)
+    if len(planned) > max_slices:
+        planned = np.linspace(planned[0], planned[-1], max_slices)
+    return np.asarray(planned, dtype=np.float64)
+
+
+def slice_intervals_a(camera, a_values) -> np.ndarray:
+    """``(K, 2)``: each slice's DOF as an interval of ``a`` (far limit's a, near limit's a; Eq. 31 inverted)."""
+    geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)))
+    a_inf = geometry.infinity_parameter(camera)
+    far_a = [a_inf if not math.isfinite(f) else geometry.refocus_parameter(camera, f) for f in geo.far_mm]
+    near_a = [geometry.refocus_parameter(camera, n) for n in geo.near_mm]
+    return np.stack([np.minimum(far_a, near_a), np.maximum(far_a, near_a)], axis=1)
+
+
+def sharpest_slice(camera, a_values, lens_a: np.ndarray) -> np.ndarray:
+    """Per lens, the index of the slice whose DOF holds the lens's ``a`` (the nearest one where none does;
+    among overlapping ones, the one centred nearest). Returns uint8 ``(Ny, Nx)``."""
+    a_values = np.asarray(a_values, dtype=np.float64)
+    intervals = slice_intervals_a(camera, a_values)
+    lens_a = np.asarray(lens_a, dtype=np.float64)
+    outside = np.maximum(intervals[:, 0, None, None] - lens_a, lens_a - intervals[:, 1, None, None])
+    cost = np.maximum(outside, 0.0) + 1e-6 * np.abs(lens_a - a_values[:, None, None])
+    return np.argmin(np.nan_to_num(cost, nan=np.inf), axis=0).astype(np.uint8)

@@ -1,0 +1,215 @@
+// lfproc viewer: refocus by clicking, move the viewpoint by dragging, read distances in metres.
+// Everything this page needs is inline or next to it; it makes no network requests.
+(function () {
+  "use strict";
+  var data = JSON.parse(document.getElementById("lfproc-data").textContent);
+  var maps = JSON.parse(document.getElementById("lfproc-maps").textContent);
+  var $ = function (id) { return document.getElementById(id); };
+
+  function decode(entry) {  // base64 of little-endian bytes -> typed array
+    var text = atob(entry.base64), bytes = new Uint8Array(text.length);
+    for (var i = 0; i < text.length; i++) { bytes[i] = text.charCodeAt(i); }
+    return entry.dtype === "uint8" ? bytes : new Float32Array(bytes.buffer);
+  }
+  var sliceIndex = decode(maps.slice_index), distance = decode(maps.distance_mm),
+      confidence = decode(maps.confidence);
+  var ny = data.lens_shape[0], nx = data.lens_shape[1];
+  var slices = data.slices, views = data.views.items, centre = data.views.center;
+
+  function metres(mm) {  // as lfproc.outputs.metres: three significant digits
+    if (mm === null || mm === undefined || !isFinite(mm)) { return "infinity"; }
+    var v = mm / 1000;
+    if (Math.abs(v) >= 100) { return v.toFixed(0) + " m"; }
+    return (Math.abs(v) >= 1 ? v.toPrecision(3) : v.toFixed(3)) + " m";
+  }
+
+  // ---------------------------------------------------------------- layout
+  var photo = $("photo"), depth = $("depth"), slider = $("slider"), marker = $("marker");
+  var width = nx * data.display.scale, height = ny * data.display.scale;
+  [photo, depth].forEach(function (img) {
+    img.width = width; img.height = height;
+    if (data.display.upscale === "nearest") { img.classList.add("pixelated"); }
+  });
+  $("frame").style.width = width + "px";
+  $("title").textContent = "lfproc viewer: " + data.stem;
+  $("source").textContent = data.source;
+  if (data.index_href) { $("back").href = data.index_href; $("back").hidden = false; }
+  depth.src = data.depth.image;
+
+  // preload every image so that sliding and dragging swap pictures at once
+  slices.concat(views).forEach(function (item) { new Image().src = item.image; });
+
+  // ---------------------------------------------------------------- state: a slice or a view is shown
+  var state = { mode: "slice", slice: 0, view: null };
+
+  function showSlice(k) {
+    var s = slices[k];
+    state.mode = "slice"; state.slice = k;
+    photo.src = s.image;
+    photo.dataset.shown = "slice " + k;
+    slider.value = String(k);
+    $("mode").textContent = "Refocused slice " + (k + 1) + " of " + slices.length + " (a = " + s.a.toFixed(3) + ")";
+    $("slice-readout").textContent = "This slice is focused at " + metres(s.distance_mm) + "; sharp from " +
+      metres(s.near_mm) + " to " + metres(s.far_mm) + " (depth of field " +
+      (isFinite(s.dof_mm) && s.dof_mm !== null ? metres(s.dof_mm) : "infinite") + ").";
+    drawAperture();
+  }
+
+  function viewAt(ky, kx) {
+    for (var i = 0; i < views.length; i++) {
+      if (views[i].view[0] === ky && views[i].view[1] === kx) { return views[i]; }
+    }
+    return null;
+  }
+
+  function nearestView(ky, kx) {  // the view inside the aperture closest to (ky, kx)
+    var best = null, bestD = Infinity;
+    views.forEach(function (v) {
+      var d = (v.view[0] - ky) * (v.view[0] - ky) + (v.view[1] - kx) * (v.view[1] - kx);
+      if (d < bestD) { bestD = d; best = v; }
+    });
+    return best;
+  }
+
+  function showView(v) {
+    state.mode = "view"; state.view = v;
+    photo.src = v.image;
+    photo.dataset.shown = "view " + v.view[0] + "," + v.view[1];
+    $("mode").textContent = "Viewpoint [" + v.view[0] + ", " + v.view[1] + "] (a view: sharp at every depth)";
+    var p = v.position_mm;
+    $("view-readout").textContent = "View [" + v.view[0] + ", " + v.view[1] + "]: virtual camera at x = " +
+      p[1].toFixed(3) + " mm, y = " + p[0].toFixed(3) + " mm in the main lens focal plane, " +
+      v.baseline_to_center_mm.toFixed(3) + " mm from the central view; tilt " + v.tilt_deg[1].toFixed(3) +
+      "°, " + v.tilt_deg[0].toFixed(3) + "°. Adjacent views are " + data.views.baseline_mm.toFixed(3) +
+      " mm apart.";
+    drawAperture();
+  }
+
+  // ---------------------------------------------------------------- click: focus where the user points
+  function focusAt(jy, jx, fx, fy) {
+    var i = jy * nx + jx, k = sliceIndex[i], d = distance[i], c = confidence[i] / 255;
+    showSlice(k);
+    var s = slices[k];
+    var out = $("readout");
+    out.innerHTML = "";
+    out.appendChild(document.createTextNode("Here: "));
+    var b = document.createElement("b"); b.id = "here-distance"; b.textContent = metres(d); out.appendChild(b);
+    out.appendChild(document.createTextNode(" from the sensor" + (c < data.depth.min_confidence ?
+      " (low confidence: little texture here)" : "") + ". Sharpest slice: " + metres(s.distance_mm) +
+      ", in focus from " + metres(s.near_mm) + " to " + metres(s.far_mm) + "."));
+    out.dataset.distanceMm = isFinite(d) ? String(d) : "inf";
+    out.dataset.slice = String(k);
+    marker.hidden = false;
+    marker.style.left = (fx * 100) + "%"; marker.style.top = (fy * 100) + "%";
+  }
+
+  function lensOf(img, event) {
+    var r = img.getBoundingClientRect();
+    var fx = (event.clientX - r.left) / r.width, fy = (event.clientY - r.top) / r.height;
+    fx = Math.min(Math.max(fx, 0), 0.999999); fy = Math.min(Math.max(fy, 0), 0.999999);
+    return { jy: Math.floor(fy * ny), jx: Math.floor(fx * nx), fx: fx, fy: fy };
+  }
+
+  // ---------------------------------------------------------------- drag: move the viewpoint
+  var drag = null;
+  photo.addEventListener("pointerdown", function (e) {
+    e.preventDefault();
+    var start = state.view || viewAt(centre, centre) || nearestView(centre, centre);
+    drag = { x: e.clientX, y: e.clientY, moved: false, start: start };
+    photo.setPointerCapture(e.pointerId);
+  });
+  photo.addEventListener("pointermove", function (e) {
+    if (!drag) { return; }
+    var dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+    if (!drag.moved && Math.abs(dx) + Math.abs(dy) < 6) { return; }
+    drag.moved = true;
+    var r = photo.getBoundingClientRect(), m = data.views.m_hat;  // the picture's width spans all views
+    var v = nearestView(drag.start.view[0] + Math.round(dy / r.height * m),
+                        drag.start.view[1] + Math.round(dx / r.width * m));
+    if (v && v !== state.view) { showView(v); }
+  });
+  photo.addEventListener("pointerup", function (e) {
+    if (drag && !drag.moved) { var p = lensOf(photo, e); focusAt(p.jy, p.jx, p.fx, p.fy); }
+    drag = null;
+  });
+  photo.addEventListener("pointercancel", function () { drag = null; });
+  depth.addEventListener("click", function (e) { var p = lensOf(depth, e); focusAt(p.jy, p.jx, p.fx, p.fy); });
+
+  document.addEventListener("keydown", function (e) {
+    var steps = { ArrowLeft: [0, -1], ArrowRight: [0, 1], ArrowUp: [-1, 0], ArrowDown: [1, 0] }[e.key];
+    if (!steps || e.target === slider) { return; }
+    e.preventDefault();
+    var from = state.view || viewAt(centre, centre) || nearestView(centre, centre);
+    var next = viewAt(from.view[0] + steps[0], from.view[1] + steps[1]);
+    if (next) { showView(next); } else if (state.mode !== "view") { showView(from); }
+  });
+
+  // ---------------------------------------------------------------- slider over the slices, in metres
+  slider.max = String(slices.length - 1);
+  slider.addEventListener("input", function () { showSlice(Number(slider.value)); });
+  var labels = $("slider-labels"), every = Math.max(1, Math.ceil(slices.length / 6));
+  slices.forEach(function (s, k) {
+    if (k % every !== 0 && k !== slices.length - 1) { return; }
+    var span = document.createElement("span");
+    span.textContent = metres(s.distance_mm);
+    span.style.left = (slices.length > 1 ? k / (slices.length - 1) * 100 : 50) + "%";
+    labels.appendChild(span);
+  });
+
+  // ---------------------------------------------------------------- the views in the aperture, with the baseline
+  var svgNS = "http://www.w3.org/2000/svg";  // an XML namespace name, not a network request
+  function drawAperture() {
+    var svg = $("aperture"), radius = data.views.aperture_radius_mm, reach = 0;
+    views.forEach(function (v) { reach = Math.max(reach, Math.abs(v.position_mm[0]), Math.abs(v.position_mm[1])); });
+    var scale = 1 / Math.max(radius || 0, reach * 1.05, 1e-9);
+    svg.innerHTML = "";
+    if (radius) {
+      var stop = document.createElementNS(svgNS, "circle");
+      stop.setAttribute("class", "stop"); stop.setAttribute("r", String(radius * scale));
+      svg.appendChild(stop);
+    }
+    var dot = 0.45 * data.views.baseline_mm * scale;
+    views.forEach(function (v) {
+      var c = document.createElementNS(svgNS, "circle");
+      c.setAttribute("class", "view" + (state.mode === "view" && state.view === v ? " current" : ""));
+      c.setAttribute("cx", String(v.position_mm[1] * scale)); c.setAttribute("cy", String(v.position_mm[0] * scale));
+      c.setAttribute("r", String(dot));
+      c.addEventListener("click", function () { showView(v); });
+      var title = document.createElementNS(svgNS, "title");
+      title.textContent = "view [" + v.view + "], " + v.baseline_to_center_mm.toFixed(3) + " mm from the centre";
+      c.appendChild(title);
+      svg.appendChild(c);
+    });
+  }
+
+  // ---------------------------------------------------------------- depth legend and summaries
+  var colours = data.depth.colours.map(function (c) { return "rgb(" + c.join(",") + ")"; });
+  $("legend-bar").style.background = "linear-gradient(to right, " + colours.join(", ") + ")";
+  data.depth.ticks.forEach(function (t) {
+    var span = document.createElement("span");
+    span.textContent = metres(t.distance_mm);
+    span.style.left = (t.t * 100) + "%";
+    $("legend-ticks").appendChild(span);
+  });
+  $("depth-method").textContent = "Distance from the sensor, " + data.depth.method + "; colours " +
+    data.depth.colour_scale + ".";
+
+  function fillTable(table, rows) {
+    rows.forEach(function (row) {
+      var tr = document.createElement("tr");
+      row.forEach(function (cell) { var td = document.createElement("td"); td.textContent = String(cell); tr.appendChild(td); });
+      table.appendChild(tr);
+    });
+  }
+  fillTable($("camera"), data.camera);
+  var calib = Object.keys(data.calibration).map(function (k) { return [k.replace(/_/g, " "), data.calibration[k]]; });
+  fillTable($("calibration"), calib.length ? calib : [["grid", "not recorded"]]);
+  $("display").textContent = "Images are 8-bit sRGB previews, enlarged " + data.display.scale + "x (" +
+    data.display.upscale + "); exposure: " + data.display.tone_map.description + ". The linear TIFF/EXR " +
+    "outputs of lfproc refocus and lfproc views are the data.";
+
+  // start on the slice sharpest at the centre of the picture
+  var middle = Math.floor(ny / 2) * nx + Math.floor(nx / 2);
+  showSlice(sliceIndex[middle] || 0);
+  document.body.dataset.ready = "true";
+})();
