@@ -1,0 +1,154 @@
+"""The viewer in a real browser (headless Chromium driven by Selenium): click a rendered plane and read
+its distance, move the slider and the viewpoint, take a screenshot.
+
+Chromium and chromedriver come from Debian's packages (``apt-get install chromium chromium-driver``;
+``.ci/run`` installs them). Outside CI a machine without them skips these tests with that reason; in
+CI (``CI=true``) a missing browser is a failure, so the tests always run there.
+"""
+
+import json
+import os
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+from viewer_scene import inner_lenses, render_capture
+
+BROWSER_ARGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--window-size=1280,1000")
+
+
+def _browser_paths():
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver = shutil.which("chromedriver")
+    return chromium, driver
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    chromium, driver = _browser_paths()
+    if not (chromium and driver):
+        message = "Chromium or chromedriver missing: apt-get install -y chromium chromium-driver"
+        if os.environ.get("CI") == "true":
+            pytest.fail(message + " (CI must run the browser tests)")
+        pytest.skip(message)  # outside CI only: a developer machine without a browser
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        if os.environ.get("CI") == "true":
+            raise
+        pytest.skip("selenium missing: pip install -e '.[test]'")  # outside CI only, as above
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for arg in BROWSER_ARGS:
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})  # console, requests
+    options.add_argument(f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}")  # new and empty
+    driver_ = webdriver.Chrome(options=options, service=Service(driver))
+    driver_.set_page_load_timeout(30)
+    yield driver_
+    driver_.quit()
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("viewer-scene")
+    truth = render_capture(folder)
+    out = folder / "viewer"
+    proc = run_cli("viewer", folder / "capture.png", "--camera", folder / "camera.toml", "--calib",
+                   folder / "grid.json", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((out / "geometry.json").read_text())
+    return dict(truth, out=out, data=data)
+
+
+def _open(browser, page):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    browser.get((page["out"] / "index.html").as_uri())
+    WebDriverWait(browser, 10).until(lambda d: d.execute_script("return document.body.dataset.ready === 'true'"))
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == [], errors
+    return browser.find_element("id", "photo")
+
+
+def _click_lens(browser, photo, page, jy, jx):
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    ny, nx = page["data"]["lens_shape"]
+    size = photo.size
+    dx = (jx + 0.5) / nx * size["width"] - size["width"] / 2  # Selenium 4: offsets from the element's centre
+    dy = (jy + 0.5) / ny * size["height"] - size["height"] / 2
+    ActionChains(browser).move_to_element_with_offset(photo, int(round(dx)), int(round(dy))).click().perform()
+
+
+def _shown_distance_mm(browser):
+    text = browser.find_element("id", "here-distance").text
+    match = re.fullmatch(r"([0-9.]+) m", text)
+    assert match, text
+    return float(match.group(1)) * 1000.0
+
+
+@pytest.mark.parametrize("plane", [0, 1], ids=["near card", "far wall"])
+def test_click_on_a_plane_shows_its_distance_within_the_slice_dof(browser, page, plane):
+    photo = _open(browser, page)
+    lenses = np.argwhere(inner_lenses(page["label"], plane))
+    jy, jx = lenses[len(lenses) // 2]
+    _click_lens(browser, photo, page, jy, jx)
+    k = int(browser.find_element("id", "readout").get_attribute("data-slice"))
+    chosen = page["data"]["slices"][k]
+    truth = page["distances"][plane]
+    shown = _shown_distance_mm(browser)
+    assert abs(shown - truth) <= chosen["dof_mm"], (shown, truth, chosen)
+    assert chosen["near_mm"] <= truth <= chosen["far_mm"], (truth, chosen)  # the slice shown is sharp there
+    assert photo.get_attribute("src").endswith(chosen["image"])
+    assert browser.find_element("id", "slider").get_attribute("value") == str(k)
+    # everything the page requested came from its own folder: no network access
+    requests = [json.loads(entry["message"])["message"] for entry in browser.get_log("performance")]
+    folder = page["out"].as_uri() + "/"
+    loaded = {r["params"]["request"]["url"] for r in requests if r["method"] == "Network.requestWillBeSent"
+              and r["params"].get("documentURL", "").startswith(folder)}
+    assert len(loaded) > 3 and all(url.startswith(folder) for url in loaded), loaded
+
+
+def test_slider_and_viewpoint_change_the_picture_and_a_screenshot_is_taken(browser, page, tmp_path):
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    photo = _open(browser, page)
+    slices = page["data"]["slices"]
+    slider = browser.find_element("id", "slider")
+    start = int(slider.get_attribute("value"))
+    before_src, before_png = photo.get_attribute("src"), photo.screenshot_as_png
+    slider.send_keys(Keys.ARROW_LEFT if start == len(slices) - 1 else Keys.ARROW_RIGHT)
+    moved = int(slider.get_attribute("value"))
+    assert moved != start and photo.get_attribute("src").endswith(slices[moved]["image"])
+    assert photo.screenshot_as_png != before_png
+    assert before_src != photo.get_attribute("src")
+
+    after_slider = photo.screenshot_as_png
+    width = photo.size["width"]
+    ActionChains(browser).move_to_element(photo).click_and_hold().move_by_offset(width // 4, 0) \
+        .move_by_offset(width // 8, 0).release().perform()
+    shown = photo.get_attribute("data-shown")
+    assert shown.startswith("view "), shown
+    ky, kx = map(int, shown[5:].split(","))
+    centre = page["data"]["views"]["center"]
+    assert ky == centre and kx > centre  # dragging right moves the viewpoint to larger kx
+    assert photo.screenshot_as_png != after_slider
+    assert "mm from the central view" in browser.find_element("id", "view-readout").text
+
+    before_key = photo.screenshot_as_png
+    browser.find_element("tag name", "body").send_keys(Keys.ARROW_LEFT)
+    assert photo.get_attribute("data-shown") == f"view {ky},{kx - 1}"
+    assert photo.screenshot_as_png != before_key
+
+    shot = tmp_path / "viewer.png"
+    assert browser.save_screenshot(str(shot))
+    assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
