@@ -1,8 +1,8 @@
 """``lfproc demo``: the whole pipeline on the bundled sample, written to ``./lfproc-demo/``.
 
 Geometry of the sample camera → grid calibration from the white image → decoding into a light field
-→ a refocus stack covering the sample's depth range (plus an animation) → the viewpoint mosaic and a
-view animation. The summary checks the refocused slices against the sample's known plane distances.
+→ a refocus stack covering the sample's depth range (plus a labelled animation) → the viewpoint mosaic
+(plus an 8-bit preview) and a view animation → the browser viewer (``lfproc-demo/viewer/index.html``). The summary checks the refocused slices against the sample's known plane distances.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ def run(args) -> int:
     from ..outputs import write_mosaic_preview, write_slice_gif, write_slices, write_view_gif, write_view_mosaic
     from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
     from ..refocus import refocus
+    from ..viewer import build_page, calibration_summary
     from ..viewpoints import viewpoints
 
     sample = Path(args.sample) if args.sample else default_sample_dir()
@@ -93,5 +94,9 @@ def run(args) -> int:
     view_gif = write_view_gif(str(out), "sample", inside, keep, camera)
     step(f"views: {int(keep.sum())} of {m * m} inside the aperture; mosaic {mosaic_path} (preview {preview}), "
          f"animation {view_gif}")
-    step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations in {out}/")
+    page = build_page(lf, str(out / "viewer"), source=source, stem="sample", a_values=a_values,
+                      calibration=calibration_summary(grid, str((sample / "white.png").resolve())))
+    step(f"viewer: {Path(page).resolve()}")
+    step("  open it in a browser: click to refocus and read distances, drag to move the viewpoint")
+    step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations, 1 viewer in {out}/")
     return 0

@@ -1,0 +1,237 @@
+"""lfproc viewer without a browser: the page's files and data, depth from focus on a rendered scene, the
+local server, several captures; and the previews for people (tone mapping, enlarging, labels, mosaics)."""
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+import urllib.request
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from lfproc import geometry
+from lfproc.io import read_image, srgb_encode
+from lfproc.outputs import (ToneMap, metres, slice_label, upscale, upscale_factor, write_mosaic_preview,
+                            write_slice_gif)
+
+from conftest import ROOT, assert_clean_error, run_cli
+from viewer_scene import camera as scene_camera, inner_lenses, render_capture
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    return render_capture(tmp_path_factory.mktemp("scene"))
+
+
+@pytest.fixture(scope="module")
+def page(scene, tmp_path_factory):
+    folder = scene["folder"]
+    out = tmp_path_factory.mktemp("page") / "viewer"
+    proc = run_cli("viewer", folder / "capture.png", "--camera", folder / "camera.toml", "--calib",
+                   folder / "grid.json", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"viewer: {out / 'index.html'}"
+    return out
+
+
+# ------------------------------------------------------------------ previews
+def test_tone_map_is_a_percentile_stretch_then_srgb():
+    rng = np.random.default_rng(1)
+    images = rng.gamma(2.0, 0.1, (3, 40, 50, 3)).astype(np.float32)
+    tone = ToneMap.for_images(images)
+    assert tone.black == pytest.approx(np.percentile(images, 0.5))
+    assert tone.white == pytest.approx(np.percentile(images, 99.5))
+    expected = np.round(srgb_encode((images - tone.black) / (tone.white - tone.black)) * 255)
+    assert np.abs(tone(images).astype(int) - expected).max() <= 1
+    assert tone(images).min() == 0 and tone(images).max() == 255  # the whole display range: not washed out
+
+
+def test_upscaling_reaches_the_display_size_and_nearest_keeps_blocks():
+    image = np.arange(53 * 75 * 3, dtype=np.uint8).reshape(53, 75, 3)
+    factor = upscale_factor(image.shape)
+    assert factor == 7 and 75 * 6 < 512 <= 75 * 7
+    big = upscale(image, factor)
+    assert big.shape == (371, 525, 3)
+    np.testing.assert_array_equal(big[::7, ::7], image)
+    np.testing.assert_array_equal(big[6::7, 6::7], image)
+    assert upscale(image, factor, "smooth").shape == big.shape
+    assert upscale_factor((434, 625)) == 1
+
+
+def test_slice_label_gives_distance_and_dof_in_metres():
+    cam = scene_camera()
+    rec = geometry.slice_geometry(cam, 1.3).records()[0]
+    text = slice_label(rec["distance_mm"], rec["near_mm"], rec["far_mm"])
+    assert text == (f"focus {rec['distance_mm'] / 1000:.3f} m | DOF {rec['near_mm'] / 1000:.3f} m - "
+                    f"{rec['far_mm'] / 1000:.3f} m")
+    assert metres(1236.4) == "1.24 m" and metres(float("inf")) == "inf" and metres(658.99) == "0.659 m"
+
+
+def test_refocus_gif_is_enlarged_labelled_and_uses_the_display_range(tmp_path):
+    cam = scene_camera()
+    ramp = np.linspace(0.2, 0.3, 37, dtype=np.float32)  # a dim, low-contrast stack of grey ramps
+    stack = np.broadcast_to(ramp[None, None, :, None], (3, 25, 37, 3)) * np.float32([1.0, 0.98, 0.96])[:, None, None,
+                                                                                                     None]
+    path = write_slice_gif(str(tmp_path), "s", stack, cam, [0.4, 0.8, 1.3])
+    with Image.open(path) as gif:
+        assert gif.n_frames == 4  # there and back
+        width, height = gif.size
+        assert max(width, height) >= 512 and width == 37 * 14
+        frames = []
+        for k in range(3):
+            gif.seek(k)
+            frames.append(np.asarray(gif.convert("RGB")))
+    pictures = np.stack([frame[:25 * 14] for frame in frames])
+    for frame in frames:
+        band = frame[25 * 14:]
+        assert band.shape[0] >= 12 and (band > 200).any() and (band < 30).mean() > 0.5  # white text on black
+    assert pictures.min() <= 5 and pictures.max() >= 250  # one exposure for all frames, the whole range
+    assert not np.array_equal(frames[0][25 * 14:], frames[1][25 * 14:])  # each frame has its own label
+
+
+def test_views_inside_aperture_mosaic_blacks_out_the_others(scene, tmp_path):
+    folder, cam = scene["folder"], scene["camera"]
+    base = [folder / "capture.png", "--camera", folder / "camera.toml", "--calib", folder / "grid.json", "--mosaic"]
+    assert run_cli("views", *base, "-o", tmp_path / "all").returncode == 0
+    proc = run_cli("views", *base, "--inside-aperture", "-o", tmp_path / "inside")
+    assert proc.returncode == 0, proc.stderr
+    keep = geometry.views_inside_aperture(cam)
+    assert not keep.all()
+    inside = read_image(tmp_path / "inside" / "capture_views_mosaic.tif")
+    full = read_image(tmp_path / "all" / "capture_views_mosaic.tif")
+    m = cam.m_hat
+    ny, nx = inside.shape[0] // m, inside.shape[1] // m
+    outside_signal = False
+    for ky in range(m):
+        for kx in range(m):
+            block = (slice(ky * ny, (ky + 1) * ny), slice(kx * nx, (kx + 1) * nx))
+            if keep[ky, kx]:
+                view = read_image(tmp_path / "inside" / f"capture_view_{ky:02d}_{kx:02d}.tif")
+                np.testing.assert_array_equal(inside[block], view.reshape(inside[block].shape))
+                np.testing.assert_array_equal(inside[block], full[block])
+            else:
+                assert not inside[block].any(), (ky, kx)
+                outside_signal = outside_signal or bool(full[block].any())
+    assert outside_signal  # without --inside-aperture those views hold something: the flag made them black
+    side = json.loads((tmp_path / "inside" / "capture_views_mosaic.json").read_text())
+    assert len(side["views"]) == keep.sum()
+
+
+def test_mosaic_preview_is_enlarged_8bit_with_black_views_outside(scene, tmp_path):
+    m = 5
+    views = np.full((m, m, 20, 30, 3), 0.5, np.float32)
+    keep = np.ones((m, m), bool)
+    keep[0, 0] = False
+    path = write_mosaic_preview(str(tmp_path), "p", views, keep)
+    with Image.open(path) as image:
+        pixels = np.asarray(image)
+    assert max(pixels.shape[:2]) >= 512 and pixels.dtype == np.uint8
+    factor = upscale_factor((m * 21 - 1, m * 31 - 1))
+    assert not pixels[: 20 * factor, : 30 * factor].any() and pixels[: 20 * factor, 31 * factor: 61 * factor].min() > 0
+
+
+# ------------------------------------------------------------------ depth from focus and slice choice
+def test_depth_from_focus_finds_each_plane_and_its_slice(scene):
+    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.viewer import depth_from_focus, scene_slices, sharpest_slice
+
+    folder, cam = scene["folder"], scene["camera"]
+    lf = load_lightfield(str(folder / "capture.png"), prepare_decoding(cam, calib=str(folder / "grid.json")))
+    focus = depth_from_focus(lf)
+    a_values = scene_slices(cam, focus)
+    geo = geometry.slice_geometry(cam, a_values)
+    index = sharpest_slice(cam, a_values, focus.a)
+    for plane, truth in enumerate(scene["distances"]):
+        region = inner_lenses(scene["label"], plane)
+        chosen = index[region]
+        holds = (geo.near_mm[chosen] <= truth) & (truth <= geo.far_mm[chosen])
+        assert holds.mean() >= 0.9, (plane, holds.mean())
+        estimate = float(np.median(focus.distance_mm[region]))
+        k = int(np.bincount(chosen).argmax())
+        assert abs(estimate - truth) <= geo.dof_mm[k], (plane, estimate, truth)
+        assert np.median(focus.confidence[region]) > 0.5
+
+
+# ------------------------------------------------------------------ the page
+def test_page_is_self_contained_and_its_data_is_the_geometry(page, scene):
+    html = (page / "index.html").read_text()
+    links = re.findall(r'(?:src|href)="([^"]*)"', html)
+    assert all(not re.match(r"[a-z]+:", link) for link in links), links  # only relative links ...
+    assert "fetch(" not in html and "XMLHttpRequest" not in html and "<link" not in html  # ... and nothing loaded
+    data = json.loads((page / "geometry.json").read_text())
+    cam = scene["camera"]
+    expected = geometry.slice_geometry(cam, [s["a"] for s in data["slices"]]).records()
+    for got, want in zip(data["slices"], expected):
+        for key in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm"):
+            assert got[key] == pytest.approx(want[key], rel=1e-12) or (got[key] is None and want[key] == np.inf)
+        with Image.open(page / got["image"]) as image:
+            assert image.mode in ("L", "RGB") and image.size == (data["lens_shape"][1], data["lens_shape"][0])
+    keep = geometry.views_inside_aperture(cam)
+    assert sorted(tuple(v["view"]) for v in data["views"]["items"]) == sorted(map(tuple, np.argwhere(keep).tolist()))
+    assert all((page / v["image"]).is_file() for v in data["views"]["items"])
+    assert data["views"]["baseline_mm"] == pytest.approx(geometry.baseline_mm(cam, 1))
+    assert (page / "depth.png").is_file() and data["display"]["scale"] * max(data["lens_shape"]) >= 512
+    embedded = json.loads(re.search(r'<script type="application/json" id="lfproc-data">(.*?)</script>', html,
+                                    re.S).group(1))
+    assert embedded == data
+
+
+def test_several_captures_get_a_page_each_and_an_index(scene, tmp_path):
+    folder = scene["folder"]
+    other = render_capture(tmp_path / "other", seed=9, flip=True)["folder"]
+    shutil.copy(folder / "capture.png", tmp_path / "left.png")
+    shutil.copy(other / "capture.png", tmp_path / "right.png")
+    out = tmp_path / "out"
+    proc = run_cli("viewer", tmp_path / "left.png", tmp_path / "right.png", "--camera", folder / "camera.toml",
+                   "--calib", folder / "grid.json", "-o", out, "--depth-range", "400:2000")
+    assert proc.returncode == 0, proc.stderr
+    index = (out / "index.html").read_text()
+    for stem in ("left", "right"):
+        assert f'href="{stem}/index.html"' in index
+        page_html = (out / stem / "index.html").read_text()
+        assert '"index_href":"../index.html"' in page_html
+        data = json.loads((out / stem / "geometry.json").read_text())
+        planned = geometry.plan_slices(scene["camera"], 400.0, 2000.0)
+        np.testing.assert_allclose([s["a"] for s in data["slices"]], planned, rtol=1e-12)
+
+
+def test_serve_binds_localhost_and_serves_the_page(scene, tmp_path):
+    folder = scene["folder"]
+    cmd = [sys.executable, "-m", "lfproc", "viewer", str(folder / "capture.png"), "--camera",
+           str(folder / "camera.toml"), "--calib", str(folder / "grid.json"), "-o", str(tmp_path), "--a", "0.4,1.3",
+           "--serve", "--port", "0"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        line = ""
+        while not line.startswith("serving"):
+            line = proc.stdout.readline()
+            assert line, "the viewer exited before serving"
+        url = re.search(r"(http://\S+/)", line).group(1)
+        assert url.startswith("http://127.0.0.1:")
+        with urllib.request.urlopen(url + "index.html", timeout=10) as response:
+            assert response.read() == (tmp_path / "index.html").read_bytes()
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+def test_bad_viewer_options_are_one_line_errors(scene, tmp_path):
+    folder = scene["folder"]
+    base = [folder / "capture.png", "--camera", folder / "camera.toml", "--calib", folder / "grid.json"]
+    assert_clean_error(run_cli("viewer", *base, "-o", tmp_path / "a", "--display-size", "4"), "--display-size")
+    assert_clean_error(run_cli("viewer", *base, "-o", tmp_path / "b", "--serve", "--port", "70000"), "--port")
+    assert_clean_error(run_cli("viewer", *base, "-o", tmp_path / "c", "--max-gap", "5"), "--depth-range")
+    assert not any(tmp_path.iterdir())
+
+
+def test_demo_writes_the_viewer_and_enlarged_labelled_previews(tmp_path):
+    proc = run_cli("demo", "-o", tmp_path / "demo")
+    assert proc.returncode == 0, proc.stderr
+    match = re.search(r"^viewer: (.+index\.html)", proc.stdout, re.M)
+    assert match and (tmp_path / "demo" / "viewer" / "index.html").samefile(match.group(1))
+    with Image.open(tmp_path / "demo" / "sample_refocus.gif") as gif:
+        assert max(gif.size) >= 512
+    assert (ROOT / "samples" / "sample" / "capture.png").is_file()
