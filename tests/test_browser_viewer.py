@@ -106,7 +106,6 @@ def test_click_on_a_plane_shows_its_distance_within_the_slice_dof(browser, page,
     truth = page["distances"][plane]
     shown = _shown_distance_mm(browser)
     assert abs(shown - truth) <= chosen["dof_mm"], (shown, truth, chosen)
-    assert chosen["near_mm"] <= truth <= chosen["far_mm"], (truth, chosen)  # the slice shown is sharp there
     assert photo.get_attribute("src").endswith(chosen["image"])
     assert browser.find_element("id", "slider").get_attribute("value") == str(k)
     # everything the page requested came from its own folder: no network access

@@ -147,11 +147,15 @@ def test_depth_from_focus_finds_each_plane_and_its_slice(scene):
     for plane, truth in enumerate(scene["distances"]):
         region = inner_lenses(scene["label"], plane)
         chosen = index[region]
+        # what the page shows on a click: the lens's distance, within the chosen slice's DOF of the truth ...
+        assert (np.abs(focus.distance_mm[region] - truth) <= geo.dof_mm[chosen]).mean() >= 0.95, plane
+        # ... and mostly a slice that is sharp there (where the truth sits at the border between two
+        # slices' DOFs, estimates a hair off pick the neighbour)
         holds = (geo.near_mm[chosen] <= truth) & (truth <= geo.far_mm[chosen])
-        assert holds.mean() >= 0.9, (plane, holds.mean())
+        assert holds.mean() >= 0.75, (plane, holds.mean())
         estimate = float(np.median(focus.distance_mm[region]))
         k = int(np.bincount(chosen).argmax())
-        assert abs(estimate - truth) <= geo.dof_mm[k], (plane, estimate, truth)
+        assert abs(estimate - truth) <= 0.5 * geo.dof_mm[k], (plane, estimate, truth)
         assert np.median(focus.confidence[region]) > 0.5
 
 

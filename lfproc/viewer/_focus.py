@@ -7,7 +7,7 @@ per slice (gradient energy of the luminance, summed over a small window) and, pe
 where it peaks give the scene's refocus parameter and, through Eq. 21, its distance. The sweep
 steps by a third of a slice's depth of field in ``a`` (which is about 1/c wide at a = 0, see
 :func:`lfproc.geometry.slice_geometry`), and a parabola through the peak and its neighbours refines
-it. Textureless regions have no sharpness peak; their confidence (1 − median/peak of the
+it. The sweep refocuses the luminance of every other view only (:func:`sweep_lightfield`). Textureless regions have no sharpness peak; their confidence (1 − median/peak of the
 sharpness along the sweep) is low.
 """
 
@@ -68,10 +68,20 @@ def sweep(camera, lo: float, hi: float) -> np.ndarray:
     return np.linspace(lo, hi, count) if hi > lo else np.array([lo - step, lo, lo + step])
 
 
-def luminance_lightfield(lf: LightField) -> LightField:
-    """The light field's mean over channels (C = 1), the input of the sharpness measure."""
-    views = lf.views if lf.channels == 1 else lf.views.mean(axis=-1, keepdims=True, dtype=np.float32)
-    return LightField.from_views(views, lf.camera, lf.grid)
+def sweep_lightfield(lf: LightField) -> tuple[LightField, int]:
+    """The light field the sweep refocuses: the luminance (mean over channels) of every ``stride``-th view
+    about the centre, and that stride (2 from 9 × 9 views on, else 1).
+
+    Refocusing the thinned views at ``stride·a`` moves each of them exactly as refocusing all views at
+    ``a`` does (Eq. 9: view k moves by a·(c − k)), so the sharpness peaks at the same ``a``; the outer
+    views that set the defocus blur stay, and a 15 × 15 light field is read 4.6 × less.
+    """
+    m, c = lf.m_hat, lf.center_index
+    stride = 2 if m >= 9 else 1
+    keep = np.arange(c % stride, m, stride)
+    views = lf.views[np.ix_(keep, keep)]
+    grey = views[..., 0].copy() if lf.channels == 1 else views.mean(axis=-1, dtype=np.float32)
+    return LightField.from_views(grey[..., None]), stride
 
 
 def sharpness(stack: np.ndarray, window: int) -> np.ndarray:
@@ -121,7 +131,8 @@ def depth_from_focus(lf: LightField, a_values=None, window: int | None = None) -
     camera = lf.camera
     lo, hi = sweep_range(camera, lf.lens_shape, a_values)
     sweep_a = sweep(camera, lo, hi)
-    stack = refocus(luminance_lightfield(lf), sweep_a)
+    thinned, stride = sweep_lightfield(lf)
+    stack = refocus(thinned, stride * sweep_a, interpolation="cubic")
     if window is None:
         window = max(5, camera.center_index + 1) | 1
     a, confidence = peak(sharpness(stack, window), sweep_a)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from .. import geometry
+from ..errors import LfprocError
 
 #: most slices on one page (a wider plan is thinned evenly in a)
 MAX_SLICES = 48
@@ -30,7 +31,10 @@ def scene_slices(camera, focus, min_confidence: float = MIN_CONFIDENCE, max_slic
     far = math.inf if a_lo <= a_inf else geometry.slice_distance_mm(camera, a_lo)
     near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
     near = min(near, far) if math.isfinite(near) else geometry.slice_distance_mm(camera, a_inf + 1.0)
-    planned = geometry.plan_slices(camera, near, far)
+    try:
+        planned = geometry.plan_slices(camera, near, far, max_slices=4 * max_slices)
+    except LfprocError:  # DOFs that shrink to nothing (the model's singularity near a = -1): even steps in a
+        planned = np.linspace(a_lo, a_hi, int(np.clip(np.ceil((a_hi - a_lo) * c) + 1, 2, max_slices)))
     if len(planned) > max_slices:
         planned = np.linspace(planned[0], planned[-1], max_slices)
     return np.asarray(planned, dtype=np.float64)
