@@ -32,7 +32,8 @@
   });
   $("frame").style.width = width + "px";
   $("title").textContent = "lfproc viewer: " + data.stem;
-  $("source").textContent = data.source;
+  $("source").textContent = data.source.split(/[\\/]/).pop();
+  $("source").title = data.source;
   if (data.index_href) { $("back").href = data.index_href; $("back").hidden = false; }
   depth.src = data.depth.image;
 
