@@ -71,6 +71,7 @@ def run(args) -> int:
     def work(path, progress):
         lf = inputs.load(path)
         key, values = slices_for(lf.camera)
+        check_view_coverage(lf.camera, values, lf.lens_shape, path)
         stack = refocus(lf, values, interpolation=args.interpolation, upsample=args.upsample)
         describe_once(key, lf.camera, values)
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
@@ -79,3 +80,27 @@ def run(args) -> int:
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
+
+
+def check_view_coverage(camera, a_values, lens_shape, source: str) -> None:
+    """Refuse slices at which no pixel averages every view (a garbage a), warn where most pixels do not."""
+    import warnings
+
+    from .. import geometry
+    from ..refocus import full_view_fraction, max_full_view_a
+    from .common import _mm
+
+    m, (ny, nx) = camera.m_hat, lens_shape
+    limit = max_full_view_a(m, lens_shape)
+    beyond = [a for a in a_values if abs(a) > limit]
+    if beyond:
+        near, far = (float(d) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
+        raise LfprocError(f"{source}: at a={beyond[0]:g} no pixel of this {ny}x{nx}-lens capture sees all {m}x{m} "
+                          f"views (the outer views shift off the image); refocus within |a| <= {limit:.3g}, i.e. "
+                          f"{_mm(near)} (a={limit:+.3g}) to {_mm(far)} (a={-limit:+.3g})")
+    share = full_view_fraction(a_values, m, lens_shape)
+    thin = [a for a, f in zip(a_values, share) if f < 0.5]
+    if thin:
+        worst = max(thin, key=abs)
+        warnings.warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
+                      f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused")

@@ -57,9 +57,10 @@ row whose y-taps read it.
 import sys
 import types
 
+from ._coverage import full_view_fraction, max_full_view_a
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
 
-__all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES"]
+__all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_full_view_a"]
 
 
 class _CallableModule(types.ModuleType):
