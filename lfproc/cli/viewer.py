@@ -5,29 +5,28 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
-from .capture_loop import add_decode_options, for_each_capture, require_output_folder, setup_from_args
-from .common import add_slice_planning_options, slice_parameters
+from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
+    prepare_inputs, require_output_folder
+from .common import add_slice_options, check_slice_options, slice_parameters
 
 
 def register(sub) -> None:
     p = sub.add_parser("viewer", help="write a browser viewer: click to refocus, drag to move the viewpoint",
                        description="Decode each capture and write a self-contained static viewer into OUTDIR "
-                                   "(index.html, its 8-bit sRGB images and geometry.json): the refocused stack, "
+                                   "(index.html, its 8-bit sRGB images and geometry.json): the refocused stack; "
                                    "click a point to show the slice sharpest there with its distance and depth of "
-                                   "field in metres, drag or use the arrow keys to move the viewpoint, a depth map "
-                                   "with its legend, the camera and calibration. Opens from the file system; no "
-                                   "network access. Several captures: one page each in OUTDIR/STEM/ plus an index.")
-    p.add_argument("raw", nargs="+", metavar="INPUT", help="raw captures (as lfproc refocus takes them)")
+                                   "field in metres; drag or use the arrow keys to move the viewpoint; a depth map "
+                                   "with its legend; the camera and calibration. Opens from the file system, no "
+                                   "network access. Several captures: one page each in OUTDIR/STEM/ plus an index. "
+                                   "Without --a/--depth-range/--at the slices are planned for the depths the scene "
+                                   "shows (depth from focus).")
+    p.add_argument("raw", nargs="+", metavar="INPUT",
+                   help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)
-    which = p.add_mutually_exclusive_group()
-    which.add_argument("--a", metavar="LIST", help="show these slices instead of those planned for the scene")
-    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
-                       help="show the fewest slices whose depths of field cover this range (default: planned for "
-                            "the depths the scene shows, found by depth from focus)")
-    add_slice_planning_options(p)
-    p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
+    add_slice_options(p)
+    add_output_folder_option(p)
     p.add_argument("--upscale", default="nearest", choices=("nearest", "smooth"),
-                   help="how the page enlarges the images (one pixel per lens) to --display-size: nearest keeps "
+                   help="how the page enlarges its images (one pixel per lens) to --display-size: nearest keeps "
                         "every lens a sharp block (default), smooth interpolates")
     p.add_argument("--display-size", type=int, default=512, metavar="PX",
                    help="smallest long side of the shown pictures in screen pixels (default 512)")
@@ -37,36 +36,39 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..camera import Camera
-    from ..pipeline import load_lightfield, unique_stems
-    from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, write_index
+    from ..pipeline import unique_stems
+    from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, serve, write_index
 
-    if (args.max_gap or args.integer) and args.depth_range is None:
-        raise LfprocError("--max-gap and --integer apply to --depth-range only")
+    check_slice_options(args)
     if args.display_size < 16:
         raise LfprocError(f"--display-size must be at least 16 px, got {args.display_size}")
     require_output_folder(args.outdir)
-    server = make_server(args.outdir if os.path.isdir(args.outdir) else ".", args.port) if args.serve else None
-    if server is not None:
-        server.server_close()  # the port is free: checked before any work, bound again after it
-    camera = Camera.from_toml(args.camera)
-    a_values = None
-    if args.a is not None or args.depth_range is not None:
-        a_values = slice_parameters(camera, args.a, args.depth_range, None, args.max_gap, args.integer)
-    setup = setup_from_args(args, camera)
+    if args.serve:
+        make_server(".", args.port).server_close()  # the port is free: checked before any work
     stems = unique_stems(args.raw)
+    camera = input_camera(args, args.raw)
+    chosen = args.a is not None or args.depth_range is not None or args.at is not None
+    if chosen:  # every list is checked before any capture is read
+        slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                         max_slices=args.max_slices)
+    inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
     several = len(args.raw) > 1
     options = PageOptions(min_long_side=args.display_size, upscale=args.upscale)
-    calibration = calibration_summary(setup.grid, getattr(setup.white, "source", None))
     pages = {}
 
     def work(path, progress):
-        lf = load_lightfield(path, setup)
+        lf = inputs.load(path)
+        a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                                    max_slices=args.max_slices) if chosen else None
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
+        setup = inputs.setup
+        grid = lf.grid if lf.grid is not None else getattr(setup, "grid", None)
+        white = getattr(getattr(setup, "white", None), "source", None)
         pages[path] = build_page(lf, folder, source=os.path.abspath(path), stem=stems[path], a_values=a_values,
-                                 calibration=calibration, index_href="../index.html" if several else None,
-                                 options=options)
+                                 calibration=calibration_summary(grid, white),
+                                 index_href="../index.html" if several else None, options=options)
         progress.update(1)
+        print(f"{path}: viewer page -> {pages[path]}")
 
     status = for_each_capture("viewer", args.raw, work)
     if several and pages:
@@ -78,7 +80,5 @@ def run(args) -> int:
         return status
     print(f"viewer: {os.path.abspath(index)}")
     if args.serve:
-        from ..viewer import serve
-
         serve(os.path.abspath(args.outdir), args.port)
     return status
