@@ -22,10 +22,10 @@ import numpy as np
 from .. import geometry
 from ..atomic import write_json_atomic, write_text_atomic
 from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, upscale_factor, view_name
-from ._focus import depth_from_focus
+from ._estimate import estimate_depth
 from ._images import depth_colours, image_extension, write_all
 from ._page import encode_array, render_page
-from ._plan import MIN_CONFIDENCE, scene_slices, sharpest_slice, slice_intervals_a
+from ._plan import scene_slices, sharpest_slice, slice_intervals_a
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     from ..refocus import refocus
 
     camera = lf.camera
-    focus = depth_from_focus(lf, a_values)
+    focus = estimate_depth(lf, a_values)
     a_values = scene_slices(camera, focus) if a_values is None else np.asarray(a_values, dtype=np.float64)
     stack = refocus(lf, a_values)
     tone = ToneMap.for_images(stack)
@@ -76,7 +76,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     intervals = slice_intervals_a(camera, a_values)
     a_far, a_near = float(intervals.min()), float(intervals.max())
     jobs.append((os.path.join(outdir, "depth.png"),
-                 lambda: depth_colours(focus.a, focus.confidence, a_far, a_near, MIN_CONFIDENCE)))
+                 lambda: depth_colours(focus.a, focus.confidence, a_far, a_near, focus.min_confidence)))
     write_all(jobs)
     slice_index = sharpest_slice(camera, a_values, focus.a)
     data = {
@@ -122,9 +122,10 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
         a = a_far + t * (a_near - a_far)
         distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
         ticks.append({"t": float(t), "distance_mm": distance, "label": metres(distance)})
-    return {"image": "depth.png", "method": f"{focus.method} over {len(focus.sweep_a)} slices "
-                                            f"(a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})",
-            "min_confidence": MIN_CONFIDENCE, "colours": [list(c) for c in DEPTH_COLOURS], "ticks": ticks,
+    searched = f" over {len(focus.sweep_a)} slices (a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})" \
+        if len(focus.sweep_a) else ""
+    return {"image": "depth.png", "method": focus.method + searched,
+            "min_confidence": focus.min_confidence, "colours": [list(c) for c in DEPTH_COLOURS], "ticks": ticks,
             "colour_scale": "linear in a (disparity), far = first colour, near = last; grey = low confidence"}
 
 

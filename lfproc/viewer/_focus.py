@@ -36,6 +36,8 @@ class FocusDepth:
     distance_mm : its distance from the sensor (Eq. 21), ``inf`` at or beyond infinity's ``a``
     confidence : 0 (no sharpness peak: flat or noisy) to 1 (a clear peak)
     sweep_a : the refocus parameters of the sweep
+    method : how the depths were found
+    min_confidence : below it a lens's depth is a guess (grey in the depth map, not used for planning)
     """
 
     a: np.ndarray
@@ -43,6 +45,7 @@ class FocusDepth:
     confidence: np.ndarray
     sweep_a: np.ndarray
     method: str = "depth from focus"
+    min_confidence: float = 0.3
 
 
 def sweep_range(camera, lens_shape, a_values=None) -> tuple[float, float]:

@@ -11,18 +11,14 @@ from ..errors import LfprocError
 
 #: most slices on one page (a wider plan is thinned evenly in a)
 MAX_SLICES = 48
-#: lenses below this confidence do not set the scene's depth range
-MIN_CONFIDENCE = 0.3
-
-
-def scene_slices(camera, focus, min_confidence: float = MIN_CONFIDENCE, max_slices: int = MAX_SLICES) -> np.ndarray:
+def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     """The fewest slices whose DOFs cover the scene (:func:`lfproc.geometry.plan_slices`, as ``--depth-range``).
 
     The scene's range is the 2nd to 98th percentile of the refocus parameter of the lenses whose
-    depth-from-focus confidence reaches ``min_confidence`` (the whole sweep if fewer than 10 do),
+    depth is known with at least ``focus.min_confidence`` (the whole sweep if fewer than 10 are),
     widened by half a slice's DOF at each end.
     """
-    confident = focus.confidence >= min_confidence
+    confident = (focus.confidence >= focus.min_confidence) & np.isfinite(focus.a)
     a = focus.a[confident] if confident.sum() >= 10 else focus.sweep_a
     a_lo, a_hi = (float(v) for v in np.percentile(a, [2, 98]))
     c = max(camera.center_index, 1)  # widened by half a DOF, about (1 + |a|)/(2c) in a, against estimate errors
@@ -49,12 +45,19 @@ def slice_intervals_a(camera, a_values) -> np.ndarray:
     return np.stack([np.minimum(far_a, near_a), np.maximum(far_a, near_a)], axis=1)
 
 
+#: slice index of lenses whose depth is unknown
+UNKNOWN_SLICE = 255
+
+
 def sharpest_slice(camera, a_values, lens_a: np.ndarray) -> np.ndarray:
     """Per lens, the index of the slice whose DOF holds the lens's ``a`` (the nearest one where none does;
-    among overlapping ones, the one centred nearest). Returns uint8 ``(Ny, Nx)``."""
+    among overlapping ones, the one centred nearest); :data:`UNKNOWN_SLICE` where ``a`` is NaN.
+    Returns uint8 ``(Ny, Nx)``."""
     a_values = np.asarray(a_values, dtype=np.float64)
     intervals = slice_intervals_a(camera, a_values)
     lens_a = np.asarray(lens_a, dtype=np.float64)
     outside = np.maximum(intervals[:, 0, None, None] - lens_a, lens_a - intervals[:, 1, None, None])
     cost = np.maximum(outside, 0.0) + 1e-6 * np.abs(lens_a - a_values[:, None, None])
-    return np.argmin(np.nan_to_num(cost, nan=np.inf), axis=0).astype(np.uint8)
+    index = np.argmin(np.nan_to_num(cost, nan=np.inf), axis=0).astype(np.uint8)
+    index[~np.isfinite(lens_a)] = UNKNOWN_SLICE
+    return index

@@ -89,10 +89,19 @@
   // ---------------------------------------------------------------- click: focus where the user points
   function focusAt(jy, jx, fx, fy) {
     var i = jy * nx + jx, k = sliceIndex[i], d = distance[i], c = confidence[i] / 255;
-    showSlice(k);
-    var s = slices[k];
     var out = $("readout");
     out.innerHTML = "";
+    marker.hidden = false;
+    marker.style.left = (fx * 100) + "%"; marker.style.top = (fy * 100) + "%";
+    if (k >= slices.length || isNaN(d)) {  // no depth known here
+      var none = document.createElement("b"); none.id = "here-distance"; none.textContent = "unknown";
+      out.appendChild(document.createTextNode("Here: ")); out.appendChild(none);
+      out.appendChild(document.createTextNode(" (too little texture, or an occlusion edge); the slice stays."));
+      out.dataset.distanceMm = "nan"; out.dataset.slice = "";
+      return;
+    }
+    showSlice(k);
+    var s = slices[k];
     out.appendChild(document.createTextNode("Here: "));
     var b = document.createElement("b"); b.id = "here-distance"; b.textContent = metres(d); out.appendChild(b);
     out.appendChild(document.createTextNode(" from the sensor" + (c < data.depth.min_confidence ?
@@ -100,8 +109,6 @@
       ", in focus from " + metres(s.near_mm) + " to " + metres(s.far_mm) + "."));
     out.dataset.distanceMm = isFinite(d) ? String(d) : "inf";
     out.dataset.slice = String(k);
-    marker.hidden = false;
-    marker.style.left = (fx * 100) + "%"; marker.style.top = (fy * 100) + "%";
   }
 
   function lensOf(img, event) {
@@ -211,6 +218,6 @@
 
   // start on the slice sharpest at the centre of the picture
   var middle = Math.floor(ny / 2) * nx + Math.floor(nx / 2);
-  showSlice(sliceIndex[middle] || 0);
+  showSlice(sliceIndex[middle] < slices.length ? sliceIndex[middle] : Math.floor(slices.length / 2));
   document.body.dataset.ready = "true";
 })();
