@@ -65,7 +65,7 @@ def main() -> None:
         png = screenshot(build(Path(tmp) / "viewer"), str(Path(tmp) / "profile"))
     image = Image.open(io.BytesIO(png)).convert("RGB")
     image = image.resize((image.width * 3 // 4, image.height * 3 // 4), Image.LANCZOS)
-    image.quantize(colors=128, method=Image.Quantize.MEDIANCUT).save(args.out, optimize=True)
+    image.quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(args.out, optimize=True)
     print(f"{args.out}: {image.width} x {image.height}, {Path(args.out).stat().st_size / 1000:.0f} kB")
 
 

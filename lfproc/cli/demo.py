@@ -2,7 +2,8 @@
 
 Geometry of the sample camera → grid calibration from the white image → decoding into a light field
 → a refocus stack covering the sample's depth range (plus a labelled animation) → the viewpoint mosaic
-(plus an 8-bit preview) and a view animation → the browser viewer (``lfproc-demo/viewer/index.html``). The summary checks the refocused slices against the sample's known plane distances.
+(plus an 8-bit preview) and a view animation → the browser viewer (``lfproc-demo/viewer/index.html``).
+The summary checks the refocused slices against the sample's known plane distances.
 """
 
 from __future__ import annotations

@@ -8,6 +8,7 @@ from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
 from .common import add_slice_options, check_slice_options, slice_parameters
+from .refocus import check_view_coverage
 
 
 def register(sub) -> None:
@@ -58,8 +59,11 @@ def run(args) -> int:
 
     def work(path, progress):
         lf = inputs.load(path)
-        a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                    max_slices=args.max_slices) if chosen else None
+        a_values = None
+        if chosen:
+            a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                                        max_slices=args.max_slices)
+            check_view_coverage(lf.camera, a_values, lf.lens_shape, path)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
         setup = inputs.setup
         grid = lf.grid if lf.grid is not None else getattr(setup, "grid", None)

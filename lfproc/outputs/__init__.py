@@ -8,7 +8,8 @@ enlarged to at least 512 px on the long side (:func:`upscale`) and labelled in m
 
 Modules: ``_names`` (file names), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
 and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
-``_colours`` (the depth colour scale), ``_view_set`` (what ``lfproc views`` writes). Pillow and OpenImageIO load only when something is written.
+``_colours`` (the depth colour scale), ``_view_set`` (what ``lfproc views`` writes). Pillow and
+OpenImageIO load only when something is written.
 """
 
 from ._colours import DEPTH_COLOURS, colour_scale

@@ -16,7 +16,7 @@ from .. import geometry
 from ..atomic import atomic_path
 from ..errors import LfprocError
 from ..viewpoints import circular_walk, mosaic
-from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, metres, slice_label, upscale, upscale_factor
+from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._products import masked_views
 from ._tone import ToneMap
 
@@ -49,7 +49,8 @@ def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float) -> str
             images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
                            duration=int(round(duration_ms)), loop=0)
     except OSError as exc:
-        raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and permissions") from None
+        raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and "
+                          f"permissions") from None
     return path
 
 
@@ -63,7 +64,8 @@ def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
         with atomic_path(path, suffix=".png") as tmp:
             Image.fromarray(np.ascontiguousarray(pixels)).save(tmp, format="PNG")
     except OSError as exc:
-        raise LfprocError(f"{path}: cannot write PNG ({exc.strerror or exc}); check the folder and permissions") from None
+        raise LfprocError(f"{path}: cannot write PNG ({exc.strerror or exc}); check the folder and "
+                          f"permissions") from None
     return path
 
 

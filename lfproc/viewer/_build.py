@@ -51,7 +51,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     a_values : sequence of float, optional
         The slices to show; default: planned for the scene (:func:`scene_slices`).
     calibration : dict, optional
-        Grid summary for the page (``kind``, ``pitch_px``, ``rotation_deg``, ``residual_rms_px``, …).
+        Grid summary for the page (:func:`calibration_summary`).
     index_href : str, optional
         Link back to an index of several captures.
     """
@@ -134,9 +134,11 @@ def camera_summary(camera) -> list[list[str]]:
     focus_mm = geometry.slice_distance_mm(camera, 0.0)
     rows = [
         ("camera", camera.name or "(unnamed)"),
-        ("main lens", f"f = {camera.main_focal_length_mm:g} mm" + (f", f/{camera.f_number:g}" if camera.f_number else "")),
+        ("main lens", f"f = {camera.main_focal_length_mm:g} mm"
+                      + (f", f/{camera.f_number:g}" if camera.f_number else "")),
         ("focused at (a = 0)", metres(focus_mm)),
-        ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, f = {camera.mla_focal_length_mm:g} mm"),
+        ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, "
+                         f"f = {camera.mla_focal_length_mm:g} mm"),
         ("pixels", f"{camera.pixel_pitch_mm * 1000:g} µm ({camera.effective_pixel_pitch_mm * 1000:.3f} µm after "
                    f"resampling to {camera.m_hat} x {camera.m_hat} views)"),
         ("baseline of adjacent views", f"{geometry.baseline_mm(camera, 1):.3f} mm"),
@@ -175,8 +177,7 @@ def page_entry(outdir: str, page_dir: str) -> dict:
         data = json.load(fh)
     relative = os.path.relpath(page_dir, outdir).replace(os.sep, "/")
     middle = data["slices"][len(data["slices"]) // 2]
-    distances = [s["distance_mm"] for s in data["slices"]]
-    span = f"{metres(min(d for d in distances if d is not None))} to " \
-           f"{metres(max(distances) if None not in distances else None)}"
+    distances = [math.inf if s["distance_mm"] is None else s["distance_mm"] for s in data["slices"]]
+    span = f"{metres(min(distances))} to {metres(max(distances))}"
     return {"stem": data["stem"], "href": f"{relative}/index.html", "thumbnail": f"{relative}/{middle['image']}",
             "source": data["source"], "slices": len(data["slices"]), "range": span}

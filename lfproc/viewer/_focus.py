@@ -7,7 +7,8 @@ per slice (gradient energy of the luminance, summed over a small window) and, pe
 where it peaks give the scene's refocus parameter and, through Eq. 21, its distance. The sweep
 steps by a third of a slice's depth of field in ``a`` (which is about 1/c wide at a = 0, see
 :func:`lfproc.geometry.slice_geometry`), and a parabola through the peak and its neighbours refines
-it. The sweep refocuses the luminance of every other view only (:func:`sweep_lightfield`). Textureless regions have no sharpness peak; their confidence (1 − median/peak of the
+it. The sweep refocuses the luminance of every other view only (:func:`sweep_lightfield`).
+Textureless regions have no sharpness peak; their confidence (1 − median/peak of the
 sharpness along the sweep) is low.
 """
 
