@@ -12,7 +12,7 @@ def register(sub) -> None:
                        description="Render the scene file SCENE.toml (docs/scene-format.md) through the paraxial "
                                    "SPC model and write DIR/capture.png and DIR/white.png (16-bit), "
                                    "DIR/camera.toml, DIR/ground_truth.npz (ideal_views, ideal_weight, "
-                                   "plane_label) and DIR/ground_truth.json (lens grid, planes with their refocus "
+                                   "plane_label, depth_mm) and DIR/ground_truth.json (lens grid, planes with their refocus "
                                    "parameter a, render options).")
     p.add_argument("scene", metavar="SCENE.toml", help="scene file")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
@@ -55,7 +55,7 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
     write_image(os.path.join(folder, "capture.png"), capture.raw)   # uint16: written exactly, 16-bit PNG
     write_image(os.path.join(folder, "white.png"), capture.white)
     write_text_atomic(os.path.join(folder, "camera.toml"), capture.camera.to_toml())
-    arrays = {"plane_label": capture.plane_label}
+    arrays = {"plane_label": capture.plane_label, "depth_mm": capture.depth_mm}
     if capture.ideal_views is not None:
         arrays.update(ideal_views=capture.ideal_views, ideal_weight=capture.ideal_weight)
     with atomic_path(os.path.join(folder, "ground_truth.npz")) as tmp:

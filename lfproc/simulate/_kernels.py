@@ -115,27 +115,66 @@ def _image_sample(par, images, x, y, channel):
 
 
 @njit(cache=True, inline="always")
-def _scene_radiance(ux, uy, qx, qy, z, region, kind, par, center, tint, images, background):
-    """RGB radiance along the object-space ray X(z) = U + q·z, and the (sorted) index of the plane hit (−1: none).
+def _nearest_hit(ux, uy, qx, qy, z, frame, region):
+    """The nearest plane whose region the object-space ray X(z) = U + q·z meets in front of the main lens.
 
-    Plane coordinates are the ray heights negated (the picture as seen in the capture, upright).
+    Returns (sorted plane index or −1, plane coordinates a, b of the hit, its z from H1U). A
+    fronto-parallel plane sits at z[p]; a tilted one (frame[p, 9] = 1) is where the plane coordinates
+    (x, y, z − z[p]) = (−X, z − z[p]) are normal to n = frame[p, 6:9]; its own coordinates are the
+    projections on e1 = frame[p, 0:3] and e2 = frame[p, 3:6]. Plane coordinates are the ray heights
+    negated (the picture as seen in the capture, upright). Ties go to the lower index.
     """
+    best = -1
+    best_z = np.inf
+    best_a = 0.0
+    best_b = 0.0
     for p in range(z.shape[0]):
-        x = -(ux + qx * z[p])
-        y = -(uy + qy * z[p])
-        if x < region[p, 0] or x >= region[p, 1] or y < region[p, 2] or y >= region[p, 3]:
+        if frame[p, 9] == 0.0:
+            zp = z[p]
+            if zp >= best_z:
+                continue
+            a = -(ux + qx * zp)
+            b = -(uy + qy * zp)
+        else:
+            nx = frame[p, 6]
+            ny = frame[p, 7]
+            nz = frame[p, 8]
+            denom = nz - nx * qx - ny * qy
+            if denom == 0.0:
+                continue  # the ray runs inside the plane's direction
+            zp = (nx * ux + ny * uy + nz * z[p]) / denom
+            if zp <= 0.0 or zp >= best_z:
+                continue  # behind the main lens, or farther than a plane already hit
+            x = -(ux + qx * zp)
+            y = -(uy + qy * zp)
+            dz = zp - z[p]
+            a = frame[p, 0] * x + frame[p, 1] * y + frame[p, 2] * dz
+            b = frame[p, 3] * x + frame[p, 4] * y + frame[p, 5] * dz
+        if a < region[p, 0] or a >= region[p, 1] or b < region[p, 2] or b >= region[p, 3]:
             continue
-        tx = x - center[p, 0]
-        ty = y - center[p, 1]
-        low = par[p, 0]
-        span = par[p, 1] - par[p, 0]
-        if kind[p] == KIND_IMAGE:
-            return ((low + span * _image_sample(par[p], images, tx, ty, 0)) * tint[p, 0],
-                    (low + span * _image_sample(par[p], images, tx, ty, 1)) * tint[p, 1],
-                    (low + span * _image_sample(par[p], images, tx, ty, 2)) * tint[p, 2], p)
-        value = low + span * _texture_value(kind[p], par[p], tx, ty)
-        return value * tint[p, 0], value * tint[p, 1], value * tint[p, 2], p
-    return background[0], background[1], background[2], -1
+        best = p
+        best_z = zp
+        best_a = a
+        best_b = b
+    return best, best_a, best_b, best_z
+
+
+@njit(cache=True, inline="always")
+def _scene_radiance(ux, uy, qx, qy, z, frame, region, kind, par, center, tint, images, background):
+    """RGB radiance along the object-space ray X(z) = U + q·z, and the (sorted) index of the plane hit (−1: none)."""
+    p, x, y, _ = _nearest_hit(ux, uy, qx, qy, z, frame, region)
+    if p < 0:
+        return background[0], background[1], background[2], -1
+    tx = x - center[p, 0]
+    ty = y - center[p, 1]
+    low = par[p, 0]
+    span = par[p, 1] - par[p, 0]
+    if kind[p] == KIND_IMAGE:
+        return ((low + span * _image_sample(par[p], images, tx, ty, 0)) * tint[p, 0],
+                (low + span * _image_sample(par[p], images, tx, ty, 1)) * tint[p, 1],
+                (low + span * _image_sample(par[p], images, tx, ty, 2)) * tint[p, 2], p)
+    value = low + span * _texture_value(kind[p], par[p], tx, ty)
+    return value * tint[p, 0], value * tint[p, 1], value * tint[p, 2], p
 
 
 @njit(cache=True, inline="always")
@@ -150,7 +189,7 @@ def _store(out, y, x, r, g, b, scale):
 
 @njit(cache=True, parallel=True)
 def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_slope2, rim2,
-                   pix_off, ap_off, z, region, kind, par, center, tint, images, background):
+                   pix_off, ap_off, z, frame, region, kind, par, center, tint, images, background):
     """Sensor irradiance: each pixel averages pix_off × ap_off rays (zero for the blocked ones)."""
     height, width = out.shape[0], out.shape[1]
     n_pix = pix_off.shape[0]
@@ -176,8 +215,8 @@ def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_sl
                     u_y = s_y + ap_off[j, 1] + my * b_u
                     if u_x * u_x + u_y * u_y > rim2:
                         continue
-                    rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, region, kind,
-                                                    par, center, tint, images, background)
+                    rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, frame, region,
+                                                    kind, par, center, tint, images, background)
                     r += rr
                     g += gg
                     b += bb
@@ -186,7 +225,7 @@ def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_sl
 
 @njit(cache=True, parallel=True)
 def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pixel_mm, f_s, b_u, f_u,
-                  max_slope2, rim2, ap_off, z, region, kind, par, center, tint, images, background):
+                  max_slope2, rim2, ap_off, z, frame, region, kind, par, center, tint, images, background):
     """Ideal views: per lens and view, the mean radiance of the passing rays and the passing fraction."""
     m = views.shape[0]
     rows, cols = views.shape[2], views.shape[3]
@@ -218,8 +257,9 @@ def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pix
                                 u_y = s_y + ap_off[j, 1] + my * b_u
                                 if not fallback and u_x * u_x + u_y * u_y > rim2:
                                     continue
-                                rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, region,
-                                                                kind, par, center, tint, images, background)
+                                rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, frame,
+                                                                region, kind, par, center, tint, images,
+                                                                background)
                                 r += rr
                                 g += gg
                                 b += bb
@@ -238,15 +278,24 @@ def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pix
 
 
 @njit(cache=True)
-def _plane_labels_kernel(s_mm, f_u, z, region, kind, par, center, tint, images, background):
-    """Sorted plane index hit by the chief ray through each lens centre with slope m = 0 (U = s, q = −s/f_U)."""
+def _central_hits_kernel(s_mm, inv_d_a, b_u, f_u, z, frame, region):
+    """What the central view's chief ray of each lens meets: (sorted plane index or −1, z from H1U or NaN).
+
+    The chief ray leaves the lens centre s towards the exit pupil's centre: slope m = −s/d_A (0 when
+    telecentric), U = s + m·b_U (Eq. 16), q = m − U/f_U (Eqs. 17-18).
+    """
     rows, cols = s_mm.shape[0], s_mm.shape[1]
     labels = np.empty((rows, cols), dtype=np.int64)
+    hit_z = np.empty((rows, cols), dtype=np.float64)
     for row in range(rows):
         for col in range(cols):
             sx = s_mm[row, col, 0]
             sy = s_mm[row, col, 1]
-            _, _, _, hit = _scene_radiance(sx, sy, -sx / f_u, -sy / f_u, z, region, kind, par, center, tint,
-                                           images, background)
+            mx = -sx * inv_d_a
+            my = -sy * inv_d_a
+            ux = sx + mx * b_u
+            uy = sy + my * b_u
+            hit, _, _, zp = _nearest_hit(ux, uy, mx - ux / f_u, my - uy / f_u, z, frame, region)
             labels[row, col] = hit
-    return labels
+            hit_z[row, col] = zp if hit >= 0 else np.nan
+    return labels, hit_z

@@ -39,7 +39,7 @@ from ..camera import Camera
 from ..errors import LfprocError
 from ..grid import LensGrid
 from ._checks import _check_channels, _check_noise
-from ._ground_truth import central_plane_labels
+from ._ground_truth import central_view_truth
 from ._scene import Scene
 from ._scene_arrays import SceneArrays
 from ._sensor import mosaic, radiance_to_dn
@@ -57,7 +57,8 @@ class SimulatedCapture:
     white : ndarray (H, W) uint16
         White image: the same optics under uniform radiance 1.
     grid : LensGrid
-        Exact lens centres in sensor pixels (the calibration ground truth).
+        Exact micro image centres in sensor pixels: what a white image shows and calibration must
+        find (the lens centres when telecentric).
     camera : Camera
     ideal_views : ndarray (m̂, m̂, rows, cols, C) float32 or None
         Scene radiance of each view sample (see :func:`render_ideal_views`); C = 3 with a CFA, else 1.
@@ -71,6 +72,11 @@ class SimulatedCapture:
         The main lens rim radius used (``inf`` when vignetting was off).
     options : dict
         The render options used.
+    depth_mm : ndarray (rows, cols) float64
+        Per lens of ``grid``: the distance from the sensor of the surface point that the central
+        view's chief ray meets (a plane's depth there; NaN = background).
+    lens_grid : LensGrid
+        The physical micro lens centres in sensor pixels (equal to ``grid`` when telecentric).
     """
 
     raw: np.ndarray
@@ -83,6 +89,8 @@ class SimulatedCapture:
     planes: tuple
     rim_radius_mm: float = math.inf
     options: dict = field(default_factory=dict)
+    depth_mm: np.ndarray | None = None
+    lens_grid: LensGrid | None = None
 
 
 def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_deg=0.0, offset_px=(0.0, 0.0),
@@ -141,9 +149,11 @@ def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_de
                    pixel_samples=int(pixel_samples), aperture_samples=int(aperture_samples),
                    shot_noise_photons=shot_noise_photons, read_noise_dn=float(read_noise_dn),
                    exposure=float(exposure), seed=int(seed), ideal_views=bool(ideal_views))
+    labels, depth_mm = central_view_truth(setup, arrays)
     return SimulatedCapture(raw=raw, white=white, grid=setup.grid, camera=camera, ideal_views=views,
-                            ideal_weight=weight, plane_label=central_plane_labels(setup, arrays),
-                            planes=scene.planes, rim_radius_mm=setup.rim_radius_mm, options=options)
+                            ideal_weight=weight, plane_label=labels, planes=scene.planes,
+                            rim_radius_mm=setup.rim_radius_mm, options=options, depth_mm=depth_mm,
+                            lens_grid=setup.grid)
 
 
 def render_white(camera: Camera, sensor_shape, *, rotation_deg=0.0, offset_px=(0.0, 0.0), rim_radius_mm="auto",

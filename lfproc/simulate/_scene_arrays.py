@@ -21,9 +21,14 @@ class SceneArrays:
     checkerboard p2 = half period; sinusoid p2 = 2π/period, p3 = cos θ, p4 = sin θ, p5 = phase;
     noise p2 = 1/feature, p3 = seed; image p2 = width, p3 = height, p4 = offset into ``images``,
     p5 = rows, p6 = cols.
+
+    ``frame`` per plane: the plane's axes e1, e2 and normal n (``Plane.frame()``, in plane coordinates
+    x, y and depth) flattened, then 1.0 for a tilted plane (0.0: the kernels take the fronto-parallel
+    path, z fixed).
     """
 
-    z_mm: np.ndarray        # (P,) distance from H1U
+    z_mm: np.ndarray        # (P,) distance from H1U (of the centre point on the axis for a tilted plane)
+    frame: np.ndarray       # (P, 10) e1, e2, n, tilted flag
     region: np.ndarray      # (P, 4) x0, x1, y0, y1 (±inf when unbounded)
     kind: np.ndarray        # (P,) int64
     params: np.ndarray      # (P, 7)
@@ -36,7 +41,7 @@ class SceneArrays:
     @classmethod
     def uniform(cls, value: float) -> SceneArrays:
         """No planes, radiance ``value`` everywhere (the white image)."""
-        return cls(np.zeros(0), np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros((0, 7)), np.zeros((0, 2)),
+        return cls(np.zeros(0), np.zeros((0, 10)), np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros((0, 7)), np.zeros((0, 2)),
                    np.zeros((0, 3)), np.zeros(1, np.float32), np.full(3, float(value)), np.zeros(0, np.int64))
 
     @classmethod
@@ -45,6 +50,7 @@ class SceneArrays:
         order = np.argsort([p.distance_mm for p in scene.planes], kind="stable").astype(np.int64)
         n = len(order)
         z = np.zeros(n)
+        frame = np.zeros((n, 10))
         region = np.tile(np.array([-np.inf, np.inf, -np.inf, np.inf]), (n, 1))
         kind = np.zeros(n, np.int64)
         params = np.zeros((n, 7))
@@ -57,6 +63,8 @@ class SceneArrays:
                 raise LfprocError(f"plane {plane.name or index} at {plane.distance_mm} mm is not in front of the main "
                                   f"lens ({inside:.3f} mm from the sensor); move it farther away")
             z[row] = plane.distance_mm - inside
+            frame[row, :9] = plane.frame().ravel()
+            frame[row, 9] = 1.0 if plane.tilted else 0.0
             tex = plane.texture
             kind[row] = tex.kind
             params[row, :2] = tex.levels()
@@ -82,7 +90,9 @@ class SceneArrays:
                 region[row] = (max(region[row, 0], extent[0]), min(region[row, 1], extent[1]),
                                max(region[row, 2], extent[2]), min(region[row, 3], extent[3]))
         flat = np.concatenate(images).astype(np.float32) if images else np.zeros(1, np.float32)
-        return cls(z, region, kind, params, center, tint, flat, np.asarray(scene.background, dtype=np.float64), order)
+        background = np.asarray(scene.background, dtype=np.float64)
+        return cls(z, frame, region, kind, params, center, tint, flat, background, order)
 
     def kernel_args(self):
-        return (self.z_mm, self.region, self.kind, self.params, self.center, self.tint, self.images, self.background)
+        return (self.z_mm, self.frame, self.region, self.kind, self.params, self.center, self.tint, self.images,
+                self.background)

@@ -61,7 +61,7 @@ class SceneFile:
     source: str = field(default="", compare=False)
 
 
-_PLANE_COMMON = {"name", "distance_mm", "texture", "region_mm", "tint", "center_mm"}
+_PLANE_COMMON = {"name", "distance_mm", "texture", "region_mm", "tint", "center_mm", "tilt_deg"}
 _TEXTURE_KEYS = {
     "uniform": {"value"},
     "checkerboard": {"period_mm", "low", "high"},
@@ -179,7 +179,8 @@ def _parse_plane(table, index: int, source: str, base_dir: str) -> Plane:
                                 tuple(_number_list(table["region_mm"], 4, f"{where}: region_mm"))),
                      tint=tuple(_number_list(table.get("tint", [1.0, 1.0, 1.0]), 3, f"{where}: tint")),
                      center_mm=tuple(_number_list(table.get("center_mm", [0.0, 0.0]), 2, f"{where}: center_mm")),
-                     name=table.get("name", ""))
+                     name=table.get("name", ""),
+                     tilt_deg=tuple(_number_list(table.get("tilt_deg", [0.0, 0.0]), 2, f"{where}: tilt_deg")))
     except LfprocError as exc:
         msg = str(exc)
         raise LfprocError(msg if msg.startswith(source) else f"{where}: {msg}") from None
