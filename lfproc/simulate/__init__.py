@@ -16,7 +16,7 @@ from ._render import SimulatedCapture, render, render_ideal_views, render_radian
 from ._scene import Plane, Scene
 from ._scene_file import RenderOptions, SceneFile, load_scene_file, parse_scene_dict
 from ._sensor import LUMA_WEIGHTS, MAX_SHOT_NOISE_PHOTONS, mosaic, radiance_to_dn
-from ._setup import aperture_offsets_mm, auto_rim_radius_mm, default_grid, pixel_offsets
+from ._setup import aperture_offsets_mm, auto_rim_radius_mm, default_grid, micro_image_scale, pixel_offsets
 from ._textures import (KIND_CHECKER, KIND_IMAGE, KIND_NOISE, KIND_SINUSOID, KIND_UNIFORM, TEXTURES, Checkerboard,
                         ImageTexture, Noise, Sinusoid, Uniform, read_texture_image, srgb_to_linear)
 
@@ -43,6 +43,7 @@ __all__ = [
                         "auto_rim_radius_mm",
                         "default_grid",
                         "load_scene_file",
+    "micro_image_scale",
                         "mosaic",
                         "parse_scene_dict",
                         "pixel_offsets",

@@ -187,15 +187,32 @@ def _store(out, y, x, r, g, b, scale):
         out[y, x, 2] = b * scale
 
 
+@njit(cache=True, inline="always")
+def _outside_pupil(mx, my, t_x, t_y, inv_d_a, max_slope2):
+    """True when the ray of slope m leaving the micro lens aperture at height t misses the exit pupil.
+
+    The pupil, a disk of radius d_A/(2N) at d_A in front of the MLA, is met at height t + m·d_A; the
+    test divides by d_A: |m + t/d_A|² > 1/(2N)². Telecentric (inv_d_a = 0): |m|² > 1/(2N)².
+    """
+    ex = mx + t_x * inv_d_a
+    ey = my + t_y * inv_d_a
+    return ex * ex + ey * ey > max_slope2
+
+
 @njit(cache=True, parallel=True)
-def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_slope2, rim2,
+def _sensor_kernel(out, row0, row1, axis_x, axis_y, pixel_mm, lattice, inv_scale, f_s, b_u, f_u, max_slope2, rim2, inv_d_a,
                    pix_off, ap_off, z, frame, region, kind, par, center, tint, images, background):
-    """Sensor irradiance: each pixel averages pix_off × ap_off rays (zero for the blocked ones)."""
-    height, width = out.shape[0], out.shape[1]
+    """Sensor irradiance of rows row0 ≤ y < row1: each pixel averages pix_off × ap_off rays (0 for blocked ones).
+
+    ``lattice`` is the micro image lattice: a sensor point belongs to the micro image whose cell holds
+    it (ideal baffles), and its lens sits at the micro image centre's height times ``inv_scale``.
+    """
+    width = out.shape[1]
     n_pix = pix_off.shape[0]
     n_ap = ap_off.shape[0]
     scale = 1.0 / (n_pix * n_ap)
-    for y in prange(height):
+    telecentric = inv_d_a == 0.0
+    for y in prange(row0, row1):
         for x in range(width):
             r = 0.0
             g = 0.0
@@ -203,16 +220,20 @@ def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_sl
             for i in range(n_pix):
                 px = x + pix_off[i, 0]
                 py = y + pix_off[i, 1]
-                sx, sy = _nearest_lens_px(px, py, lattice)
-                s_x = (sx - axis_x) * pixel_mm
-                s_y = (sy - axis_y) * pixel_mm
+                cx, cy = _nearest_lens_px(px, py, lattice)
+                s_x = (cx - axis_x) * pixel_mm * inv_scale
+                s_y = (cy - axis_y) * pixel_mm * inv_scale
                 mx = (s_x - (px - axis_x) * pixel_mm) / f_s
                 my = (s_y - (py - axis_y) * pixel_mm) / f_s
-                if mx * mx + my * my > max_slope2:
+                if telecentric and mx * mx + my * my > max_slope2:
                     continue  # outside the aperture stop, whatever the aperture point
                 for j in range(n_ap):
-                    u_x = s_x + ap_off[j, 0] + mx * b_u
-                    u_y = s_y + ap_off[j, 1] + my * b_u
+                    t_x = s_x + ap_off[j, 0]
+                    t_y = s_y + ap_off[j, 1]
+                    if not telecentric and _outside_pupil(mx, my, t_x, t_y, inv_d_a, max_slope2):
+                        continue
+                    u_x = t_x + mx * b_u
+                    u_y = t_y + my * b_u
                     if u_x * u_x + u_y * u_y > rim2:
                         continue
                     rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, frame, region,
@@ -224,19 +245,27 @@ def _sensor_kernel(out, axis_x, axis_y, pixel_mm, lattice, f_s, b_u, f_u, max_sl
 
 
 @njit(cache=True, parallel=True)
-def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pixel_mm, f_s, b_u, f_u,
-                  max_slope2, rim2, ap_off, z, frame, region, kind, par, center, tint, images, background):
-    """Ideal views: per lens and view, the mean radiance of the passing rays and the passing fraction."""
+def _ideal_kernel(views, weight, row0, row1, centers, lens_centers, view_off, sub_off, axis_x, axis_y, pixel_mm, f_s, b_u, f_u,
+                  max_slope2, rim2, inv_d_a, ap_off, z, frame, region, kind, par, center, tint, images, background):
+    """Ideal views of lens rows row0 ≤ row < row1: per lens and view, the mean radiance of the passing rays and the
+    passing fraction.
+
+    View samples sit at the micro image centre (``centers``, px) plus ``view_off``; the rays leave
+    the lens at ``lens_centers`` (px), the same points when telecentric.
+    """
     m = views.shape[0]
-    rows, cols = views.shape[2], views.shape[3]
+    cols = views.shape[3]
     channels = views.shape[4]
     n_sub = sub_off.shape[0]
     n_ap = ap_off.shape[0]
     total = n_sub * n_ap
-    for row in prange(rows):
+    for row in prange(row0, row1):
         for col in range(cols):
-            s_x = (centers[row, col, 0] - axis_x) * pixel_mm
-            s_y = (centers[row, col, 1] - axis_y) * pixel_mm
+            s_x = (lens_centers[row, col, 0] - axis_x) * pixel_mm
+            s_y = (lens_centers[row, col, 1] - axis_y) * pixel_mm
+            # slope towards the micro image centre: 0 when telecentric, the chief ray −s/d_A otherwise
+            chief_x = (s_x - (centers[row, col, 0] - axis_x) * pixel_mm) / f_s
+            chief_y = (s_y - (centers[row, col, 1] - axis_y) * pixel_mm) / f_s
             for ky in range(m):
                 for kx in range(m):
                     r = 0.0
@@ -248,13 +277,15 @@ def _ideal_kernel(views, weight, centers, view_off, sub_off, axis_x, axis_y, pix
                         for i in range(n_sub):
                             dx_mm = (view_off[ky, kx, 0] + sub_off[i, 0]) * pixel_mm
                             dy_mm = (view_off[ky, kx, 1] + sub_off[i, 1]) * pixel_mm
-                            mx = -dx_mm / f_s
-                            my = -dy_mm / f_s
-                            if not fallback and mx * mx + my * my > max_slope2:
-                                continue
+                            mx = chief_x - dx_mm / f_s
+                            my = chief_y - dy_mm / f_s
                             for j in range(n_ap):
-                                u_x = s_x + ap_off[j, 0] + mx * b_u
-                                u_y = s_y + ap_off[j, 1] + my * b_u
+                                t_x = s_x + ap_off[j, 0]
+                                t_y = s_y + ap_off[j, 1]
+                                if not fallback and _outside_pupil(mx, my, t_x, t_y, inv_d_a, max_slope2):
+                                    continue
+                                u_x = t_x + mx * b_u
+                                u_y = t_y + my * b_u
                                 if not fallback and u_x * u_x + u_y * u_y > rim2:
                                     continue
                                 rr, gg, bb, _ = _scene_radiance(u_x, u_y, mx - u_x / f_u, my - u_y / f_u, z, frame,

@@ -34,6 +34,7 @@ class RenderOptions:
     exposure: float = 0.8
     seed: int = 0
     ideal_views: bool = True
+    exit_pupil_distance_mm: float | None = None  # None: the camera's
 
     @property
     def sensor_shape(self) -> tuple[int, int]:
@@ -48,6 +49,10 @@ class RenderOptions:
         out["offset_px"] = list(self.offset_px)
         if isinstance(self.rim_radius_mm, float) and math.isinf(self.rim_radius_mm):
             out["rim_radius_mm"] = None
+        if self.exit_pupil_distance_mm is None:
+            del out["exit_pupil_distance_mm"]  # the camera's (and the format of files written before the key)
+        elif math.isinf(self.exit_pupil_distance_mm):
+            out["exit_pupil_distance_mm"] = "inf"  # JSON has no infinity
         return out
 
 
@@ -152,7 +157,19 @@ def _parse_render(table, source: str) -> RenderOptions:
         if not isinstance(table["ideal_views"], bool):
             raise LfprocError(f"{where}: ideal_views must be true or false")
         kw["ideal_views"] = table["ideal_views"]
+    if "exit_pupil_distance_mm" in table:
+        kw["exit_pupil_distance_mm"] = _parse_exit_pupil(table["exit_pupil_distance_mm"], where)
     return RenderOptions(**kw)
+
+
+def _parse_exit_pupil(value, where: str) -> float | None:
+    """A positive distance in mm, inf (or "inf": telecentric), or "camera" (None: the camera file's value)."""
+    if isinstance(value, str) and value.strip().lower() in ("inf", "camera"):
+        return math.inf if value.strip().lower() == "inf" else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value) or value <= 0:
+        raise LfprocError(f"{where}: exit_pupil_distance_mm must be a positive distance in mm, inf (telecentric) "
+                          f"or \"camera\", got {value!r}")
+    return float(value)
 
 
 def _parse_plane(table, index: int, source: str, base_dir: str) -> Plane:

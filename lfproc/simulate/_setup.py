@@ -1,14 +1,19 @@
 """Everything about the optics and sampling that does not depend on the scene (pure numpy).
 
-The simulated lattice (:func:`default_grid`), the main lens rim (:func:`auto_rim_radius_mm`), the
-stratified sub-samples over a pixel and over a micro lens aperture, and :class:`_Setup`, which
-bundles them for the kernels.
+The simulated lattices (:func:`default_grid` of the micro image centres, :func:`lens_grid_of` of
+the lenses), the main lens rim (:func:`auto_rim_radius_mm`), the stratified sub-samples over a
+pixel and over a micro lens aperture, and :class:`_Setup`, which bundles them for the kernels.
+
+Exit pupil. With the exit pupil d_A in front of the micro lens array (``camera.exit_pupil_distance_mm``),
+the chief ray of the lens at height s comes from the pupil's centre and meets the sensor at
+s·(d_A + f_s)/d_A: the micro image centres form the lens lattice scaled by that factor about the
+optical axis (Hahne et al. 2018; :func:`micro_image_scale`). Telecentric (d_A = inf): factor 1.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,20 +25,32 @@ from ._checks import _check_pair, _check_samples, _check_shape, _require_f_numbe
 _STOP_TOLERANCE = 1.0 + 1e-12  # the same tolerance as geometry.views_inside_aperture
 
 
-def default_grid(camera: Camera, sensor_shape, rotation_deg: float = 0.0, offset_px=(0.0, 0.0)) -> LensGrid:
-    """The simulated micro lens lattice in sensor pixels.
+def micro_image_scale(camera: Camera) -> float:
+    """(d_A + f_s)/d_A: the micro image centre lattice over the lens lattice (1.0 when telecentric).
 
-    One lens is centred at the sensor centre ((W − 1)/2, (H − 1)/2) + ``offset_px``; the lattice has
-    pitch ``camera.pitch_px`` and kind ``camera.grid``, rotated by ``rotation_deg``. The returned grid
-    holds the largest rows × cols block of lenses whose centres all lie at least half a pitch inside
-    the sensor (complete micro images). The renderer uses the same lattice extended without bound,
-    so the partial cells at the sensor border receive light too.
+    The same number as ``lfproc.geometry.micro_image_scale``; kept here so the simulator stands on its own.
+    """
+    d_a = camera.exit_pupil_distance_mm
+    return 1.0 if math.isinf(d_a) else (d_a + camera.mla_focal_length_mm) / d_a
+
+
+def default_grid(camera: Camera, sensor_shape, rotation_deg: float = 0.0, offset_px=(0.0, 0.0)) -> LensGrid:
+    """The simulated lattice of micro image centres in sensor pixels (what a white image shows).
+
+    The lens lattice has pitch ``camera.pitch_px`` and kind ``camera.grid``, rotated by
+    ``rotation_deg``, with one lens at the sensor centre ((W − 1)/2, (H − 1)/2) + ``offset_px``. The
+    micro image centres are that lattice scaled about the sensor centre (the optical axis) by
+    :func:`micro_image_scale` (the lens lattice itself when telecentric). The returned grid holds the
+    largest rows × cols block of micro images whose centres all lie at least half a pitch inside the
+    sensor (complete micro images); :func:`lens_grid_of` gives their lenses. The renderer uses the
+    same lattice extended without bound, so the partial cells at the sensor border receive light too.
     """
     height, width = _check_shape(sensor_shape)
     if not (math.isfinite(rotation_deg) and all(math.isfinite(float(v)) for v in offset_px)):
         raise LfprocError(f"rotation_deg and offset_px must be finite, got {rotation_deg}, {offset_px}")
-    pitch = camera.pitch_px
-    anchor = ((width - 1) / 2.0 + float(offset_px[0]), (height - 1) / 2.0 + float(offset_px[1]))
+    scale = micro_image_scale(camera)
+    pitch = camera.pitch_px * scale
+    anchor = ((width - 1) / 2.0 + scale * float(offset_px[0]), (height - 1) / 2.0 + scale * float(offset_px[1]))
     base = LensGrid(camera.grid, pitch, float(rotation_deg), anchor, 1, 1)
     reach = int(math.ceil(math.hypot(height, width) / base.row_spacing_px)) + 2
     idx = np.arange(-reach, reach + 1)
@@ -51,6 +68,33 @@ def default_grid(camera: Camera, sensor_shape, rotation_deg: float = 0.0, offset
     return LensGrid(camera.grid, pitch, float(rotation_deg), origin, rows, cols)
 
 
+def with_exit_pupil(camera: Camera, exit_pupil_distance_mm) -> Camera:
+    """``camera`` with the exit pupil a render uses: its own for ``None``, else the given distance (mm, or inf)."""
+    if exit_pupil_distance_mm is None:
+        return camera
+    d_a = exit_pupil_distance_mm
+    if isinstance(d_a, bool) or not isinstance(d_a, (int, float)) or math.isnan(d_a) or d_a <= 0:
+        raise LfprocError(f"exit_pupil_distance_mm must be a positive distance in mm, inf (telecentric) or None "
+                          f"(the camera's), got {d_a!r}")
+    if float(d_a) == camera.exit_pupil_distance_mm:
+        return camera
+    return replace(camera, exit_pupil_distance_mm=float(d_a))
+
+
+def lens_grid_of(grid: LensGrid, camera: Camera, sensor_shape) -> LensGrid:
+    """The lenses of the micro images in ``grid`` (from :func:`default_grid`): the grid scaled back about the axis.
+
+    Returns ``grid`` itself when telecentric.
+    """
+    scale = micro_image_scale(camera)
+    if scale == 1.0:
+        return grid
+    height, width = _check_shape(sensor_shape)
+    axis = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
+    origin = tuple(float(v) for v in axis + (np.asarray(grid.origin_xy_px) - axis) / scale)
+    return LensGrid(grid.kind, camera.pitch_px, grid.rotation_deg, origin, grid.rows, grid.cols)
+
+
 def auto_rim_radius_mm(camera: Camera, sensor_shape) -> float:
     """The default main lens rim: just large enough that the sensor's inscribed circle is unvignetted.
 
@@ -59,33 +103,51 @@ def auto_rim_radius_mm(camera: Camera, sensor_shape) -> float:
     (the stop, and the baffle keeping x inside the cell), so the rim radius
     ρ + r_cell + (f_s + b_U)·min(1/(2N), r_cell/f_s) clears all of them. Points beyond the inscribed
     circle (the sensor's corners) are partly vignetted.
+
+    With a finite exit pupil d_A (scale k = (d_A + f_s)/d_A), the slope is m = (−x/d_A + δ)/k with
+    |δ| ≤ min(1/(2N) + r_cell/d_A, k·r_cell/f_s) (the pupil, seen from any point of the lens cell,
+    and the baffle around the micro image centre), so U = x·(d_A − b_U)/(d_A + f_s) + τ + (f_s + b_U)·δ/k
+    and the rim ρ·|d_A − b_U|/(d_A + f_s) + r_cell + (f_s + b_U)·max|δ|/k clears them.
     """
     height, width = _check_shape(sensor_shape)
     _require_f_number(camera)
     rho = 0.5 * min(height, width) * camera.pixel_pitch_mm
     r_cell = camera.mla_pitch_mm * (1.0 / math.sqrt(2.0) if camera.grid == "rectangular" else 1.0 / math.sqrt(3.0))
-    max_slope = min(1.0 / (2.0 * camera.f_number), r_cell / camera.mla_focal_length_mm)
-    return rho + r_cell + (camera.mla_focal_length_mm + camera.image_distance_mm) * max_slope
+    f_s, b_u, d_a = camera.mla_focal_length_mm, camera.image_distance_mm, camera.exit_pupil_distance_mm
+    if math.isinf(d_a):
+        max_slope = min(1.0 / (2.0 * camera.f_number), r_cell / f_s)
+        return rho + r_cell + (f_s + b_u) * max_slope
+    scale = micro_image_scale(camera)
+    max_delta = min(1.0 / (2.0 * camera.f_number) + r_cell / d_a, scale * r_cell / f_s)
+    return rho * abs(d_a - b_u) / (d_a + f_s) + r_cell + (f_s + b_u) * max_delta / scale
 
 
 @dataclass(frozen=True, eq=False)
 class _Setup:
     """Everything about the optics and sampling that does not depend on the scene."""
 
-    camera: Camera
+    camera: Camera             # with the exit pupil of this render
     shape: tuple
-    grid: LensGrid
+    grid: LensGrid             # micro image centres
+    lens_grid: LensGrid        # their lenses (grid itself when telecentric)
     axis_px: tuple
     rim_radius_mm: float
-    lattice: np.ndarray        # [ox, oy, ux, uy, vx, vy, pitch, row_spacing, is_hex] (px)
+    lattice: np.ndarray        # micro image lattice [ox, oy, ux, uy, vx, vy, pitch, row_spacing, is_hex] (px)
     pixel_offsets: np.ndarray  # (n, 2) px, stratified over a pixel
     aperture_offsets: np.ndarray  # (k, 2) mm, stratified over the lens cell, sensor frame
     max_slope2: float
 
+    @property
+    def inverse_scale(self) -> float:
+        """1 / micro_image_scale: from a micro image centre's height to its lens's (1.0 when telecentric)."""
+        return 1.0 / micro_image_scale(self.camera)
+
     @classmethod
-    def build(cls, camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples, aperture_samples):
+    def build(cls, camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples, aperture_samples,
+              exit_pupil_distance_mm=None):
         if not isinstance(camera, Camera):
             raise LfprocError(f"camera must be an lfproc.Camera, got {type(camera).__name__}")
+        camera = with_exit_pupil(camera, exit_pupil_distance_mm)
         _require_f_number(camera)
         shape = _check_shape(sensor_shape)
         offset_px = _check_pair(offset_px, "offset_px")
@@ -104,14 +166,16 @@ class _Setup:
                             1.0 if grid.kind == "hexagonal" else 0.0])
         axis = ((shape[1] - 1) / 2.0, (shape[0] - 1) / 2.0)
         stop = 1.0 / (2.0 * camera.f_number)
-        return cls(camera, shape, grid, axis, rim, lattice, pixel_offsets(n_pix),
+        return cls(camera, shape, grid, lens_grid_of(grid, camera, shape), axis, rim, lattice,
+                   pixel_offsets(n_pix),
                    aperture_offsets_mm(camera.grid, camera.mla_pitch_mm, float(rotation_deg), n_ap),
                    stop * stop * _STOP_TOLERANCE)
 
     def optics_args(self):
         c = self.camera
         rim2 = self.rim_radius_mm ** 2 if math.isfinite(self.rim_radius_mm) else math.inf
-        return (c.mla_focal_length_mm, c.image_distance_mm, c.main_focal_length_mm, self.max_slope2, rim2)
+        inv_d_a = 0.0 if c.telecentric else 1.0 / c.exit_pupil_distance_mm
+        return (c.mla_focal_length_mm, c.image_distance_mm, c.main_focal_length_mm, self.max_slope2, rim2, inv_d_a)
 
 
 def pixel_offsets(n: int) -> np.ndarray:
