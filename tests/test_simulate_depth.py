@@ -30,7 +30,7 @@ def rotation(tx_deg, ty_deg):
 
 
 def central_chief_rays(cam, grid, shape):
-    """Telecentric central-view chief rays through each lens centre (Eqs. 16-19 with m = 0): U and q, (rows, cols, 2)."""
+    """Telecentric central-view chief rays through each lens centre (Eqs. 16-19, m = 0): U and q, (rows, cols, 2)."""
     axis = np.array([(shape[1] - 1) / 2, (shape[0] - 1) / 2])
     u = (grid.centers_xy_px() - axis) * cam.pixel_pitch_mm
     return u, -u / cam.main_focal_length_mm
@@ -129,7 +129,7 @@ def test_textures_on_a_tilted_plane_use_the_planes_own_coordinates():
     cam = camera(m=7, f_number=2.0)
     shape, d, period = (150, 170), 450.0, 30.0
     plane = Plane(d, Sinusoid(period_mm=period, low=0.1, high=0.9), tilt_deg=(60.0, 0.0))
-    views, weight, grid = simulate.render_ideal_views(cam, Scene((plane,)), shape, rim_radius_mm=None)
+    views, _, grid = simulate.render_ideal_views(cam, Scene((plane,)), shape, rim_radius_mm=None)
     x, y, depth = hit_on_tilted_plane(cam, grid, shape, d, 60.0, 0.0)
     along = np.tensordot(rotation(60.0, 0.0)[:, 0], np.stack([x, y, depth - d]), axes=1)  # along the plane's e1
     expected = 0.1 + 0.8 * (0.5 + 0.5 * np.cos(2 * np.pi * along / period))
@@ -166,7 +166,7 @@ def test_the_sharpest_refocus_parameter_follows_the_tilt_across_the_plane():
     plane = Plane(d, Noise(1.5, seed=4), tilt_deg=tilt)  # features of about two lens footprints
     views, weight, grid = simulate.render_ideal_views(cam, Scene((plane,)), (560, 560), rim_radius_mm=None)
     assert weight.min() > 0.99
-    x, y, depth = hit_on_tilted_plane(cam, grid, (560, 560), d, *tilt)
+    _, _, depth = hit_on_tilted_plane(cam, grid, (560, 560), d, *tilt)
     a_grid = np.round(np.arange(1.1, 2.0001, 0.02), 6)
     variance = np.array([shifted_views(views, a).var(axis=0) for a in a_grid])  # (A, rows, cols)
     border, block = 9, 11  # border > max a·c = 8 lenses

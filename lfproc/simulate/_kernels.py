@@ -200,8 +200,8 @@ def _outside_pupil(mx, my, t_x, t_y, inv_d_a, max_slope2):
 
 
 @njit(cache=True, parallel=True)
-def _sensor_kernel(out, row0, row1, axis_x, axis_y, pixel_mm, lattice, inv_scale, f_s, b_u, f_u, max_slope2, rim2, inv_d_a,
-                   pix_off, ap_off, z, frame, region, kind, par, center, tint, images, background):
+def _sensor_kernel(out, row0, row1, axis_x, axis_y, pixel_mm, lattice, inv_scale, f_s, b_u, f_u, max_slope2, rim2,
+                   inv_d_a, pix_off, ap_off, z, frame, region, kind, par, center, tint, images, background):
     """Sensor irradiance of rows row0 ≤ y < row1: each pixel averages pix_off × ap_off rays (0 for blocked ones).
 
     ``lattice`` is the micro image lattice: a sensor point belongs to the micro image whose cell holds
@@ -245,8 +245,9 @@ def _sensor_kernel(out, row0, row1, axis_x, axis_y, pixel_mm, lattice, inv_scale
 
 
 @njit(cache=True, parallel=True)
-def _ideal_kernel(views, weight, row0, row1, centers, lens_centers, view_off, sub_off, axis_x, axis_y, pixel_mm, f_s, b_u, f_u,
-                  max_slope2, rim2, inv_d_a, ap_off, z, frame, region, kind, par, center, tint, images, background):
+def _ideal_kernel(views, weight, row0, row1, centers, lens_centers, view_off, sub_off, axis_x, axis_y, pixel_mm,
+                  f_s, b_u, f_u, max_slope2, rim2, inv_d_a, ap_off, z, frame, region, kind, par, center, tint, images,
+                  background):
     """Ideal views of lens rows row0 ≤ row < row1: per lens and view, the mean radiance of the passing rays and the
     passing fraction.
 

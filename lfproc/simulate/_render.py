@@ -1,8 +1,9 @@
 """Forward renderer of Standard Plenoptic Camera raw captures, with exact ground truth.
 
 The optics are the paper's paraxial model (Sections 2–3), with an image-side telecentric main lens
-or, with a finite exit pupil, its extension by Hahne et al. (IJCV 2018). Coordinates are heights in mm from the optical axis, in the sensor's own (x = column, y = row)
-directions; the axis meets the sensor at its centre ((W − 1)/2, (H − 1)/2) px.
+or, with a finite exit pupil, its extension by Hahne et al. (IJCV 2018). Coordinates are heights in
+mm from the optical axis, in the sensor's own (x = column, y = row) directions; the axis meets the
+sensor at its centre ((W − 1)/2, (H − 1)/2) px.
 
 Ray model (one ray per sensor point x and micro lens aperture point t)
 ----------------------------------------------------------------------
@@ -210,17 +211,17 @@ def render_radiance(camera: Camera, scene: Scene | None, sensor_shape, *, rotati
 
 
 def render_ideal_views(camera: Camera, scene: Scene, sensor_shape, *, rotation_deg=0.0, offset_px=(0.0, 0.0),
-                       rim_radius_mm="auto", pixel_samples=2, aperture_samples=3,
-                       channels=None, exit_pupil_distance_mm=None) -> tuple[np.ndarray, np.ndarray, LensGrid]:
+                       rim_radius_mm="auto", pixel_samples=2, aperture_samples=3, channels=None,
+                       exit_pupil_distance_mm=None) -> tuple[np.ndarray, np.ndarray, LensGrid]:
     """What a perfect decoder should output: ``(views, weight, grid)``.
 
     View (ky, kx) at lens (r, q) is the radiance the model gives for an *effective* pixel of pitch
     p_eff = p_m·k / m̂ centred at the micro image centre + (kx − c)·p_eff·u + (ky − c)·p_eff·v (u, v
     the lattice axes, c = (m̂ − 1)/2, k = :func:`micro_image_scale`, 1 when telecentric: the micro
-    image pitch over m̂, as a decoder samples it), integrated over that pixel (a square aligned with u, v) and the micro lens
-    aperture, and normalised by the rays that pass the stop and the rim, so it is pure scene radiance.
-    ``weight`` is the fraction that passed. Where none passed (views outside the stop) the view holds
-    the unblocked average instead, so it is never NaN. Hexagonal grids give views at the hexagonal
+    image pitch over m̂, as a decoder samples it), integrated over that pixel (a square aligned with
+    u, v) and the micro lens aperture, and normalised by the rays that pass the stop and the rim, so
+    it is pure scene radiance. ``weight`` is the fraction that passed. Where none passed (views
+    outside the stop) the view holds the unblocked average instead, so it is never NaN. Hexagonal grids give views at the hexagonal
     lens centres (the LensGrid's rows × cols). ``channels`` (1 = luminance, :data:`LUMA_WEIGHTS`, or 3)
     defaults to 3 for a CFA camera and 1 otherwise; anything else raises LfprocError.
     """

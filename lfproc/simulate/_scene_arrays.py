@@ -41,8 +41,9 @@ class SceneArrays:
     @classmethod
     def uniform(cls, value: float) -> SceneArrays:
         """No planes, radiance ``value`` everywhere (the white image)."""
-        return cls(np.zeros(0), np.zeros((0, 10)), np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros((0, 7)), np.zeros((0, 2)),
-                   np.zeros((0, 3)), np.zeros(1, np.float32), np.full(3, float(value)), np.zeros(0, np.int64))
+        return cls(np.zeros(0), np.zeros((0, 10)), np.zeros((0, 4)), np.zeros(0, np.int64), np.zeros((0, 7)),
+                   np.zeros((0, 2)), np.zeros((0, 3)), np.zeros(1, np.float32), np.full(3, float(value)),
+                   np.zeros(0, np.int64))
 
     @classmethod
     def build(cls, scene: Scene, camera: Camera) -> SceneArrays:
