@@ -221,9 +221,10 @@ def render_ideal_views(camera: Camera, scene: Scene, sensor_shape, *, rotation_d
     image pitch over m̂, as a decoder samples it), integrated over that pixel (a square aligned with
     u, v) and the micro lens aperture, and normalised by the rays that pass the stop and the rim, so
     it is pure scene radiance. ``weight`` is the fraction that passed. Where none passed (views
-    outside the stop) the view holds the unblocked average instead, so it is never NaN. Hexagonal grids give views at the hexagonal
-    lens centres (the LensGrid's rows × cols). ``channels`` (1 = luminance, :data:`LUMA_WEIGHTS`, or 3)
-    defaults to 3 for a CFA camera and 1 otherwise; anything else raises LfprocError.
+    outside the stop) the view holds the unblocked average instead, so it is never NaN. Hexagonal
+    grids give views at the hexagonal lens centres (the LensGrid's rows × cols). ``channels``
+    (1 = luminance, :data:`LUMA_WEIGHTS`, or 3) defaults to 3 for a CFA camera and 1 otherwise;
+    anything else raises LfprocError. ``exit_pupil_distance_mm`` as in :func:`render`.
     """
     setup = _Setup.build(camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples,
                          aperture_samples, exit_pupil_distance_mm)
