@@ -20,7 +20,16 @@ def require_matplotlib():
 
 
 def plot_slices(camera, slices, path: str) -> None:
-    """Each slice's central distance and DOF interval against a (the paper's Fig. 9), written atomically.
+    """Write :func:`slice_figure` to ``path`` (PNG, atomically)."""
+    plt = require_matplotlib()
+    fig = slice_figure(camera, slices)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+
+
+def slice_figure(camera, slices):
+    """Each slice's central distance and DOF interval against a (the paper's Fig. 9), and the DOF itself.
 
     Distances go on a logarithmic axis, so a 10 mm DOF at 200 mm and a 2 m one at 5 m are both
     visible; intervals reaching infinity end in an arrow at the top.
@@ -62,6 +71,4 @@ def plot_slices(camera, slices, path: str) -> None:
     ax_dof.set_xlabel("refocus parameter a")
     ax_dof.grid(alpha=0.3, which="both")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
+    return fig
