@@ -121,3 +121,15 @@ def test_plot_is_log_scaled_with_the_title_inside(tmp_path):
     proc = run_cli("geometry", "--camera", ILLUM, "--a=-2:3:0.5", "--plot", out)
     assert proc.returncode == 0, proc.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_triangulation_command_stays_light():
+    """`lfproc geometry` with a finite exit pupil and --disparity imports no numba/OpenCV/OIIO/matplotlib."""
+    import subprocess
+    import sys
+    code = (f"import sys, io, contextlib; from lfproc.cli import main\n"
+            f"with contextlib.redirect_stdout(io.StringIO()): main(['geometry', '--camera', {str(ILLUM)!r}, "
+            f"'--disparity', '1', '--json'])\n"
+            f"print([m for m in ('numba', 'cv2', 'OpenImageIO', 'rawpy', 'matplotlib') if m in sys.modules])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "[]"

@@ -46,21 +46,22 @@ def exit_pupil_from_scale(scale, camera: Camera):
     Returns
     -------
     float or ndarray
-        In mm from the micro lens array; ``inf`` for a scale of exactly 1 (telecentric).
+        In mm from the micro lens array; ``inf`` for a scale of 1 or below: no outward drift (a fitted
+        scale a little below 1 is fit noise on a telecentric camera; an inward drift would need an exit
+        pupil behind the sensor, which no plenoptic camera's main lens has).
 
     Raises
     ------
     LfprocError
-        For a scale below 1 (micro images drifting inwards: an exit pupil behind the sensor, which
-        no main lens of a plenoptic camera has; check the lens pitch) or a non-finite scale.
+        For a non-finite or non-positive scale.
     """
     s = np.asarray(scale, dtype=np.float64)
-    if np.any(~np.isfinite(s)) or np.any(s < 1.0):
-        bad = s[~np.isfinite(s) | (s < 1.0)].ravel()[0]
-        raise LfprocError(f"micro image lattice scale {bad} is below 1 or not finite: micro images would drift "
-                          f"inwards; check mla.pitch_mm against the calibrated pitch")
+    if np.any(~np.isfinite(s)) or np.any(s <= 0):
+        bad = s[~np.isfinite(s) | (s <= 0)].ravel()[0]
+        raise LfprocError(f"micro image lattice scale {bad} is not a positive number; check the calibrated pitch "
+                          f"against mla.pitch_mm")
     with np.errstate(divide="ignore"):
-        d_a = camera.mla_focal_length_mm / (s - 1.0)
+        d_a = np.where(s > 1.0, camera.mla_focal_length_mm / np.maximum(s - 1.0, np.finfo(float).tiny), np.inf)
     return float(d_a) if d_a.ndim == 0 else d_a
 
 

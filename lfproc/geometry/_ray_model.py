@@ -67,6 +67,11 @@ class RayModel:
         return math.isinf(self.exit_pupil_distance_mm)
 
     @property
+    def micro_image_scale(self) -> float:
+        d_a = self.exit_pupil_distance_mm
+        return 1.0 if self.telecentric else (d_a + self.mla_focal_length_mm) / d_a
+
+    @property
     def sensor_to_main_lens_mm(self) -> float:
         return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
                 + self.main_principal_plane_gap_mm)
