@@ -284,3 +284,31 @@ def test_triangulate_is_vectorised_and_refuses_a_zero_gap():
     assert math.isnan(g.triangulate(cam, math.nan, 1).distance_mm)
     with pytest.raises(LfprocError, match="gap"):
         g.triangulate(cam, 1.0, 0)
+
+
+def test_wide_random_cameras_with_exit_pupils_give_no_nan_and_ordered_limits():
+    """Pitches 1 um-1 mm, focal lengths 0.1 mm-1 m, b_U - f_U in {0} U [1e-12, 1e3] mm, d_A 1e-9 mm-1e12 mm,
+    a from -50 to 50 and the slice at infinity: no warning, no NaN, nothing negative, near <= d <= far."""
+    rng = np.random.default_rng(7)
+
+    def log_uniform(lo, hi):
+        return float(10 ** rng.uniform(math.log10(lo), math.log10(hi)))
+
+    checked = 0
+    for _ in range(600):
+        pixel, lens = sorted((log_uniform(1e-3, 1.0), log_uniform(1e-3, 1.0)))
+        fu = log_uniform(0.1, 1000.0)
+        eps = 0.0 if rng.random() < 0.2 else log_uniform(1e-12, 1e3)
+        cam = Camera(pixel, lens, log_uniform(0.1, 1000.0), fu, fu + eps,
+                     exit_pupil_distance_mm=log_uniform(1e-9, 1e12))
+        a = np.concatenate([rng.uniform(-50, 50, 20), [0.0, -1.0, 1.0, g.infinity_parameter(cam)]])
+        with np.errstate(all="raise", under="ignore"):
+            geo = g.slice_geometry(cam, a)
+            tri = g.triangulate(cam, rng.uniform(-5, 5, 5), 2)
+            views = g.view_geometry(cam)
+        for arr in (geo.distance_mm, geo.near_mm, geo.far_mm, geo.dof_mm, tri.distance_mm):
+            assert not np.isnan(arr).any() and (arr >= 0).all()
+        assert (geo.near_mm <= geo.distance_mm).all() and (geo.distance_mm <= geo.far_mm).all()
+        assert np.all(np.isfinite(views.tilt_deg))
+        checked += 1
+    assert checked == 600

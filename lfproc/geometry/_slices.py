@@ -40,7 +40,9 @@ Domain. The rays meet in front of the camera when z > 0: above a_∞ = −δ·ε
 at infinity, they converge. Between a_0 and a_∞ they diverge: the slice is "beyond infinity" and its
 distance is ``inf``. Below a_0 they meet between the main lens and its front focal plane (z < f_U),
 a macro regime the paraxial model still describes; distances there are finite and below L + f_U.
-Distances are never negative and never NaN.
+With a finite exit pupil, slices far above a = δ·d_A/p_m pass the front focal plane towards the
+entrance pupil; where they would meet behind H1U (z ≤ 0) the distance is ``inf``, as PlenoptiSign's
+"out of range". Distances are never negative and never NaN.
 """
 
 from __future__ import annotations
