@@ -19,7 +19,7 @@ plenoptisign = pytest.importorskip("plenoptisign")
 # ------------------------------------------------------------------ helpers
 def ps_run(cam, a, gap, dx, df):
     """PlenoptiSign on our camera: its pp is our effective pixel pitch, M our m-hat, distances from H1s."""
-    obj = plenoptisign.MainClass(dict(pp=cam.effective_pixel_pitch_mm, fs=cam.mla_focal_length_mm,
+    obj = plenoptisign.MainClass(dict(pp=cam.sample_pitch_mm, fs=cam.mla_focal_length_mm,
                                       hh=cam.mla_principal_plane_gap_mm, pm=cam.mla_pitch_mm,
                                       dA=cam.exit_pupil_distance_mm, fU=cam.main_focal_length_mm,
                                       HH=cam.main_principal_plane_gap_mm, df=df, M=cam.m_hat, a=a, G=gap, dx=dx))
@@ -56,7 +56,7 @@ def ray_trace_z(cam, rays):
 def chief_slope(cam, s, i):
     """Image-side slope of pixel i counted from the micro image centre under the lens at height s."""
     centre = s * cam.micro_image_scale
-    return (s - (centre + i * cam.effective_pixel_pitch_mm)) / cam.mla_focal_length_mm
+    return (s - (centre + i * cam.sample_pitch_mm)) / cam.mla_focal_length_mm
 
 
 # ------------------------------------------------------------------ PlenoptiSign's default camera
@@ -65,7 +65,7 @@ def test_plenoptisign_default_camera_numbers():
     default = plenoptisign.MainClass()
     default.refo()
     default.tria()
-    model = g.RayModel(effective_pixel_pitch_mm=0.009, mla_pitch_mm=0.125, mla_focal_length_mm=2.75,
+    model = g.RayModel(sample_pitch_mm=0.009, mla_pitch_mm=0.125, mla_focal_length_mm=2.75,
                        main_focal_length_mm=193.2935, image_distance_mm=193.2935, micro_image_px=13.9523,
                        mla_principal_plane_gap_mm=0.396, main_principal_plane_gap_mm=-65.5563,
                        exit_pupil_distance_mm=111.0324)
@@ -269,7 +269,8 @@ def test_micro_image_scale_and_its_inverse():
     assert scale == pytest.approx((46.048875898122787 + 0.0406) / 46.048875898122787, rel=1e-15)
     assert g.exit_pupil_from_scale(scale, cam) == pytest.approx(46.048875898122787, rel=1e-9)
     assert math.isinf(g.exit_pupil_from_scale(1.0, cam))
-    assert cam.effective_pixel_pitch_mm == pytest.approx(0.02 * scale / 13, rel=1e-15)
+    assert cam.sample_pitch_mm == pytest.approx(0.02 * scale / 13, rel=1e-15)
+    assert cam.effective_pixel_pitch_mm == 0.02 / 13                 # the contract's, unchanged
     assert math.isinf(g.exit_pupil_from_scale(0.9999, cam))       # fit noise around 1: no drift
     np.testing.assert_allclose(g.exit_pupil_from_scale(np.array([1.001, 1.01]), cam), [40.6, 4.06], rtol=1e-9)
     with pytest.raises(LfprocError, match="not a positive number"):

@@ -112,14 +112,17 @@ class Camera:
 
     @property
     def effective_pixel_pitch_mm(self) -> float:
-        """Pixel pitch the geometry sees after resampling each micro image to m̂ samples: pitch / m̂.
+        """The contract's effective pixel pitch ``mla_pitch_mm / m̂`` (the lens pitch over m̂)."""
+        return self.mla_pitch_mm / self.m_hat
 
-        The decoder resamples the calibrated micro image lattice (what a white image shows), so the
-        pitch is that of the micro images, ``mla_pitch_mm × micro_image_scale``; for a telecentric
-        camera exactly ``mla_pitch_mm / m̂``.
+    @property
+    def sample_pitch_mm(self) -> float:
+        """Spacing of the decoded samples under each lens: the micro image pitch over m̂.
+
+        The decoder resamples the calibrated micro image lattice (what a white image shows), one
+        micro image pitch ``mla_pitch_mm × micro_image_scale`` to m̂ samples. The geometry uses this
+        pitch; it is exactly :attr:`effective_pixel_pitch_mm` for a telecentric camera.
         """
-        if self.telecentric:
-            return self.mla_pitch_mm / self.m_hat
         return self.micro_image_pitch_mm / self.m_hat
 
     @property

@@ -64,6 +64,7 @@ def camera_summary(camera) -> dict:
     """The derived numbers the geometry rests on (JSON-ready; ``inf`` becomes null)."""
     from .. import geometry
     return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
+                sample_pitch_mm=camera.sample_pitch_mm,
                 image_distance_mm=camera.image_distance_mm, exit_pupil_distance_mm=camera.exit_pupil_distance_mm,
                 telecentric=camera.telecentric, micro_image_scale=geometry.micro_image_scale(camera),
                 virtual_camera_plane_mm=geometry.virtual_camera_plane_mm(camera),

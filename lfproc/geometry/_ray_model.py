@@ -20,7 +20,7 @@ class RayModel:
 
     Parameters
     ----------
-    effective_pixel_pitch_mm : float
+    sample_pitch_mm : float
         p_p, the spacing of the samples under each micro lens.
     mla_pitch_mm, mla_focal_length_mm, main_focal_length_mm, image_distance_mm : float
         p_m, f_s, f_U, b_U.
@@ -33,7 +33,7 @@ class RayModel:
     f_number : float or None
     """
 
-    effective_pixel_pitch_mm: float
+    sample_pitch_mm: float
     mla_pitch_mm: float
     mla_focal_length_mm: float
     main_focal_length_mm: float
@@ -45,7 +45,7 @@ class RayModel:
     f_number: float | None = None
 
     def __post_init__(self):
-        for key in ("effective_pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm", "main_focal_length_mm",
+        for key in ("sample_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm", "main_focal_length_mm",
                     "micro_image_px", "exit_pupil_distance_mm"):
             value = getattr(self, key)
             if not (isinstance(value, (int, float)) and value > 0):

@@ -57,8 +57,8 @@ from ._exit_pupil import pupil_curvature
 
 
 def _slope_step(camera: Camera) -> float:
-    """δ = p_p / f_s with the effective pixel pitch (Eq. 13 for Δu = 1)."""
-    return camera.effective_pixel_pitch_mm / camera.mla_focal_length_mm
+    """δ = p_p / f_s with the sample pitch p_p (Eq. 13 for Δu = 1): the micro image pitch over m̂."""
+    return camera.sample_pitch_mm / camera.mla_focal_length_mm
 
 
 def _pair_distance(camera: Camera, shift, spread):
