@@ -1,0 +1,98 @@
+"""Reading Lytro files as captures: containers (``.lfp``/``.lfr``) and raw pairs (``NAME.raw`` + metadata).
+
+A raw pair is a packed ``NAME.raw`` (any case) with its metadata JSON beside it, ``NAME.txt`` or
+``NAME.json`` (any case): calibration white images copied off a camera, some exported captures.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from ..errors import LfprocError
+from ._capture import Capture, normalise_mosaic
+from ._lytro_container import (RawFrame, has_container_extension, is_container, parse_json, raw_frame,
+                               read_container)
+from ._lytro_metadata import LytroMetadata, frame_metadata, parse_metadata
+from ._lytro_unpack import unpack_raw
+
+METADATA_EXTENSIONS = (".txt", ".json")
+
+
+@dataclass(frozen=True, eq=False)
+class LytroFile:
+    """A Lytro file's raw frame (still packed) and its parsed metadata."""
+
+    frame: RawFrame
+    metadata: LytroMetadata
+    format: str     # "lytro-container" or "lytro-raw"
+
+
+def metadata_sibling(path: str) -> str | None:
+    """``NAME.txt``/``NAME.json`` (any case) next to a ``NAME.raw``, or None."""
+    folder, name = os.path.split(path)
+    stem, extension = os.path.splitext(name)
+    if extension.lower() != ".raw":
+        return None
+    try:
+        entries = os.listdir(folder or ".")
+    except OSError:
+        return None
+    for wanted in METADATA_EXTENSIONS:
+        for entry in sorted(entries):
+            entry_stem, entry_ext = os.path.splitext(entry)
+            if entry_stem == stem and entry_ext.lower() == wanted:
+                return os.path.join(folder, entry)
+    return None
+
+
+def is_lytro_file(path: str) -> bool:
+    """A container (by extension or magic) or a ``.raw`` with a metadata file beside it."""
+    return has_container_extension(path) or is_container(path) or metadata_sibling(path) is not None
+
+
+def open_lytro(path: str, verify: bool = True, pixels: bool = True) -> LytroFile:
+    """Parse a Lytro file's container or metadata (the raw stays packed; a raw pair's raw is not
+    read at all with ``pixels=False``: ``frame.packed`` is then empty).
+
+    Raises
+    ------
+    LfprocError
+        Everything `read_container` and `parse_metadata` raise; a processed picture without raw data.
+    """
+    if has_container_extension(path) or is_container(path):
+        frame = raw_frame(read_container(path, verify=verify))
+        metadata = parse_metadata(frame.metadata, frame.private, path, frame.modulation_frame)
+        return LytroFile(frame=frame, metadata=metadata, format="lytro-container")
+    sibling = metadata_sibling(path)
+    if sibling is None:
+        raise LfprocError(f"{path}: a Lytro .raw needs its metadata beside it (same name, .txt or .json); "
+                          f"copy it from the camera with the raw")
+    with open(sibling, "rb") as fh:
+        document = parse_json(fh.read(), f"{sibling}: metadata")
+    metadata, private, modulation = frame_metadata(document, sibling)
+    parsed = parse_metadata(metadata, private, path, modulation)
+    packed = b""
+    if pixels:
+        with open(path, "rb") as fh:
+            packed = fh.read()
+    frame = RawFrame(source=path, packed=packed, metadata=metadata, private=private, modulation_frame=modulation)
+    return LytroFile(frame=frame, metadata=parsed, format="lytro-raw")
+
+
+def read_lytro_metadata(path: str | os.PathLike) -> LytroMetadata:
+    """The parsed metadata of a Lytro container or raw pair (the pixels are not unpacked)."""
+    return open_lytro(os.fspath(path), pixels=False).metadata
+
+
+def read_lytro_capture(path: str, camera=None) -> Capture:
+    """Unpack a Lytro file and apply its own levels per Bayer channel (the camera file's are not used).
+
+    Like camera raws read through LibRaw, Lytro files carry their levels and CFA: the result is
+    ``(raw − black) / (white − black)`` per 2×2 position, CFA from ``mosaic.upperLeftPixel``.
+    """
+    lytro = open_lytro(path)
+    meta = lytro.metadata
+    mosaic = unpack_raw(lytro.frame.packed, meta.width, meta.height, meta.bits_per_pixel, meta.endianness, path)
+    black, white = meta.levels()
+    return Capture(data=normalise_mosaic(mosaic, black, white), cfa=meta.cfa, source=path)
