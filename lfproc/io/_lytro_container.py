@@ -104,6 +104,8 @@ def read_container(path: str, verify: bool = True) -> LytroContainer:
     """
     with open(path, "rb") as fh:
         data = fh.read()
+    if data[:8] == FILE_MAGIC and len(data) < FILE_HEADER_BYTES:
+        raise LfprocError(f"{path}: truncated Lytro container (the file header is cut off); {_FIX}")
     if len(data) < FILE_HEADER_BYTES or data[:8] != FILE_MAGIC:
         raise LfprocError(f"{path}: not a Lytro container (no LFP header); pass an .lfp/.lfr file from a Lytro camera")
     sections = tuple(_sections(data, path, verify))

@@ -67,10 +67,13 @@ def read_capture(path: str | os.PathLike, camera=None) -> Capture:
     elif extension not in RAW_EXTENSIONS:
         readers = readers[::-1]
     reasons = []
+    hint = " (a Lytro .raw needs its metadata NAME.txt or NAME.json beside it)" if extension == ".raw" else ""
     for reader in readers:
         try:
             return reader(path, camera)
         except _NotThisFormat as exc:
             reasons.append(str(exc))
+        except LfprocError as exc:
+            raise LfprocError(f"{exc}{hint}") from None
     raise LfprocError(f"{path}: not a readable image or camera raw ({'; '.join(reasons)}); "
-                      f"pass a camera raw (DNG, CR2, NEF, …), a Lytro .lfr/.lfp, a TIFF, PNG or EXR file")
+                      f"pass a camera raw (DNG, CR2, NEF, …), a Lytro .lfr/.lfp, a TIFF, PNG or EXR file{hint}")
