@@ -8,25 +8,49 @@ import time
 from ..errors import LfprocError
 
 
-def add_decode_options(p) -> None:
-    p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+def add_decode_options(p, camera_required: bool = True) -> None:
+    """The options that say how to decode: camera, grid, white image, resampling, demosaicing.
+
+    ``camera_required=False`` (for commands that take the camera with `camera_from_args`): without
+    ``--camera``, Lytro captures bring their camera in their metadata.
+    """
+    if camera_required:
+        p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+    else:
+        p.add_argument("--camera", metavar="CAM", help="camera TOML file (optional for Lytro captures: without "
+                                                       "it, the camera comes from the first capture's metadata)")
     p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
-    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) "
-                                                    "and corrects vignetting")
+    p.add_argument("--white", metavar="WHITE", help="white image (also a Lytro .raw with its metadata): "
+                                                    "calibrates the grid (without --calib) and corrects vignetting")
+    p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
+                                                      "capture's camera with the nearest zoom and focus steps")
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
                    help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
 
 
+def captures_of(args) -> list[str]:
+    """The capture paths of a command's positional RAW argument(s)."""
+    raw = getattr(args, "raw", None)
+    return [raw] if isinstance(raw, str) else list(raw or [])
+
+
+def camera_from_args(args):
+    """``--camera``, or for Lytro captures without it the camera in the first capture's metadata."""
+    from ..pipeline import camera_for_captures
+
+    return camera_for_captures(args.camera, captures_of(args))
+
+
 def setup_from_args(args, camera=None):
     """Camera, grid and white image from the parsed options (errors before any capture is read)."""
-    from ..camera import Camera
     from ..pipeline import prepare_decoding
 
-    camera = camera or Camera.from_toml(args.camera)
+    camera = camera or camera_from_args(args)
     return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                            demosaic_method=args.demosaic)
+                            demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+                            captures=captures_of(args))
 
 
 def require_output_folder(path: str) -> None:
