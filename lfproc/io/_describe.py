@@ -78,7 +78,7 @@ def _metadata_fields(meta) -> dict:
         "camera_model": meta.model, "serial": meta.serial, "width": meta.width, "height": meta.height,
         "bits_per_pixel": meta.bits_per_pixel, "endianness": meta.endianness, "cfa": meta.cfa,
         "black_level": black.tolist(), "white_level": white.tolist(),
-        "white_image": meta.modulation_frame,
+        "modulation_frame": meta.modulation_frame,
         "lens": {"focal_length_mm": mm(meta.focal_length_m), "f_number": meta.f_number,
                  "exit_pupil_distance_mm": exit_pupil, "zoom_step": meta.zoom_step, "focus_step": meta.focus_step,
                  "infinity_lambda": meta.infinity_lambda},
