@@ -62,7 +62,7 @@ def fixture(name: str) -> dict:
 
 
 def illum_document(width, height, *, serial="B5143909630", zoom_step=-1040, focus_step=-300, focal_length_m=None,
-                   black=64, white=1023, modulation=True) -> dict:
+                   black=64, white=1023, modulation=True, exit_pupil_m=None) -> dict:
     """The Illum white image's .TXT document with only the given fields changed."""
     doc = copy.deepcopy(fixture("illum-white-image.TXT"))
     frame = doc["master"]["picture"]["frameArray"][0]
@@ -72,6 +72,8 @@ def illum_document(width, height, *, serial="B5143909630", zoom_step=-1040, focu
     meta["devices"]["lens"]["focusStep"] = focus_step
     if focal_length_m is not None:
         meta["devices"]["lens"]["focalLength"] = focal_length_m
+    if exit_pupil_m is not None:
+        meta["devices"]["lens"]["exitPupilOffset"]["z"] = exit_pupil_m
     frame["frame"]["privateMetadata"]["camera"]["serialNumber"] = serial
     frame["parameters"]["vendorContent"]["com.lytro.tags"]["modulationFrame"] = modulation
     return doc
