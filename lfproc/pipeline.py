@@ -154,8 +154,9 @@ def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: fl
         return Camera.from_toml(camera_file)
     first = _lytro_metadata_of(captures[0]) if captures else None
     if first is None:
-        raise LfprocError("give --camera CAM (a camera file); only Lytro captures carry their camera in their "
-                          "metadata")
+        where = f"{captures[0]}: " if captures else ""
+        raise LfprocError(f"{where}decoding a capture needs --camera CAM (a camera TOML file); only Lytro files "
+                          f"carry their camera in their metadata")
     from .io import lytro_camera
 
     built = lytro_camera(first, focus_distance_mm)
@@ -186,8 +187,11 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
 
 
 def output_stem(path: str) -> str:
-    """The name outputs of a capture start with: its file name without extension."""
-    return os.path.splitext(os.path.basename(path))[0]
+    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
+    name = os.path.basename(path)
+    if name.lower().endswith(".lfp.npz"):
+        return name[:-len(".lfp.npz")]
+    return os.path.splitext(name)[0]
 
 
 def unique_stems(paths: list[str]) -> dict[str, str]:
