@@ -11,7 +11,8 @@ def register(sub) -> None:
                        description="Describe a file without decoding it: format, whether it holds a raw light "
                                    "field, size, bit depth, CFA, levels; for Lytro files the camera model and "
                                    "serial, lens data and every section of the container with its SHA-1 check.")
-    p.add_argument("file", metavar="FILE")
+    p.add_argument("file", metavar="FILE", help="a capture, white image or picture: Lytro .lfr/.lfp or .raw with its "
+                                                "metadata, camera raw, TIFF, PNG, EXR, …")
     p.add_argument("--json", action="store_true", help="print one JSON object (strict JSON: infinity is null)")
     p.set_defaults(func=run)
 
