@@ -131,3 +131,21 @@ def test_processed_picture_is_refused(tmp_path, command, paper_camera):
     errors = [line for line in proc.stderr.splitlines() if "error" in line]
     assert len(errors) == 1 and "holds no raw light field" in errors[0] and str(stack) in errors[0]
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_refocus_a_lytro_capture_with_its_calibration_folder(tmp_path):
+    """The README's Lytro workflow on the bundled sample: no camera file, the white image picked by metadata."""
+    from conftest import SAMPLES
+    from lfproc import geometry
+    from lfproc.pipeline import camera_for_captures
+
+    capture = SAMPLES / "lytro" / "IMG_0001.lfr"
+    out = tmp_path / "slices"
+    proc = run_cli("refocus", capture, "--white-dir", SAMPLES / "lytro" / "caldata", "--a", "0.25,1.25", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert "camera from" in proc.stderr and "caldata/MOD_0000.RAW" in proc.stderr
+    camera = camera_for_captures(None, [str(capture)])
+    for a in (0.25, 1.25):
+        sidecar = json.loads((out / f"IMG_0001_a+{a:.3f}.json").read_text())
+        assert sidecar["source"] == str(capture.resolve()) and sidecar["a"] == a
+        assert sidecar["distance_mm"] == pytest.approx(geometry.slice_distance_mm(camera, a), rel=1e-12)

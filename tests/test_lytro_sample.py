@@ -33,10 +33,10 @@ def test_sample_refocuses_on_each_plane(capsys):
     setup = prepare_decoding(camera, white_dir=str(LYTRO / "caldata"), captures=[capture])
     assert "caldata/MOD_0000.RAW" in capsys.readouterr().err      # the matching zoom, not MOD_0001
     lf = load_lightfield(capture, setup)
-    # the script put the planes where slices a = 2 (left half) and a = 0.5 (behind) focus: 5858.3 and
-    # 22967.7 mm with its f_U 77.59 mm; the metadata's 77.5937 mm moves them by well under 1 %
-    assert geometry.slice_distance_mm(camera, 2.0) == pytest.approx(5858.3, rel=0.01)
-    assert geometry.slice_distance_mm(camera, 0.5) == pytest.approx(22967.7, rel=0.01)
+    # the script put the planes where slices a = 1.25 (left half) and a = 0.25 (behind) focus: 9280.2 and
+    # 45780.1 mm with its f_U 77.59 mm; the metadata's 77.5937 mm moves them by well under 1 %
+    assert geometry.slice_distance_mm(camera, 1.25) == pytest.approx(9280.2, rel=0.01)
+    assert geometry.slice_distance_mm(camera, 0.25) == pytest.approx(45780.1, rel=0.01)
 
     def sharpness(a, columns):
         image = refocus(lf, a).mean(axis=-1)
@@ -44,5 +44,5 @@ def test_sample_refocuses_on_each_plane(capsys):
 
     width = lf.views.shape[3]
     left, right = slice(2, width // 2 - 3), slice(width // 2 + 3, width - 2)
-    assert sharpness(2.0, left) > 1.5 * sharpness(0.5, left)
-    assert sharpness(0.5, right) > 1.5 * sharpness(2.0, right)
+    assert sharpness(1.25, left) > 1.5 * sharpness(0.25, left)
+    assert sharpness(0.25, right) > 1.5 * sharpness(1.25, right)
