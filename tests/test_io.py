@@ -226,6 +226,17 @@ def test_levels_default_to_the_files_own_range(tmp_path):
         np.testing.assert_allclose(capture.data, pixels.astype(np.float64) / top, atol=1e-6)
 
 
+def test_black_level_at_or_above_the_files_white_is_refused(tmp_path):
+    """Issue 14: a level given explicitly and contradicted by the file is an error, not a division by <= 0."""
+    path = tmp_path / "cap8.png"
+    oiio_write(path, np.full((2, 2), 7, np.uint8), "uint8")
+    for camera in (make_camera(black_level=255), make_camera(black_level=300)):     # white defaults to 255
+        with pytest.raises(LfprocError, match="black_level .* is not below this file's white level 255") as info:
+            lio.read_capture(path, camera=camera)
+        assert str(path) in str(info.value)
+    assert lio.read_capture(path, camera=make_camera(black_level=254)).data[0, 0] == pytest.approx(-247.0)
+
+
 def test_read_image_is_as_stored(tmp_path):
     rgba = np.array([[[0, 255, 51, 102]]], np.uint8)
     oiio_write(tmp_path / "a.png", rgba, "uint8")
