@@ -254,3 +254,13 @@ def test_describe_images_and_strict_json(tmp_path):
     info = lio.describe_file(path)
     assert info["format"] == "lytro-raw" and info["lens"]["exit_pupil_distance_mm"] == math.inf
     json.dumps(lio.describe_file(path), allow_nan=True)
+
+
+def test_describe_a_decoded_light_field(tmp_path):
+    from lfproc import Camera, LightField
+    from conftest import SAMPLES
+    camera = Camera.from_toml(SAMPLES / "cameras" / "paper-f100.toml")
+    LightField.from_views(np.zeros((25, 25, 3, 4, 2), np.float32), camera).save(tmp_path / "x.lfp.npz")
+    info = lio.describe_file(tmp_path / "x.lfp.npz")
+    assert (info["format"], info["raw_light_field"], info["width"], info["height"], info["views"],
+            info["channels"]) == ("lightfield", False, 4, 3, 25, 2)

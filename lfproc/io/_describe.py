@@ -27,9 +27,13 @@ def describe_file(path: str | os.PathLike) -> dict:
     from ._lytro_read import is_lytro_file
     from ._read import RAW_EXTENSIONS
 
+    from ..lightfield import is_lightfield_file
+
     path = existing_file(path)
     if is_lytro_file(path):
         return _describe_lytro(path)
+    if is_lightfield_file(path):
+        return _describe_lightfield(path)
     order = (_describe_camera_raw, _describe_image)
     if os.path.splitext(path)[1].lower() not in RAW_EXTENSIONS:
         order = order[::-1]
@@ -128,6 +132,25 @@ def _collect_references(node, where: str, roles: dict) -> None:
     elif isinstance(node, list):
         for item in node:
             _collect_references(item, where, roles)
+
+
+def _describe_lightfield(path: str) -> dict:
+    """A light field written by ``lfproc decode``: its views' shape from the array header (nothing loaded)."""
+    import zipfile
+
+    import numpy as np
+
+    try:
+        with zipfile.ZipFile(path) as archive, archive.open("views.npy") as member:
+            version = np.lib.format.read_magic(member)
+            read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                np.lib.format.read_array_header_2_0
+            shape, _, dtype = read_header(member)
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile) as exc:
+        raise LfprocError(f"{path}: not a readable light field file ({exc}); decode the capture again") from None
+    m, _, rows, cols, channels = shape if len(shape) == 5 else (None,) * 5
+    return {"path": path, "format": "lightfield", "raw_light_field": False, "decoded_light_field": True,
+            "width": cols, "height": rows, "views": m, "channels": channels, "dtype": str(dtype)}
 
 
 def _describe_camera_raw(path: str) -> dict:
