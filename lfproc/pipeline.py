@@ -169,15 +169,14 @@ def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: fl
 
 
 def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
-    """Read and decode one capture."""
-    from .io import read_capture
+    """Read and decode one capture (a Lytro capture is checked against a Lytro white image first)."""
+    from .io import check_white_matches, is_lytro_file, read_capture, read_lytro
 
-    if setup.white_metadata is not None:
-        from .io import check_white_matches
-        capture_metadata = _lytro_metadata_of(path)
-        if capture_metadata is not None:
-            check_white_matches(capture_metadata, setup.white_metadata)
-    capture = read_capture(path, setup.camera)
+    if setup.white_metadata is not None and os.path.isfile(path) and is_lytro_file(path):
+        capture, capture_metadata = read_lytro(path)
+        check_white_matches(capture_metadata, setup.white_metadata)
+    else:
+        capture = read_capture(path, setup.camera)
     decoder = setup.decoder_for(capture.data.shape, capture.cfa)
     try:
         views = decoder(capture.data, capture.cfa)

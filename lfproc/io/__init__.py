@@ -28,7 +28,7 @@ from ._gif import write_gif
 from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
 from ._lytro_camera import LytroCamera, lytro_camera
 from ._lytro_metadata import LytroMetadata
-from ._lytro_read import is_lytro_file, read_lytro_metadata
+from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._oiio import read_image
@@ -39,6 +39,6 @@ from ._write import FORMATS, read_metadata, srgb_encode, write_image
 __all__ = [
     "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
     "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
-    "pick_white_image", "read_capture", "read_image", "read_lytro_metadata", "read_metadata", "sidecar_path",
+    "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata", "sidecar_path",
     "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
 ]

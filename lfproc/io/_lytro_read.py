@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from ..errors import LfprocError
 from ._capture import Capture, normalise_mosaic
+from ._checks import existing_file
 from ._lytro_container import (RawFrame, has_container_extension, is_container, parse_json, raw_frame,
                                read_container)
 from ._lytro_metadata import LytroMetadata, frame_metadata, parse_metadata
@@ -60,6 +61,7 @@ def open_lytro(path: str, verify: bool = True, pixels: bool = True) -> LytroFile
     LfprocError
         Everything `read_container` and `parse_metadata` raise; a processed picture without raw data.
     """
+    path = existing_file(path)
     if has_container_extension(path) or is_container(path):
         frame = raw_frame(read_container(path, verify=verify))
         metadata = parse_metadata(frame.metadata, frame.private, path, frame.modulation_frame)
@@ -85,14 +87,20 @@ def read_lytro_metadata(path: str | os.PathLike) -> LytroMetadata:
     return open_lytro(os.fspath(path), pixels=False).metadata
 
 
-def read_lytro_capture(path: str, camera=None) -> Capture:
-    """Unpack a Lytro file and apply its own levels per Bayer channel (the camera file's are not used).
+def read_lytro(path: str | os.PathLike) -> tuple[Capture, LytroMetadata]:
+    """A Lytro file as a `Capture` and its `LytroMetadata`, the file read once.
 
-    Like camera raws read through LibRaw, Lytro files carry their levels and CFA: the result is
+    Like camera raws read through LibRaw, Lytro files carry their levels and CFA: the capture is
     ``(raw − black) / (white − black)`` per 2×2 position, CFA from ``mosaic.upperLeftPixel``.
     """
+    path = os.fspath(path)
     lytro = open_lytro(path)
     meta = lytro.metadata
     mosaic = unpack_raw(lytro.frame.packed, meta.width, meta.height, meta.bits_per_pixel, meta.endianness, path)
     black, white = meta.levels()
-    return Capture(data=normalise_mosaic(mosaic, black, white), cfa=meta.cfa, source=path)
+    return Capture(data=normalise_mosaic(mosaic, black, white), cfa=meta.cfa, source=path), meta
+
+
+def read_lytro_capture(path: str, camera=None) -> Capture:
+    """`read_lytro`'s capture (the camera file's levels and CFA are not used for Lytro files)."""
+    return read_lytro(path)[0]
