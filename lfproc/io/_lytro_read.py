@@ -70,16 +70,23 @@ def open_lytro(path: str, verify: bool = True, pixels: bool = True) -> LytroFile
     if sibling is None:
         raise LfprocError(f"{path}: a Lytro .raw needs its metadata beside it (same name, .txt or .json); "
                           f"copy it from the camera with the raw")
-    with open(sibling, "rb") as fh:
-        document = parse_json(fh.read(), f"{sibling}: metadata")
+    document = parse_json(_read_bytes(sibling), f"{sibling}: metadata")
     metadata, private, modulation = frame_metadata(document, sibling)
     parsed = parse_metadata(metadata, private, path, modulation)
     packed = b""
     if pixels:
-        with open(path, "rb") as fh:
-            packed = fh.read()
+        packed = _read_bytes(path)
     frame = RawFrame(source=path, packed=packed, metadata=metadata, private=private, modulation_frame=modulation)
     return LytroFile(frame=frame, metadata=parsed, format="lytro-raw")
+
+
+def _read_bytes(path: str) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except OSError as exc:
+        raise LfprocError(f"{path}: cannot read ({exc.strerror or exc}); check the file and its permissions") \
+            from None
 
 
 def read_lytro_metadata(path: str | os.PathLike) -> LytroMetadata:
