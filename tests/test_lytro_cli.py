@@ -168,3 +168,36 @@ def test_readme_lytro_workflow_with_the_camera_file(tmp_path):
                    "--depth-range", "8000:60000", "-o", tmp_path / "lytro-slices")
     assert proc.returncode == 0, proc.stderr
     assert len(list((tmp_path / "lytro-slices").glob("*.json"))) >= 2
+
+
+def _bad_lytro_inputs(tmp_path):
+    """(file, what the one error line must say) for each kind of bad Lytro input."""
+    dn = np.full((6, 8), 500)
+    doc = lytrogen.illum_document(8, 6, modulation=False)
+    good = lytrogen.container_bytes(lytrogen.pack10_little(dn), *lytrogen.frame_metadata_of(doc))
+    truncated = tmp_path / "truncated.lfr"
+    truncated.write_bytes(good[:-40])
+    corrupt = tmp_path / "corrupt.lfr"
+    corrupt.write_bytes(lytrogen.container_bytes(lytrogen.pack10_little(dn), *lytrogen.frame_metadata_of(doc),
+                                                 bad_sha1=True))
+    no_raw = tmp_path / "IMG-stk.lfp"
+    no_raw.write_bytes(lytrogen.processed_picture_bytes())
+    wrong_size = lytrogen.write_raw_pair(tmp_path / "size.RAW", dn, 10, "little", lytrogen.illum_document(8, 8))
+    packing = lytrogen.illum_document(8, 6)
+    packing["master"]["picture"]["frameArray"][0]["frame"]["metadata"]["image"]["rawDetails"]["pixelPacking"][
+        "endianness"] = "big"
+    unknown = lytrogen.write_raw_pair(tmp_path / "packing.RAW", dn, 10, "little", packing)
+    return [(truncated, "truncated"), (corrupt, "fails its SHA-1 check"), (no_raw, "holds no raw light field"),
+            (wrong_size, "but the raw data holds 60 bytes"), (unknown, "unknown raw packing")]
+
+
+def test_bad_lytro_inputs_exit_2_with_one_line_and_write_nothing(tmp_path, paper_camera):
+    from lfproc import simulate
+    grid = simulate.default_grid(Camera.from_toml(paper_camera), (100, 100))
+    write_image(tmp_path / "white.png", np.full((100, 100), 50000, np.uint16))
+    (tmp_path / "grid.json").write_text(json.dumps(dict(grid.to_json_dict(), white_image=str(tmp_path / "white.png"))))
+    for path, fragment in _bad_lytro_inputs(tmp_path):
+        out = tmp_path / "out.lfp.npz"
+        proc = run_cli("decode", path, "--camera", paper_camera, "--calib", tmp_path / "grid.json", "-o", out)
+        assert_clean_error(proc, str(path), fragment)
+        assert not out.exists() and not list(tmp_path.glob("*.tmp*"))

@@ -212,6 +212,8 @@ def test_metadata_contradicting_the_data_size(tmp_path):
     doc = lytrogen.illum_document(8, 8)       # says 8 x 8, the raw holds 8 x 6
     path = lytrogen.write_raw_pair(tmp_path / "MOD_0000.RAW", np.full((6, 8), 500), 10, "little", doc)
     expect_error(path, "8 x 8 pixels at 10 bits (80 bytes) but the raw data holds 60 bytes")
+    info = lio.describe_file(path)       # described, the mismatch said
+    assert info["size_matches_metadata"] is False and info["raw_light_field"] is False
 
 
 def test_unknown_packing(tmp_path):

@@ -64,7 +64,7 @@ def _describe_lytro(path: str) -> dict:
                         camera_model=None)
             return info
     else:
-        lytro = open_lytro(path, pixels=False)
+        lytro = open_lytro(path, pixels=False, check_size=False)
         info.update(format="lytro-raw", metadata_file=metadata_sibling(path), sections=[])
     info.update(_metadata_fields(lytro.metadata))
     if info["format"] == "lytro-raw":

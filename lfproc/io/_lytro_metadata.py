@@ -88,6 +88,10 @@ def frame_metadata(document: dict, where: str) -> tuple[dict, dict | None, bool 
 def parse_metadata(metadata: dict, private: dict | None, source: str, modulation_frame=None) -> LytroMetadata:
     """Read a frame's metadata into a `LytroMetadata` (errors name ``source`` and the key)."""
     image = _get(metadata, "image", source, dict)
+    representation = image.get("representation", "rawPacked")
+    if representation != "rawPacked":
+        raise LfprocError(f"{source}: holds no raw light field (its image is {representation!r}, not packed raw "
+                          f"sensor data); pass the camera's original raw picture instead")
     raw = _get(image, "rawDetails", source, dict, "image.")
     packing = _get(raw, "pixelPacking", source, dict, "image.rawDetails.")
     width = _get(image, "width", source, int, "image.")

@@ -15,7 +15,7 @@ from ._checks import existing_file
 from ._lytro_container import (RawFrame, has_container_extension, is_container, parse_json, raw_frame,
                                read_container)
 from ._lytro_metadata import LytroMetadata, frame_metadata, parse_metadata
-from ._lytro_unpack import unpack_raw
+from ._lytro_unpack import check_packed_size, unpack_raw
 
 METADATA_EXTENSIONS = (".txt", ".json")
 
@@ -52,7 +52,7 @@ def is_lytro_file(path: str) -> bool:
     return has_container_extension(path) or is_container(path) or metadata_sibling(path) is not None
 
 
-def open_lytro(path: str, verify: bool = True, pixels: bool = True) -> LytroFile:
+def open_lytro(path: str, verify: bool = True, pixels: bool = True, check_size: bool = True) -> LytroFile:
     """Parse a Lytro file's container or metadata (the raw stays packed; a raw pair's raw is not
     read at all with ``pixels=False``: ``frame.packed`` is then empty).
 
@@ -76,6 +76,9 @@ def open_lytro(path: str, verify: bool = True, pixels: bool = True) -> LytroFile
     packed = b""
     if pixels:
         packed = _read_bytes(path)
+    elif check_size:   # the size is checked without reading the pixels
+        check_packed_size(os.path.getsize(path), parsed.width, parsed.height, parsed.bits_per_pixel,
+                          parsed.endianness, path)
     frame = RawFrame(source=path, packed=packed, metadata=metadata, private=private, modulation_frame=modulation)
     return LytroFile(frame=frame, metadata=parsed, format="lytro-raw")
 

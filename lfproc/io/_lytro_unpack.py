@@ -23,6 +23,27 @@ def supported_packings() -> str:
     return ", ".join(f"{bits}-bit {order}-endian" for bits, order in PACKINGS)
 
 
+def check_packed_size(size: int, width: int, height: int, bits: int, endianness: str, source: str = "raw") -> tuple:
+    """The packing key ``(bits, endianness)`` after checking that ``size`` bytes hold the image exactly.
+
+    Raises
+    ------
+    LfprocError
+        An unknown packing, or a byte count that contradicts the size in the metadata.
+    """
+    key = (int(bits), str(endianness).lower())
+    if key not in PACKINGS:
+        raise LfprocError(f"{source}: unknown raw packing ({bits} bits per pixel, {endianness}-endian); "
+                          f"lfproc reads {supported_packings()}: check the metadata file belongs to this raw")
+    count = width * height
+    expected = count * bits / 8
+    if count % PACKINGS[key][0] or size != expected:
+        raise LfprocError(f"{source}: the metadata says {width} x {height} pixels at {bits} bits "
+                          f"({expected:.0f} bytes) but the raw data holds {size} bytes; pass the metadata "
+                          f"file that belongs to this raw image (or re-copy a truncated file)")
+    return key
+
+
 def unpack_raw(packed, width: int, height: int, bits: int, endianness: str, source: str = "raw") -> np.ndarray:
     """Unpack Lytro raw bytes into a ``(height, width)`` uint16 array of digital numbers.
 
@@ -41,19 +62,9 @@ def unpack_raw(packed, width: int, height: int, bits: int, endianness: str, sour
     LfprocError
         An unknown packing, or a byte count that contradicts the size in the metadata.
     """
-    key = (int(bits), str(endianness).lower())
-    if key not in PACKINGS:
-        raise LfprocError(f"{source}: unknown raw packing ({bits} bits per pixel, {endianness}-endian); "
-                          f"lfproc reads {supported_packings()}: check the metadata file belongs to this raw")
-    pixels_per_group, bytes_per_group = PACKINGS[key]
-    count = width * height
     buffer = np.frombuffer(packed, np.uint8)
-    expected = count * bits / 8
-    if count % pixels_per_group or buffer.size != expected:
-        raise LfprocError(f"{source}: the metadata says {width} x {height} pixels at {bits} bits "
-                          f"({expected:.0f} bytes) but the raw data holds {buffer.size} bytes; pass the metadata "
-                          f"file that belongs to this raw image (or re-copy a truncated file)")
-    groups = buffer.reshape(-1, bytes_per_group)
+    key = check_packed_size(buffer.size, width, height, bits, endianness, source)
+    groups = buffer.reshape(-1, PACKINGS[key][1])
     if key == (10, "little"):
         pixels = _unpack_10_little(groups)
     elif key == (12, "big"):
