@@ -110,6 +110,9 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
         grid, recorded_white = read_grid(calib)
     white_path = white or (recorded_white if recorded_white and os.path.exists(recorded_white) else None)
     white_metadata = _lytro_metadata_of(white_path) if white_path else None
+    if white_metadata is not None and white_metadata.modulation_frame is False:
+        print(f"lfproc: warning: {white_path}: its metadata marks it as a capture, not a white image "
+              f"(modulationFrame false); pass a white image from the camera's calibration folder", file=sys.stderr)
     if first is not None and white_metadata is not None:
         from .io import check_white_matches
         check_white_matches(first, white_metadata)

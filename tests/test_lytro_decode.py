@@ -156,6 +156,17 @@ def test_white_of_another_camera_or_zoom_is_refused_before_any_work(tmp_path):
         assert not out.exists()
 
 
+def test_a_capture_given_as_white_image_is_warned_about(tmp_path, capsys):
+    cam, (height, width), bits, order = MODELS["illum"]
+    sim_white = np.full((height, width), 900, np.uint16)
+    capture = lytrogen.write_container(tmp_path / "IMG.lfr", sim_white, bits, order, *lytrogen.frame_metadata_of(
+        lytrogen.illum_document(width, height)), modulation=False)
+    with pytest.raises(LfprocError):     # a flat image has no lattice to find; the warning came first
+        prepare_decoding(cam, white=str(capture), captures=[str(capture)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "marks it as a capture, not a white image" in err[0] and str(capture) in err[0]
+
+
 def test_processed_picture_is_refused_by_decode(tmp_path, paper_camera):
     stack = tmp_path / "IMG_0001-stk.lfp"
     stack.write_bytes(lytrogen.processed_picture_bytes())
