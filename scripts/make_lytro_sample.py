@@ -36,7 +36,10 @@ TELECENTRIC = 10000.0     # exitPupilOffset.z of a main lens whose exit pupil is
 
 def main() -> int:
     near, far = geometry.slice_distance_mm(CAMERA, NEAR_A), geometry.slice_distance_mm(CAMERA, FAR_A)
-    lens_footprint = (lambda d: CAMERA.mla_pitch_mm * d / CAMERA.main_focal_length_mm)   # one lens, in the plane
+
+    def lens_footprint(distance_mm):     # one lens's width seen in a plane at that distance
+        return CAMERA.mla_pitch_mm * distance_mm / CAMERA.main_focal_length_mm
+
     scene = Scene((Plane(near, Noise(feature_mm=4 * lens_footprint(near), seed=11), region_mm=(-40, 0, -40, 40),
                          tint=(1.0, 0.6, 0.3)),
                    Plane(far, Noise(feature_mm=4 * lens_footprint(far), seed=12), tint=(0.4, 0.7, 1.0))),

@@ -76,7 +76,10 @@ def _describe_lytro(path: str) -> dict:
 
 def _metadata_fields(meta) -> dict:
     black, white = meta.levels()
-    mm = (lambda v: None if v is None else v * 1e3)
+
+    def mm(metres):
+        return None if metres is None else metres * 1e3
+
     exit_pupil = math.inf if meta.exit_pupil_at_infinity else mm(meta.exit_pupil_offset_m)
     return {
         "camera_model": meta.model, "serial": meta.serial, "width": meta.width, "height": meta.height,

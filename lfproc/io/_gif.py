@@ -47,4 +47,5 @@ def write_gif(path: str | os.PathLike, frames: Sequence[np.ndarray] | np.ndarray
             images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
                            duration=int(round(duration_ms)), loop=0)
     except OSError as exc:
-        raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and permissions") from None
+        raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and permissions") \
+            from None

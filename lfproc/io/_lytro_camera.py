@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 
 from ..camera import Camera
 from ..errors import LfprocError
-from ._lytro_metadata import INFINITE_EXIT_PUPIL_M, LytroMetadata
+from ._lytro_metadata import LytroMetadata
 
 DEFAULT_FOCUS = ("default: focused at infinity, b_U = f_U (the metadata has no focus distance); "
                  "pass --focus-distance MM")

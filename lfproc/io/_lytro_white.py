@@ -87,7 +87,8 @@ def pick_white_image(capture: LytroMetadata, folder: str | os.PathLike) -> White
     check_white_matches(capture, best)
     reason = (f"white image {best.source} for {os.path.basename(capture.source)}: camera "
               f"{best.serial or 'serial unknown'}, zoom step {_step(best.zoom_step)} (capture "
-              f"{_step(capture.zoom_step)}), focus step {_step(best.focus_step)} (capture {_step(capture.focus_step)}); "
+              f"{_step(capture.zoom_step)}), focus step {_step(best.focus_step)} "
+              f"(capture {_step(capture.focus_step)}); "
               f"nearest of {len(candidates)}")
     return WhiteChoice(path=best.source, metadata=best, reason=reason)
 
