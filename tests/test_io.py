@@ -556,3 +556,20 @@ def test_metadata_must_be_a_dict(tmp_path):
     with pytest.raises(LfprocError, match="dict"):
         lio.write_image(tmp_path / "x.tif", np.zeros((2, 2), np.float32), metadata=[1, 2])
     assert folder_is_empty(tmp_path)
+
+
+def test_describe_camera_raw_and_image(tmp_path):
+    """``lfproc info``'s dict for a DNG (LibRaw's size and levels) and for a PNG (OpenImageIO's header)."""
+    path = tmp_path / "capture.dng"
+    write_dng(path, np.full((32, 48), 1000), BAYER_CODES["GRBG"], black=(10, 20, 30, 40), white=4095)
+    info = lio.describe_file(path)
+    assert (info["format"], info["raw_light_field"], info["width"], info["height"]) == ("camera-raw", True, 48, 32)
+    assert info["white_level"] == 4095 and info["bits_per_pixel"] == 12 and sorted(info["black_level"]) == \
+        [10, 20, 30, 40]
+    oiio_write(tmp_path / "rgb.png", np.zeros((3, 7, 3), np.uint8), "uint8")
+    info = lio.describe_file(tmp_path / "rgb.png")
+    assert (info["format"], info["width"], info["height"], info["channels"], info["bits_per_pixel"]) == \
+        ("image", 7, 3, 3, 8)
+    with pytest.raises(LfprocError, match="not a readable image, camera raw or Lytro file"):
+        (tmp_path / "junk.xyz").write_text("junk" * 10)
+        lio.describe_file(tmp_path / "junk.xyz")

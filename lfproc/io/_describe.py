@@ -170,7 +170,13 @@ def _describe_camera_raw(path: str) -> dict:
     except rawpy.LibRawFileUnsupportedError:
         raise _NotThisFormat("LibRaw: not a supported camera raw") from None
     except rawpy.LibRawError as exc:
-        raise LfprocError(f"{path}: truncated or corrupt camera raw ({exc}); re-copy the file") from None
+        from ._libraw import _libraw_message
+        from ._read import RAW_EXTENSIONS
+
+        if os.path.splitext(path)[1].lower() not in RAW_EXTENSIONS:
+            raise _NotThisFormat(f"LibRaw: {_libraw_message(exc)}") from None
+        raise LfprocError(f"{path}: truncated or corrupt camera raw ({_libraw_message(exc)}); re-copy the file") \
+            from None
     return info
 
 
