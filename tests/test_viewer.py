@@ -239,3 +239,20 @@ def test_demo_writes_the_viewer_and_enlarged_labelled_previews(tmp_path):
     with Image.open(tmp_path / "demo" / "sample_refocus.gif") as gif:
         assert max(gif.size) >= 512
     assert (ROOT / "samples" / "sample" / "capture.png").is_file()
+
+
+def test_default_sweep_starts_at_infinity_and_stays_where_views_overlap():
+    import dataclasses
+
+    from lfproc.viewer._focus import sweep, sweep_range
+
+    cam = scene_camera()                                   # focused at infinity: a_inf = 0, c = 5
+    assert sweep_range(cam, (200, 300)) == (0.0, 3.0)
+    assert sweep_range(cam, (27, 37)) == (0.0, pytest.approx(27 / 15))   # outer views shift <= 9 of 27 lenses
+    near_focus = dataclasses.replace(cam, image_distance_mm=51.0)        # a_inf = -delta (b_U - f_U) / p_m
+    a_inf = geometry.infinity_parameter(near_focus)
+    assert a_inf == pytest.approx(-(0.1 / 11 / 0.4) * 1.0 / 0.1)
+    assert sweep_range(near_focus, (200, 300)) == (pytest.approx(a_inf), pytest.approx(a_inf + 3.0))
+    assert sweep_range(near_focus, (9, 9)) == (pytest.approx(a_inf), pytest.approx(0.6))  # 9 / (3 c)
+    steps = np.diff(sweep(cam, 0.0, 3.0))
+    assert np.allclose(steps, steps[0]) and steps[0] <= 1 / 15 + 1e-12   # a third of a DOF (about 1/c) or finer

@@ -54,15 +54,17 @@ def sweep_range(camera, lens_shape, a_values=None) -> tuple[float, float]:
 
     With ``a_values``: their range widened by half a slice's DOF on each side, so that a peak at the
     first or last slice is still a peak. Without: from infinity's ``a`` (Eq. 21 with d = ∞) nearer by
-    :data:`DEFAULT_SPAN_A`, or less where that would move the outer views by more than a third of the
+    :data:`DEFAULT_SPAN_A`, within the ``a`` that move the outer views by at most a third of the
     image's smaller side.
     """
     c = max(camera.center_index, 1)
     if a_values is not None and len(a_values):
         margin = 0.5 / c
         return float(np.min(a_values)) - margin, float(np.max(a_values)) + margin
-    lo = geometry.infinity_parameter(camera)
-    return lo, lo + min(DEFAULT_SPAN_A, min(lens_shape) / (3.0 * c))
+    reach = min(lens_shape) / (3.0 * c)  # |a|·c lenses of shift at the outer views: a third of the image
+    a_inf = geometry.infinity_parameter(camera)
+    lo = max(a_inf, -reach)
+    return lo, max(lo, min(a_inf + DEFAULT_SPAN_A, reach))
 
 
 def sweep(camera, lo: float, hi: float) -> np.ndarray:
