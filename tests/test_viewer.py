@@ -254,5 +254,7 @@ def test_default_sweep_starts_at_infinity_and_stays_where_views_overlap():
     assert a_inf == pytest.approx(-(0.1 / 11 / 0.4) * 1.0 / 0.1)
     assert sweep_range(near_focus, (200, 300)) == (pytest.approx(a_inf), pytest.approx(a_inf + 3.0))
     assert sweep_range(near_focus, (9, 9)) == (pytest.approx(a_inf), pytest.approx(0.6))  # 9 / (3 c)
+    far_focus = dataclasses.replace(cam, image_distance_mm=60.0)          # a_inf = -2.27, beyond the reach
+    assert sweep_range(far_focus, (9, 9)) == (pytest.approx(-0.6), pytest.approx(0.6))
     steps = np.diff(sweep(cam, 0.0, 3.0))
     assert np.allclose(steps, steps[0]) and steps[0] <= 1 / 15 + 1e-12   # a third of a DOF (about 1/c) or finer
