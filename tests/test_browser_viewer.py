@@ -151,3 +151,25 @@ def test_slider_and_viewpoint_change_the_picture_and_a_screenshot_is_taken(brows
     shot = tmp_path / "viewer.png"
     assert browser.save_screenshot(str(shot))
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_index_of_several_captures_opens_each_page_and_back(browser, page, tmp_path):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    folder = page["folder"]
+    for stem in ("first", "second"):
+        shutil.copy(folder / "capture.png", tmp_path / f"{stem}.png")
+    out = tmp_path / "site"
+    proc = run_cli("viewer", tmp_path / "first.png", tmp_path / "second.png", "--camera", folder / "camera.toml",
+                   "--calib", folder / "grid.json", "--a", "0.4,1.3", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    browser.get((out / "index.html").as_uri())
+    cards = browser.find_elements("css selector", "a.card")
+    assert [c.find_element("css selector", ".name").text for c in cards] == ["first", "second"]
+    cards[1].click()
+    WebDriverWait(browser, 10).until(lambda d: d.execute_script("return document.body.dataset.ready === 'true'"))
+    assert browser.find_element("id", "title").text == "lfproc viewer: second"
+    WebDriverWait(browser, 10).until(  # its picture loads from the page's own folder
+        lambda d: d.execute_script("return document.getElementById('photo').naturalWidth") > 0)
+    browser.find_element("id", "back").click()
+    WebDriverWait(browser, 10).until(lambda d: d.current_url == (out / "index.html").as_uri())
