@@ -188,15 +188,6 @@ def test_exit_pupil_in_scene_files_and_bad_values():
         simulate.render_white(camera(), (100, 100), exit_pupil_distance_mm=-1.0)
 
 
-def test_micro_image_scale_agrees_with_the_geometry_when_it_has_one():
-    """The simulator's (d_A + f_s)/d_A is the agreed interface number of lfproc.geometry (issue 12)."""
-    if not hasattr(geometry, "micro_image_scale"):
-        pytest.skip("lfproc.geometry.micro_image_scale is not merged yet (geometry helper, issue 12)")
-    for d_a in (20.0, 46.0, 1e4, math.inf):
-        cam = camera(exit_pupil_distance_mm=d_a)
-        assert simulate.micro_image_scale(cam) == pytest.approx(geometry.micro_image_scale(cam), rel=1e-12)
-
-
 # ---------------------------------------------------------------------------- against PlenoptiSign (Hahne et al. 2018)
 def shifted_view_variance(views, a, border):
     """Variance across the views shifted by the contract's a·(c − k) lenses (bilinear, plain numpy): (Ny, Nx)."""
@@ -259,3 +250,6 @@ def test_sharpest_refocus_with_an_exit_pupil_matches_plenoptisign(d_a):
     # 0.02: the bilinear shift-and-sum measurement's own bias on telecentric renders (see test_simulate.py)
     assert peak == pytest.approx(a_expected, abs=0.02)
     assert abs(a_expected - 1.5) > 0.2  # the telecentric model would miss this plane by far more
+    # and lfproc's geometry with the same exit pupil maps the plane to the same a (the seam calibration and
+    # decoding rely on: ideal views sample the micro images at k·p_m/m̂ as the geometry assumes)
+    assert geometry.refocus_parameter(cam, d) == pytest.approx(a_expected, abs=1e-6)
