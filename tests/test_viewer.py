@@ -258,3 +258,17 @@ def test_default_sweep_starts_at_infinity_and_stays_where_views_overlap():
     assert sweep_range(far_focus, (9, 9)) == (pytest.approx(-0.6), pytest.approx(0.6))
     steps = np.diff(sweep(cam, 0.0, 3.0))
     assert np.allclose(steps, steps[0]) and steps[0] <= 1 / 15 + 1e-12   # a third of a DOF (about 1/c) or finer
+
+
+def test_server_binds_the_loopback_interface_only(tmp_path):
+    from lfproc import LfprocError
+    from lfproc.viewer import make_server
+
+    server = make_server(str(tmp_path), 0)
+    try:
+        host, port = server.server_address[:2]
+        assert host == "127.0.0.1" and port > 0
+        with pytest.raises(LfprocError, match="another --port"):
+            make_server(str(tmp_path), port)   # taken: a one-line error naming the fix
+    finally:
+        server.server_close()
