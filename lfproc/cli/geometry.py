@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import re
 import sys
 
 from .common import dumps_strict, parse_number_list
@@ -17,8 +16,6 @@ def register(sub) -> None:
                                    "tilt and the baseline, and with --disparity the distance of points seen with "
                                    "those disparities between views G apart. Negative lists work with or without "
                                    "'=': --a -1:1 or --a=-1:1.")
-    # values such as "-1,2" or "-0.5:1" are arguments, not options (no option here looks like a number)
-    p._negative_number_matcher = re.compile(r"^-\.?\d")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
     p.add_argument("--a", default="0:5", metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
