@@ -88,7 +88,7 @@ def format_table(camera, slices, views, gaps, check, path, tri=None) -> str:
     from .. import geometry
     pupil = ("exit pupil at infinity (telecentric)" if camera.telecentric else
              f"exit pupil {camera.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
-             f"{geometry.micro_image_scale(camera):.6f})")
+             f"{geometry.micro_image_scale(camera):.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} um apart)")
     out = [f"camera {camera.name or path}: m = {camera.m_hat} px per micro image, effective pixel pitch "
            f"{camera.effective_pixel_pitch_mm * 1e3:.3f} um, b_U - f_U = "
            f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm, {pupil}"]
