@@ -26,7 +26,8 @@ def register(sub) -> None:
                    help="with --disparity: views G apart (signed as PlenoptiSign's G; default 1)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
-    p.add_argument("--wavelength-nm", type=float, default=550.0, help="wavelength for the Airy limit (default 550)")
+    p.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM",
+                   help="wavelength for the Airy limit (default 550)")
     p.set_defaults(func=run)
 
 
