@@ -179,12 +179,10 @@ class Camera:
         from ._toml import camera_fields
         return cls(**camera_fields(data, source=source))
 
-    def to_toml(self, include_provenance: bool = False) -> str:
+    def to_toml(self, include_provenance: bool = True) -> str:
         """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision).
 
-        ``include_provenance`` appends the ``[provenance]`` table. It is off by default: provenance
-        describes the file a camera was read from, and a writer that knows better (``lfproc camera``)
-        writes its own.
+        ``include_provenance`` appends the ``[provenance]`` table (where the camera has one).
         """
         from ._toml import camera_to_toml
         return camera_to_toml(self, include_provenance)

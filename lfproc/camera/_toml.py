@@ -128,7 +128,7 @@ def parse_provenance(table, source: str) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
-def camera_to_toml(camera, include_provenance: bool = False) -> str:
+def camera_to_toml(camera, include_provenance: bool = True) -> str:
     """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision)."""
     lines = []
     if camera.name:
