@@ -124,7 +124,7 @@ def faithful_views(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     A view is kept where, among the probed lenses on which its white sample is lit (above
     ``dark_fraction`` of the bright level), at least :data:`REQUIRED_FRACTION` have the centroid within
     ``tolerance`` effective pixels (pitch/m̂) of the kernel's own and at most ``crosstalk_tolerance`` of
-    their white from other lenses, and it is lit on at least half of them.
+    their white from other lenses (a view lit on none of them, outside the aperture, is not delivered).
     """
     errors, crosstalk, levels = centroid_errors(white, grid, m_hat, cfa, demosaic_method, interpolation)
     if errors.shape[0] == 0:
@@ -134,4 +134,4 @@ def faithful_views(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     right = (lit & (np.nan_to_num(errors, nan=np.inf) <= tolerance * grid.pitch_px / m_hat)
              & (np.nan_to_num(crosstalk, nan=np.inf) <= crosstalk_tolerance))
     n_lit = lit.sum(axis=0)
-    return (n_lit >= 0.5 * errors.shape[0]) & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(n_lit, 1))
+    return right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(n_lit, 1)
