@@ -37,7 +37,7 @@ def whole_lens_mask(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape)
 
 def largest_whole_block(whole: np.ndarray, even_start_row: bool) -> tuple[int, int, int, int]:
     """``(r0, q0, rows, cols)`` of a block of lenses, all whole, found by trimming the border row or
-    column with the most partial lenses until none is left (rows start even when asked)."""
+    column with the largest share of partial lenses until none is left (rows start even when asked)."""
     r0, r1, q0, q1 = 0, whole.shape[0], 0, whole.shape[1]
     while r1 > r0 and q1 > q0:
         block = whole[r0:r1, q0:q1]
@@ -46,8 +46,8 @@ def largest_whole_block(whole: np.ndarray, even_start_row: bool) -> tuple[int, i
             continue
         if block.all():
             return r0, q0, r1 - r0, q1 - q0
-        bad = {"top": (~block[0]).sum(), "bottom": (~block[-1]).sum(),
-               "left": (~block[:, 0]).sum(), "right": (~block[:, -1]).sum()}
+        bad = {"top": (~block[0]).mean(), "bottom": (~block[-1]).mean(),
+               "left": (~block[:, 0]).mean(), "right": (~block[:, -1]).mean()}
         side = max(bad, key=bad.get)
         if side == "top":
             r0 += 2 if even_start_row else 1
