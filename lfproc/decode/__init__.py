@@ -12,7 +12,8 @@ over bands of lens rows:
 * **Devignetting** (``_decoder``). The white image is demosaiced and resampled the same way, and the
   decoded value is ``remap(capture) / remap(white)``: the scene radiance in units of the white image,
   white balance included for colour sensors. Samples where the white image is darker than
-  ``dark_fraction`` of its bright level carry no signal and are set to 0, never NaN.
+  ``dark_fraction`` of its bright level in any channel carry no signal and are set to 0 in every
+  channel (never NaN, never one channel alone: that would colour them).
 * **Delivered views** (``_view_mask``): only views whose samples read their own lens's lit micro image
   are delivered; the others are 0 everywhere — see *the refocus bias* below.
 * **Whole lenses** (``_whole_lenses``): by default the grid is cropped to the lenses whose delivered

@@ -100,7 +100,7 @@ class Decoder:
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
                    interpolation: str, dark_fraction: float, delivered: np.ndarray) -> np.ndarray:
-    """1 / white views where the white carries signal and the view is delivered, else 0 (float32)."""
+    """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
     channels = channel_count(white, cfa)
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
     step = _band_rows(m_hat, grid.cols, channels)
@@ -115,7 +115,9 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     threshold = np.float32(dark_fraction * bright)
     for ky in range(m_hat):      # per view row: the boolean temporaries stay small
         w = inverse[ky]
-        signal = w > threshold
+        # a sample carries signal only where every channel does: one dark channel alone would turn a
+        # neutral sample magenta or green
+        signal = np.broadcast_to((w > threshold).all(axis=-1, keepdims=True), w.shape)
         np.divide(np.float32(1.0), w, out=w, where=signal)
         w[~signal] = 0.0
     inverse[~delivered] = 0.0
@@ -140,7 +142,7 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         Bayer pattern of 2-D mosaics, or ``"none"``.
     dark_fraction : float
         Samples whose white value is below this fraction of the white's bright level (its 99th
-        percentile) carry no signal and decode to 0.
+        percentile) in any channel carry no signal and decode to 0 in every channel.
     centroid_tolerance : float or None
         A view is delivered only where its samples' white-weighted centroid lies within this many
         effective pixels of its nominal position (see :mod:`lfproc.decode`); other views are 0.
