@@ -34,7 +34,7 @@ def sharpness(views, a_values, delivered=None):
     return np.array(scores)
 
 
-def sweep_peak(views, centre, delivered=None, half_width=0.12, step=0.005):
+def sweep_peak(views, centre, delivered=None, half_width=0.08, step=0.01):
     a_values = np.arange(centre - half_width, centre + half_width + step / 2, step)
     s = sharpness(views, a_values, delivered)
     i = int(np.argmax(s))

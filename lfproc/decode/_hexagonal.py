@@ -64,11 +64,17 @@ def hex_rows_to_rect(views: np.ndarray, first_hex_row: int, rect_rows: range, ou
 
 
 def rect_grid_of(grid: LensGrid) -> LensGrid:
-    """The rectangular grid of the lens positions :func:`hex_to_rect` resamples a hexagonal ``grid`` to."""
+    """The rectangular grid of the lens positions :func:`hex_to_rect` resamples a hexagonal ``grid`` to.
+
+    Only the rigid lattice changes (origin half a pitch along u, rows one pitch apart); other fields,
+    such as a smooth deviation that is a function of the rigid position, are kept.
+    """
+    import dataclasses
+
     u, _ = grid.axes
     origin = np.asarray(grid.origin_xy_px) + 0.5 * grid.pitch_px * u
-    return LensGrid("rectangular", grid.pitch_px, grid.rotation_deg, tuple(origin), rect_row_count(grid.rows),
-                    grid.cols - 1, grid.residual_rms_px)
+    return dataclasses.replace(grid, kind="rectangular", origin_xy_px=(float(origin[0]), float(origin[1])),
+                               rows=rect_row_count(grid.rows), cols=grid.cols - 1)
 
 
 def check_hex_size(rows: int, cols: int) -> None:

@@ -62,13 +62,19 @@ def largest_whole_block(whole: np.ndarray, even_start_row: bool) -> tuple[int, i
 
 
 def sub_grid(grid: LensGrid, r0: int, q0: int, rows: int, cols: int) -> LensGrid:
-    """The lenses ``[r0, r0 + rows) × [q0, q0 + cols)`` of ``grid`` as a grid of their own."""
+    """The lenses ``[r0, r0 + rows) × [q0, q0 + cols)`` of ``grid`` as a grid of their own.
+
+    The new origin is the *rigid* lattice position of lens (r0, q0) (``r0`` even on hexagonal grids),
+    and every other field is kept: a deviation that is a function of the rigid position (a smooth,
+    non-rigid fit) then gives the same centres as before.
+    """
     if (r0, q0, rows, cols) == (0, 0, grid.rows, grid.cols):
         return grid
-    if hasattr(grid, "sub_grid"):      # a lattice type that knows how to cut itself (non-rigid fits)
-        return grid.sub_grid(r0, q0, rows, cols)
-    origin = tuple(float(v) for v in grid.lens_xy(r0, q0))
-    return dataclasses.replace(grid, origin_xy_px=origin, rows=rows, cols=cols)
+    if grid.kind == "hexagonal" and r0 % 2:
+        raise LfprocError("a hexagonal grid can only be cut at an even row")
+    u, v = grid.axes
+    origin = np.asarray(grid.origin_xy_px) + q0 * grid.pitch_px * u + r0 * grid.row_spacing_px * v
+    return dataclasses.replace(grid, origin_xy_px=(float(origin[0]), float(origin[1])), rows=rows, cols=cols)
 
 
 def crop_to_whole_lenses(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape) -> LensGrid:
