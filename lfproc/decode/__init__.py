@@ -38,7 +38,7 @@ The refocus bias (issue 13) and its cause
     positions, the effective pitch (pitch/m̂ in both the decoder and ``geometry``) and the truth were
     right. The fix measures that centroid from the white image itself (``_view_mask``) and delivers
     only views whose centroid is within ``centroid_tolerance`` (0.1 effective pixel) of nominal; a
-    sweep then peaks within 0.005 of the true a (``tests/test_decode_bias.py``). The cost: fewer
+    sweep then peaks within 0.002 of the true a (``tests/test_decode_bias.py``). The cost: fewer
     views at the rim (for 12 px lenses at f-number match, 45 of 121 with Bayer demosaicing, 69 mono).
     Two measurement traps found on the way: linearly interpolated refocusing peaks towards integer a
     (1.93 → 2.00 on exactly shifted synthetic views), and the simulator's ideal views that the stop
