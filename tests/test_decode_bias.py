@@ -11,7 +11,7 @@ import pytest
 from scipy import ndimage
 
 from lfproc import Camera, geometry, simulate
-from lfproc.decode import hex_to_rect, make_decoder
+from lfproc.decode import make_decoder
 from lfproc.scene import Noise, Plane, Scene
 
 A_TRUE = 1.93

@@ -73,7 +73,7 @@ def remap_maps(grid: LensGrid, m_hat: int) -> list[tuple[np.ndarray, np.ndarray]
 def sensor_rows_read(grid: LensGrid, m_hat: int, rows: range, margin: int, height: int) -> tuple[int, int]:
     """The sensor rows ``[y0, y1)`` that the samples of lens ``rows`` read, widened by ``margin`` and
     clipped to the sensor; ``y0`` is even so that a Bayer strip keeps the mosaic's phase."""
-    off_x, off_y = view_offsets_px(grid, m_hat)
+    _, off_y = view_offsets_px(grid, m_hat)
     ys = lens_centers(grid, rows)[..., 1]
     lo = float(ys.min()) + float(off_y.min()) - margin
     hi = float(ys.max()) + float(off_y.max()) + margin
