@@ -185,7 +185,7 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{path}: {exc}") from None
-    return LightField.from_views(views, setup.camera, decoder.output_grid)
+    return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered)
 
 
 def output_stem(path: str) -> str:

@@ -196,4 +196,4 @@ def decode_capture(capture, white, grid: LensGrid, camera, **options):
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{capture.source}: {exc}") from None
-    return LightField.from_views(views, camera, decoder.output_grid)
+    return LightField.from_views(views, camera, decoder.output_grid, decoder.views_delivered)
