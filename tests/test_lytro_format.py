@@ -134,6 +134,12 @@ def test_container_sections_follow_the_format(tmp_path):
     np.testing.assert_allclose(capture.data, (dn - 64.0) / (1023.0 - 64.0), rtol=1e-6)
 
 
+def test_the_raw_frame_is_found_by_reference_not_position(tmp_path):
+    """A first frame whose image is not in the file is passed over; the raw chunk is the third chunk."""
+    path, dn = small_illum(tmp_path, frame_without_raw_first=True)
+    np.testing.assert_allclose(lio.read_capture(path).data, (dn - 64.0) / 959.0, rtol=1e-6)
+
+
 @pytest.mark.parametrize("extension", [".LFR", ".lfp", ".LFP", ".bin"])
 def test_any_case_extension_and_magic(tmp_path, extension):
     path, dn = small_illum(tmp_path, "cap" + extension)
