@@ -69,7 +69,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         path = f"slices/{names[k]}{extension}"
         jobs.append((os.path.join(outdir, path), lambda k=k: tone(stack[k])))
         slices.append(dict(record, image=path))
-    views = _view_records(camera, stem, extension)
+    views = _view_records(camera, stem, extension, getattr(lf, "view_mask", None))
     for item in views["items"]:
         ky, kx = item["view"]
         jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
@@ -101,11 +101,14 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     return page
 
 
-def _view_records(camera, stem: str, extension: str) -> dict:
-    """The views inside the aperture with their virtual cameras (Eqs. 17, 33, 34) and image paths."""
+def _view_records(camera, stem: str, extension: str, view_mask=None) -> dict:
+    """The views inside the aperture (and, with ``view_mask``, carrying light) with their virtual cameras
+    (Eqs. 17, 33, 34) and image paths."""
     from ..viewpoints import viewpoint_geometry
 
     keep = geometry.views_inside_aperture(camera)
+    if view_mask is not None:
+        keep = keep & np.asarray(view_mask, dtype=bool)
     items = [dict(vg.metadata(), image=f"views/{view_name(stem, *vg.view)}{extension}")
              for row in viewpoint_geometry(camera) for vg in row if keep[vg.view]]
     return {"m_hat": camera.m_hat, "center": camera.center_index, "baseline_mm": geometry.baseline_mm(camera, 1),
