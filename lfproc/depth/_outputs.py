@@ -4,7 +4,7 @@
 * ``STEM_depth_confidence.tif`` — float32, 0–1;
 * ``STEM_allfocus.tif`` — float32 linear, the light field's channels;
 * ``STEM_depth_preview.png`` — colour-mapped depth with a legend in metres;
-* ``STEM_depth.ply`` — the point cloud (optional).
+* ``STEM_depth_points.ply`` — the point cloud (optional).
 
 Every image embeds the same metadata as its sidecar ``NAME.json`` (``source``, ``unit``, ``method``,
 the searched range …). Everything is written atomically; a failure leaves no partial file.
@@ -19,7 +19,7 @@ import numpy as np
 
 #: output name suffixes
 DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence.tif", "_allfocus.tif",
-                                                "_depth_preview.png", "_depth.ply")
+                                                "_depth_preview.png", "_depth_points.ply")
 
 
 def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
@@ -41,7 +41,7 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     depth_range_mm : (near, far), optional
         Passed to :func:`lfproc.depth`.
     point_cloud : bool
-        Also write ``STEM_depth.ply``.
+        Also write ``STEM_depth_points.ply``.
     **depth_options
         Further keyword arguments of :func:`lfproc.depth`.
 
