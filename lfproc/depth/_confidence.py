@@ -40,10 +40,20 @@ def cost_floor(luminance: np.ndarray) -> float:
 def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
     """The ``a`` of the sharpest slice per lens: largest aggregated gradient energy of the refocused luminance
     (``(K, Ny, Nx)``), refined between slices like the correspondence cost."""
-    gy = np.gradient(luminance, axis=1) if luminance.shape[1] > 1 else np.zeros_like(luminance)
-    gx = np.gradient(luminance, axis=2) if luminance.shape[2] > 1 else np.zeros_like(luminance)
-    energy = aggregate(gx * gx + gy * gy)
-    return refine_minimum(energy.max() - energy, a_values, 0.0).a
+    energy = np.zeros_like(luminance)
+    if luminance.shape[1] > 1:      # squared forward differences, each shared by the two lenses it joins
+        d = np.diff(luminance, axis=1)
+        d *= d
+        energy[:, 1:] += d
+        energy[:, :-1] += d
+    if luminance.shape[2] > 1:
+        d = np.diff(luminance, axis=2)
+        d *= d
+        energy[:, :, 1:] += d
+        energy[:, :, :-1] += d
+    energy = aggregate(energy)
+    np.subtract(energy.max(), energy, out=energy)
+    return refine_minimum(energy, a_values, 0.0).a
 
 
 def confidence(a_corr: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, a_defocus: np.ndarray,

@@ -8,9 +8,11 @@ across the views is only noise. Out of focus they sample different points and th
 the whole cost volume is one call of the fused multi-slice kernel, one pass over the views.
 
 Views outside the main lens aperture carry no light (decoded: noise divided by a dark white image);
-they are weighted 0 through a third channel ``w`` (the mean of ``w`` normalises the weighted means).
+they get weight 0: the refocused channels are ``w·Y`` and ``w·Y²``, and the mean weight of the views
+that count at each lens (a function of the geometry only, :func:`mean_view_weight`) normalises them.
 With many views a sub-lattice of every ``step``-th view around the central one is used: the same
-baseline at a fraction of the cost, its refocus parameter ``step·a``.
+baseline at a fraction of the cost, its refocus parameter ``step·a``. The outer ring of views is left
+out by default (its samples straddle the border of the micro image: crosstalk after decoding).
 """
 
 from __future__ import annotations
@@ -36,11 +38,11 @@ class CostVolume:
     view_step: int
 
 
-def auto_view_step(m_hat: int, lens_count: int) -> int:
-    """The smallest view step whose sub-lattice of views stays within :data:`FULL_VIEW_BUDGET` samples."""
-    c = (m_hat - 1) // 2
-    for step in range(1, max(c, 1) + 1):
-        n = 2 * (c // step) + 1
+def auto_view_step(reach: int, lens_count: int) -> int:
+    """The smallest view step whose views (offsets up to ``reach`` from the centre) stay within
+    :data:`FULL_VIEW_BUDGET` samples."""
+    for step in range(1, max(reach, 1) + 1):
+        n = 2 * (reach // step) + 1
         if n * n * lens_count <= FULL_VIEW_BUDGET or n <= 3:
             return step
     return 1
@@ -53,8 +55,17 @@ def luminance(views: np.ndarray) -> np.ndarray:
     return views.mean(axis=-1, dtype=np.float32)
 
 
-def sweep_views(views: np.ndarray, view_step: int, view_weight: np.ndarray | None) -> np.ndarray:
-    """The light field the sweep refocuses: channels ``w·Y``, ``w·Y²`` (and ``w`` when weights vary).
+def picked_views(m_hat: int, view_step: int, reach: int | None = None) -> np.ndarray:
+    """Indices ``c + step·t`` with ``|step·t| ≤ reach`` (default c) of the views the sweep uses."""
+    c = (m_hat - 1) // 2
+    reach = c if reach is None else min(int(reach), c)
+    half = reach // view_step
+    return c + view_step * np.arange(-half, half + 1)
+
+
+def sweep_views(views: np.ndarray, view_step: int, view_weight: np.ndarray | None,
+                reach: int | None = None) -> np.ndarray:
+    """The light field the sweep refocuses: channels ``w·Y`` and ``w·Y²``.
 
     Parameters
     ----------
@@ -64,20 +75,43 @@ def sweep_views(views: np.ndarray, view_step: int, view_weight: np.ndarray | Non
     view_weight : ndarray (m̂, m̂) or None
         Weight of each view (0 = outside the aperture); ``None`` = all 1.
     """
-    m = views.shape[0]
+    picked = picked_views(views.shape[0], view_step, reach)
+    y = luminance(views[np.ix_(picked, picked)])
+    out = np.empty(y.shape + (2,), dtype=np.float32)
+    if view_weight is not None:
+        y *= view_weight[np.ix_(picked, picked)].astype(np.float32)[:, :, None, None]  # w·Y (w is 0 or 1)
+    out[..., 0] = y
+    np.multiply(y, y, out=out[..., 1])
+    if view_weight is not None and not np.all((view_weight == 0) | (view_weight == 1)):
+        out[..., 1] /= np.maximum(view_weight[np.ix_(picked, picked)], 1e-12)[:, :, None, None]  # w·Y², not w²·Y²
+    return out
+
+
+def mean_view_weight(a_scaled, weight: np.ndarray, ny: int, nx: int) -> np.ndarray:
+    """``(K, Ny, Nx)``: the mean of ``weight[ky, kx]`` over the views that count at each lens in slice ``a``.
+
+    A view counts where its sample position ``j + a·(c − k)`` lies in ``[0, N − 1]`` on both axes (the
+    contract's rule, separable), so the weighted sum is ``inside_y(k_y, j_y)ᵀ · W · inside_x(k_x, j_x)``
+    and the count the product of the per-axis counts: two small matrix products per slice.
+    """
+    m = weight.shape[0]
     c = (m - 1) // 2
-    picked = np.arange(c % view_step, m, view_step)
-    sub = views[np.ix_(picked, picked)]
-    y = luminance(sub)
-    if view_weight is None or np.all(view_weight[np.ix_(picked, picked)] == 1):
-        return np.stack([y, y * y], axis=-1)
-    w = view_weight[np.ix_(picked, picked)].astype(np.float32)[:, :, None, None]
-    wy = w * y
-    return np.stack([wy, wy * y, np.broadcast_to(w, y.shape)], axis=-1)
+    shifts = np.asarray(a_scaled, dtype=np.float64)[:, None] * (c - np.arange(m))[None, :]
+    nearest = np.round(shifts)
+    shifts = np.where(np.abs(shifts - nearest) < 1e-9, nearest, shifts)   # refocus's snapping
+
+    def inside(n):
+        pos = np.arange(n)[None, None, :] + shifts[:, :, None]
+        return ((pos >= 0) & (pos <= n - 1)).astype(np.float64)          # (K, m, n)
+
+    iy, ix = inside(ny), inside(nx)
+    total = np.einsum("kan,ab,kbm->knm", iy, weight.astype(np.float64), ix, optimize=True)
+    count = iy.sum(axis=1)[:, :, None] * ix.sum(axis=1)[:, None, :]
+    return (total / count).astype(np.float32)
 
 
-def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, view_weight: np.ndarray | None = None,
-                interpolation: str = "linear") -> CostVolume:
+def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, reach: int | None = None,
+                view_weight: np.ndarray | None = None, interpolation: str = "linear") -> CostVolume:
     """Variance across the views behind every lens for each refocus parameter (one fused refocus call).
 
     Parameters
@@ -85,8 +119,8 @@ def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, view_weight:
     views : ndarray (m̂, m̂, Ny, Nx, C)
     a_values : sequence of float
         Refocus parameters of the sweep.
-    view_step, view_weight
-        See :func:`sweep_views`.
+    view_step, reach, view_weight
+        See :func:`picked_views` and :func:`sweep_views`.
     interpolation : str
         Interpolation of the refocus kernel between lenses.
 
@@ -97,11 +131,17 @@ def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, view_weight:
     from ..refocus import refocus
 
     a = np.asarray(a_values, dtype=np.float64)
-    stack = refocus(sweep_views(views, view_step, view_weight), a * view_step, interpolation=interpolation)
-    if stack.shape[-1] == 3:
-        weight = np.maximum(stack[..., 2], np.float32(1e-6))
-        mean, mean_sq = stack[..., 0] / weight, stack[..., 1] / weight
-    else:
-        mean, mean_sq = stack[..., 0], stack[..., 1]
-    cost = np.maximum(mean_sq - mean * mean, np.float32(0))
+    picked = picked_views(views.shape[0], view_step, reach)
+    if view_weight is not None and np.all(view_weight[np.ix_(picked, picked)]):
+        view_weight = None
+    stack = refocus(sweep_views(views, view_step, view_weight, reach), a * view_step, interpolation=interpolation)
+    mean, mean_sq = stack[..., 0], stack[..., 1]
+    if view_weight is not None:
+        weight = mean_view_weight(a * view_step, view_weight[np.ix_(picked, picked)], *mean.shape[1:])
+        np.maximum(weight, np.float32(1e-6), out=weight)
+        mean /= weight
+        mean_sq /= weight
+    cost = mean_sq
+    cost -= mean * mean
+    np.maximum(cost, np.float32(0), out=cost)
     return CostVolume(a, cost, mean, view_step)
