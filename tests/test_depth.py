@@ -78,13 +78,14 @@ def test_textured_planes_from_ideal_views_meet_the_accuracy_targets(scene, ideal
 
 
 def test_decoded_capture_keeps_every_lens_within_its_dof(scene):
-    """Decoding adds its own bias (the sharpest slice of decoded views sits a few % farther, decode's issue),
-    so the median target is checked on ideal views; BadPix and the bounds must hold here too."""
+    """Decoding adds its own bias (the sharpest slice of decoded views sits a few % farther, decode's issue;
+    most of it from the outer rings of views), so the 5 % median target is checked on ideal views; BadPix
+    and the bounds must hold here too."""
     depth_map = lfproc.depth(scene["decoded"])
     for plane in (0, 2):
         mask = region(scene["sim"], plane, scene["camera"])
         median, badpix, inside = scores(depth_map, scene["camera"], scene["truth_a"], mask)
-        assert median <= 0.25 and badpix <= 0.05 and inside >= 0.90, (plane, median, badpix, inside)
+        assert median <= 0.12 and badpix <= 0.05 and inside >= 0.90, (plane, median, badpix, inside)
 
 
 @pytest.mark.parametrize("source", ["ideal", "decoded"])
@@ -152,6 +153,27 @@ def test_depth_range_limits_the_search_and_leaves_outside_surfaces_unknown(scene
     wall = region(scene["sim"], 2, cam)
     median, badpix, _ = scores(depth_map, cam, scene["truth_a"], wall)
     assert median <= 0.05 and badpix <= 0.05
+
+
+def test_outer_ring_of_decoded_views_pulls_the_estimate_farther(scene):
+    """Why the outer ring is left out by default: with it, decoded captures come out farther (lower a)."""
+    cam = scene["camera"]
+    mask = region(scene["sim"], 0, cam)
+    without = lfproc.depth(scene["decoded"])
+    with_ring = lfproc.depth(scene["decoded"], outer_views=True)
+    bias = lambda d: np.nanmedian(d.a[mask] - scene["truth_a"][mask])  # noqa: E731
+    assert bias(with_ring) < bias(without) < 0
+    assert abs(bias(without)) < 0.6 * abs(bias(with_ring))
+
+
+def test_coarse_pass_narrows_the_sweep_to_the_occupied_range(scene, ideal_depth):
+    """The scene spans a = 0.57 … 1.43: the fine sweep covers that, and much less than the default 0 … 3."""
+    a = ideal_depth.a_searched
+    assert a[0] <= 0.57 - 0.2 and a[-1] >= 1.43 + 0.2
+    full = lfproc.depth(scene["ideal"], coarse_pass=False)
+    assert full.a_searched[-1] >= 3.0 and len(a) < 0.7 * len(full.a_searched)
+    known = np.isfinite(ideal_depth.a) & np.isfinite(full.a)
+    assert known.mean() > 0.6 and np.median(np.abs(ideal_depth.a[known] - full.a[known])) < 1e-6
 
 
 def test_callable_both_ways_and_errors(scene):

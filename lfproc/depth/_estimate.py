@@ -2,7 +2,8 @@
 
 Steps (each in its own module):
 
-1. :mod:`._search` — the refocus parameters to visit, from the depth range asked for;
+1. :mod:`._search` — the refocus parameters to visit, from the depth range asked for, narrowed by a
+   coarse pass to the range the scene occupies (:func:`occupied_range`);
 2. :mod:`._cost` — one fused refocus of the views' luminance and its square gives, per slice, the
    variance across the views behind every lens (correspondence) and the refocused luminance;
 3. :mod:`._refine` — the cost averaged over 3 × 3 lenses, its minimum refined between slices, and
@@ -26,6 +27,13 @@ from ._confidence import MIN_CONFIDENCE
 #: the method name written into the outputs' metadata
 METHOD = "plane sweep over the refocus parameter a: variance across the views (correspondence) " \
          "checked by the sharpest slice (defocus); parabolic sub-slice minimum; distance by Eqs. 13-31"
+
+
+#: sweeps with more slices than this start with a coarse pass that finds the occupied range
+COARSE_PASS_MIN_SLICES = 16
+
+#: confidence of the coarse pass's estimates that counts as a surface found
+COARSE_PASS_CONFIDENCE = 0.5
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,8 +81,31 @@ class DepthMap:
                 "lens_grid": [int(self.a.shape[0]), int(self.a.shape[1])]}
 
 
+def occupied_range(views, a_lo, a_hi, step, view_step, reach, weight, interpolation) -> tuple[float, float]:
+    """The part of ``[a_lo, a_hi]`` the scene occupies, from a sweep at twice the step with half the views
+    (per axis): from the least to the largest confidently estimated ``a``, widened by one coarse step.
+    Where nothing is confidently known the whole range is kept."""
+    from ._confidence import confidence, cost_floor
+    from ._cost import cost_volume
+    from ._refine import aggregate, refine_minimum
+    from ._search import sweep_parameters
+
+    coarse = sweep_parameters(a_lo, a_hi, 2.0 * step)
+    volume = cost_volume(views, coarse, view_step=view_step, reach=reach, view_weight=weight,
+                         interpolation=interpolation)
+    found = refine_minimum(aggregate(volume.cost), coarse, cost_floor(volume.luminance))
+    c = (views.shape[0] - 1) // 2
+    conf = confidence(found.a, found.a_low, found.a_high, found.a, c)
+    known = found.interior & (conf >= COARSE_PASS_CONFIDENCE)
+    if not known.any():
+        return a_lo, a_hi
+    return (max(a_lo, float(found.a[known].min()) - 2.0 * step),
+            min(a_hi, max(float(found.a[known].max()) + 2.0 * step, a_lo)))
+
+
 def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, camera=None,
-          min_confidence: float = MIN_CONFIDENCE, interpolation: str = "cubic", outer_views: bool = False) -> DepthMap:
+          min_confidence: float = MIN_CONFIDENCE, interpolation: str = "cubic", outer_views: bool = False,
+          coarse_pass: bool = True) -> DepthMap:
     """Metric depth map of a light field (module docstring for the method).
 
     Parameters
@@ -91,6 +122,10 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     view_step : int, optional
         Use every ``view_step``-th view around the central one for the sweep (default: 1 for light
         fields up to 20 M view samples, more above; the baseline stays the same).
+    coarse_pass : bool
+        With more than :data:`COARSE_PASS_MIN_SLICES` slices to visit, first find the part of the
+        range the scene occupies with a cheap sweep (twice the step, half the views per axis) and
+        sweep finely only there (default). A surface the coarse pass misses comes out unknown.
     outer_views : bool
         Also use the outer ring of views (default: not). Their samples lie on the border of the
         micro image, where decoding mixes in the neighbouring micro image (crosstalk): on decoded
@@ -136,13 +171,20 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings = {}
     t0 = time.perf_counter()
     a_lo, a_hi = search_range_a(camera, depth_range_mm, a_range)
-    a_values = sweep_parameters(a_lo, a_hi, default_step(c) if step is None else float(step))
+    step = default_step(c) if step is None else float(step)
+    a_values = sweep_parameters(a_lo, a_hi, step)
     reach = c if outer_views or c < 2 else c - 1
     view_step = auto_view_step(reach, ny * nx) if view_step is None else int(view_step)
     if not 1 <= view_step <= reach:
         raise LfprocError(f"view_step must be an integer from 1 to {reach}, got {view_step}")
     weight = geometry.views_inside_aperture(camera) if camera.f_number is not None else None
     timings["plan"] = time.perf_counter() - t0
+
+    if coarse_pass and len(a_values) > COARSE_PASS_MIN_SLICES:
+        t0 = time.perf_counter()
+        a_lo, a_hi = occupied_range(views, a_lo, a_hi, step, min(2 * view_step, reach), reach, weight, interpolation)
+        a_values = sweep_parameters(a_lo, a_hi, step)
+        timings["coarse pass (occupied range)"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     volume = cost_volume(views, a_values, view_step=view_step, reach=reach, view_weight=weight,
