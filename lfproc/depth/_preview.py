@@ -88,9 +88,13 @@ def preview_image(distance_mm: np.ndarray) -> np.ndarray:
     draw = ImageDraw.Draw(canvas)
     font = ImageFont.load_default()
     draw.text((x0, margin - 8), "distance", fill=(0, 0, 0), font=font)
-    for tick in _nice_ticks(near, far):
+    drawn: list[int] = []
+    for tick in [near, far] + _nice_ticks(near, far):   # the ends first, then round values between
         inv = 0.0 if math.isinf(tick) else 1.0 / tick
         y = y0 + int(round((1.0 - (inv - inv_far) / (inv_near - inv_far)) * (bar_h - 1)))
+        if any(abs(y - other) < 14 for other in drawn):
+            continue
+        drawn.append(y)
         draw.line([(x0 + bar_w, y), (x0 + bar_w + 4, y)], fill=(0, 0, 0))
         draw.text((x0 + bar_w + 6, y - 5), _label(tick), fill=(0, 0, 0), font=font)
     draw.text((x0, y0 + bar_h + 2), "grey: unknown", fill=(80, 80, 80), font=font)
