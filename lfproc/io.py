@@ -388,6 +388,10 @@ def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | 
         spec.attribute("Compression", f"jpeg:{_JPEG_QUALITY}")
         spec.attribute("jpeg:subsampling", "4:4:4")
     extension = os.path.splitext(path)[1].lower()
+    if extension in (".tif", ".tiff"):
+        # uncompressed: every TIFF reader opens it (OpenImageIO's default zip + floating-point predictor needs
+        # imagecodecs in tifffile), and it writes at disk speed (zip of float noise runs at ~6 MB/s)
+        spec.attribute("Compression", "none")
     _attach_metadata(spec, metadata, strings_only=extension == ".png")
     try:
         with atomic_path(path) as tmp:

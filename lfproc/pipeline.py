@@ -117,8 +117,11 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
 
 
 def output_stem(path: str) -> str:
-    """The name outputs of a capture start with: its file name without extension."""
-    return os.path.splitext(os.path.basename(path))[0]
+    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
+    name = os.path.basename(path)
+    if name.lower().endswith(".lfp.npz"):
+        return name[:-len(".lfp.npz")]
+    return os.path.splitext(name)[0]
 
 
 def unique_stems(paths: list[str]) -> dict[str, str]:
