@@ -246,6 +246,14 @@ def test_cli_writes_every_output_with_metadata(scene, tmp_path):
     assert preview.shape[1] > 4 * nx
 
 
+def test_cli_takes_a_decoded_light_field_without_camera_options(scene, tmp_path):
+    scene["decoded"].save(tmp_path / "lf.lfp.npz")
+    proc = run_cli("depth", tmp_path / "lf.lfp.npz", "--no-ply", "-o", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "out" / "lf_depth.tif").is_file() and not (tmp_path / "out" / "lf_depth_points.ply").exists()
+    assert "depth known at" in proc.stdout
+
+
 def test_cli_bad_inputs_fail_cleanly_and_write_nothing(scene, tmp_path):
     folder = scene["folder"]
     out = tmp_path / "out"
@@ -256,6 +264,10 @@ def test_cli_bad_inputs_fail_cleanly_and_write_nothing(scene, tmp_path):
     assert_clean_error(run_cli("depth", *base, "--white", folder / "white.png", "--depth-range", "abc"),
                        "--depth-range")
     assert_clean_error(run_cli("depth", *base), "--white")
+    assert_clean_error(run_cli("depth", *base, "--white", folder / "white.png", "--min-confidence", "2"),
+                       "--min-confidence")
+    assert_clean_error(run_cli("depth", folder / "capture.png", "--white", folder / "white.png", "-o", out),
+                       "--camera")
     small = tmp_path / "small.png"
     write_image(small, np.zeros((64, 64), np.uint16))
     assert_clean_error(run_cli("depth", *base, "--white", small), "small.png")
