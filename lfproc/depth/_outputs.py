@@ -106,6 +106,7 @@ def _write_float(path: str, image: np.ndarray, metadata: dict) -> str:
     spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 1, "float")
     spec.attribute("Software", "lfproc")
     spec.attribute("DateTime", "")
+    spec.attribute("Compression", "none")   # as lfproc.io writes float TIFFs: any TIFF reader opens them
     spec.attribute("ImageDescription", json.dumps(json_safe(metadata), allow_nan=False))
     for key in ("unit", "source", "method"):
         if metadata.get(key) is not None:
