@@ -176,6 +176,23 @@ def test_coarse_pass_narrows_the_sweep_to_the_occupied_range(scene, ideal_depth)
     assert known.mean() > 0.6 and np.median(np.abs(ideal_depth.a[known] - full.a[known])) < 1e-6
 
 
+def test_views_delivered_as_zero_are_left_out(scene):
+    """The decoder delivers views it cannot sample without bias as 0 everywhere: they must not count."""
+    views = scene["ideal"].views.copy()
+    dead = np.zeros((11, 11), bool)
+    dead[:2], dead[-2:], dead[:, :2], dead[:, -2:] = True, True, True, True
+    dead[3, 6] = dead[7, 4] = True
+    views[dead] = 0.0
+    depth_map = lfproc.depth(LightField.from_views(views, scene["camera"], scene["sim"].grid))
+    for plane in (0, 2):
+        mask = region(scene["sim"], plane, scene["camera"])
+        median, badpix, inside = scores(depth_map, scene["camera"], scene["truth_a"], mask)
+        assert median <= 0.05 and badpix <= 0.05 and inside >= 0.90, (plane, median, badpix, inside)
+    views[5, 5] = 0.0
+    with pytest.raises(lfproc.LfprocError, match="central view"):
+        lfproc.depth(LightField.from_views(views, scene["camera"]))
+
+
 def test_callable_both_ways_and_errors(scene):
     import lfproc.depth as package
 

@@ -7,8 +7,8 @@ across the views is only noise. Out of focus they sample different points and th
 :func:`lfproc.refocus` computes when it refocuses a light field whose channels are ``Y`` and ``Y²``:
 the whole cost volume is one call of the fused multi-slice kernel, one pass over the views.
 
-Views outside the main lens aperture carry no light (decoded: noise divided by a dark white image);
-they get weight 0: the refocused channels are ``w·Y`` and ``w·Y²``, and the mean weight of the views
+Views outside the main lens aperture carry no light, and the decoder delivers views it cannot sample
+without bias as 0 everywhere (:func:`delivered_views`); these get weight 0: the refocused channels are ``w·Y`` and ``w·Y²``, and the mean weight of the views
 that count at each lens (a function of the geometry only, :func:`mean_view_weight`) normalises them.
 With many views a sub-lattice of every ``step``-th view around the central one is used: the same
 baseline at a fraction of the cost, its refocus parameter ``step·a``. The outer ring of views is left
@@ -46,6 +46,14 @@ def auto_view_step(reach: int, lens_count: int) -> int:
         if n * n * lens_count <= FULL_VIEW_BUDGET or n <= 3:
             return step
     return 1
+
+
+def delivered_views(views: np.ndarray, row_step: int = 4) -> np.ndarray:
+    """``(m̂, m̂)`` booleans: views that carry a signal. The decoder delivers views it cannot sample without
+    bias (and views outside the aperture) as 0 everywhere; every ``row_step``-th lens row is enough to
+    tell."""
+    sample = views[:, :, ::row_step]
+    return np.any(sample != 0, axis=tuple(range(2, views.ndim)))
 
 
 def luminance(views: np.ndarray) -> np.ndarray:

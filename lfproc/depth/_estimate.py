@@ -150,7 +150,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     from .. import geometry
     from ._allfocus import allfocus
     from ._confidence import confidence, cost_floor, defocus_estimate
-    from ._cost import auto_view_step, cost_volume
+    from ._cost import auto_view_step, cost_volume, delivered_views
     from ._metric import metric_depth
     from ._refine import aggregate, refine_minimum
     from ._search import default_step, search_range_a, sweep_parameters
@@ -177,7 +177,13 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     view_step = auto_view_step(reach, ny * nx) if view_step is None else int(view_step)
     if not 1 <= view_step <= reach:
         raise LfprocError(f"view_step must be an integer from 1 to {reach}, got {view_step}")
-    weight = geometry.views_inside_aperture(camera) if camera.f_number is not None else None
+    weight = delivered_views(views)
+    if camera.f_number is not None:
+        weight &= geometry.views_inside_aperture(camera)
+    if not weight[c, c]:
+        raise LfprocError("the central view of this light field is dark (0 everywhere): nothing to estimate "
+                          "depth from; check the capture and the white image")
+    weight = None if weight.all() else weight
     timings["plan"] = time.perf_counter() - t0
 
     if coarse_pass and len(a_values) > COARSE_PASS_MIN_SLICES:
