@@ -324,3 +324,24 @@ def test_tilted_plane_from_ideal_views_meets_the_accuracy_targets():
     mask = ndimage.binary_erosion(finite, iterations=3, border_value=0)
     median, badpix, inside = scores(depth_map, cam, np.where(finite, truth_a, 0.0), mask)
     assert median <= 0.05 and badpix <= 0.05 and inside >= 0.90, (median, badpix, inside)
+
+
+def test_point_cloud_of_a_plane_is_flat_and_scaled_like_the_object():
+    """Telecentric: a lens s mm off the axis sees the point s·(1 − z/f_U) off it (a plain similar-triangles
+    check: the central view looks through the main lens's front focal point)."""
+    from lfproc.depth._pointcloud import point_cloud
+
+    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
+                 image_distance_mm=50.0, f_number=4.0, name="pc")
+    distance = np.full((5, 7), 600.0)
+    distance[0, 0] = np.nan
+    points, rgb = point_cloud(cam, None, distance, np.ones((5, 7, 1), np.float32))
+    assert points.shape == (34, 3) and rgb.shape == (34, 3)
+    np.testing.assert_allclose(points[:, 2], 600.0)
+    z_front = 600.0 - cam.sensor_to_main_lens_mm - cam.main_focal_length_mm      # from the front focal point
+    magnification = -z_front / cam.main_focal_length_mm
+    xs = np.unique(np.round(points[:, 0], 6))
+    np.testing.assert_allclose(np.diff(xs), abs(magnification) * cam.mla_pitch_mm, rtol=1e-6)
+    last = points[-1]              # lens (4, 6): 3 pitches right of and 2 below the centre lens, seen inverted
+    assert last[0] == pytest.approx(3 * cam.mla_pitch_mm * magnification, rel=1e-6) and last[0] < 0
+    assert last[1] == pytest.approx(2 * cam.mla_pitch_mm * magnification, rel=1e-6)

@@ -1,16 +1,18 @@
 """A 3-D point cloud of the depth map (binary PLY): one point per lens of known distance.
 
-The central view's chief ray through lens j leaves the MLA parallel to the axis at the lens height
-s_j (Eqs. 13–16 with Δu = 0: m = 0, U = s_j); behind the main lens it passes the central virtual
-camera's optical centre F = 0 (Eq. 17), so its slope is q = −s_j/f_U (Eq. 18) and at z from the main
-lens's principal plane H1U it is at height s_j·(1 − z/f_U) (Eq. 19). A surface at distance d from the
-sensor lies at z = d − L (L: sensor to H1U), so the point is
+The central view's chief ray through lens j leaves the micro lens at its height s_j with slope
+m = −s_j/d_A towards the exit pupil centre (0 when the exit pupil is at infinity, the paper's case:
+Eqs. 13–16 with Δu = 0). It reaches the main lens at U = s_j + m·b_U (Eq. 16), passes the front focal
+plane at F = m·f_U (Eq. 17), so its object-side slope is q = (F − U)/f_U (Eq. 18) and at z from the main
+lens's principal plane H1U it is at height U + q·z (Eq. 19). A surface at distance d from the sensor
+lies at z = d − L (L: sensor to H1U), so the point is
 
-    x = s_x·(1 − z/f_U),  y = s_y·(1 − z/f_U),  z_point = d
+    x = U_x + q_x·z,  y = U_y + q_y·z,  z_point = d
 
 in mm, x along the sensor's columns and y along its rows (object space is inverted: lenses right of
 the axis see points to the left), measured from the optical axis, which is taken through the centre of
-the lens grid.
+the lens grid. With a finite exit pupil the decoded grid holds micro image centres, which sit
+(d_A + f_s)/d_A farther out than their lenses; the lens heights are scaled back by that.
 """
 
 from __future__ import annotations
@@ -42,11 +44,21 @@ def point_cloud(camera, grid, distance_mm: np.ndarray, colours: np.ndarray | Non
     from ..io import srgb_encode
 
     sy, sx = lens_heights_mm(camera, grid, distance_mm.shape)
+    d_a = float(getattr(camera, "exit_pupil_distance_mm", np.inf))
+    if grid is not None and np.isfinite(d_a):       # the grid is the micro image centres: back to the lenses
+        scale = (d_a + camera.mla_focal_length_mm) / d_a
+        sy, sx = sy / scale, sx / scale
     keep = np.isfinite(distance_mm)
     d = distance_mm[keep].astype(np.float64)
     z = d - camera.sensor_to_main_lens_mm
-    factor = 1.0 - z / camera.main_focal_length_mm
-    points = np.stack([sx[keep] * factor, sy[keep] * factor, d], axis=1).astype(np.float32)
+    f_u, b_u = camera.main_focal_length_mm, camera.image_distance_mm
+
+    def height(s):
+        m = 0.0 if not np.isfinite(d_a) else -s / d_a
+        u = s + m * b_u
+        return u + (m * f_u - u) / f_u * z
+
+    points = np.stack([height(sx[keep]), height(sy[keep]), d], axis=1).astype(np.float32)
     rgb = None
     if colours is not None:
         c = colours[keep]
