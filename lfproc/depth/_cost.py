@@ -48,11 +48,11 @@ def auto_view_step(reach: int, lens_count: int) -> int:
     return 1
 
 
-def delivered_views(views: np.ndarray, row_step: int = 4) -> np.ndarray:
+def delivered_views(views: np.ndarray, rows: int = 16) -> np.ndarray:
     """``(m̂, m̂)`` booleans: views that carry a signal. The decoder delivers views it cannot sample without
-    bias (and views outside the aperture) as 0 everywhere; every ``row_step``-th lens row is enough to
+    bias (and views outside the aperture) as 0 everywhere; ``rows`` evenly spread lens rows are enough to
     tell."""
-    sample = views[:, :, ::row_step]
+    sample = views[:, :, ::max(1, views.shape[2] // rows)]
     return np.any(sample != 0, axis=tuple(range(2, views.ndim)))
 
 

@@ -81,9 +81,10 @@ class DepthMap:
                 "lens_grid": [int(self.a.shape[0]), int(self.a.shape[1])]}
 
 
-def occupied_range(views, a_lo, a_hi, step, view_step, reach, weight, interpolation) -> tuple[float, float]:
+def occupied_range(views, a_lo, a_hi, step, view_step, reach, weight) -> tuple[float, float]:
     """The part of ``[a_lo, a_hi]`` the scene occupies, from a sweep at twice the step with half the views
-    (per axis): from the least to the largest confidently estimated ``a``, widened by one coarse step.
+    (per axis) and linear interpolation (its pull towards integer ``a`` is far below the coarse step):
+    from the least to the largest confidently estimated ``a``, widened by one coarse step.
     Where nothing is confidently known the whole range is kept."""
     from ._confidence import confidence, cost_floor
     from ._cost import cost_volume
@@ -92,7 +93,7 @@ def occupied_range(views, a_lo, a_hi, step, view_step, reach, weight, interpolat
 
     coarse = sweep_parameters(a_lo, a_hi, 2.0 * step)
     volume = cost_volume(views, coarse, view_step=view_step, reach=reach, view_weight=weight,
-                         interpolation=interpolation)
+                         interpolation="linear")
     found = refine_minimum(aggregate(volume.cost), coarse, cost_floor(volume.luminance))
     c = (views.shape[0] - 1) // 2
     conf = confidence(found.a, found.a_low, found.a_high, found.a, c)
@@ -188,7 +189,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
 
     if coarse_pass and len(a_values) > COARSE_PASS_MIN_SLICES:
         t0 = time.perf_counter()
-        a_lo, a_hi = occupied_range(views, a_lo, a_hi, step, min(2 * view_step, reach), reach, weight, interpolation)
+        a_lo, a_hi = occupied_range(views, a_lo, a_hi, step, min(2 * view_step, reach), reach, weight)
         a_values = sweep_parameters(a_lo, a_hi, step)
         timings["coarse pass (occupied range)"] = time.perf_counter() - t0
 
