@@ -18,10 +18,13 @@ from ..lightfield import is_lightfield_file
 
 def add_decode_options(p) -> None:
     p.add_argument("--camera", metavar="CAM",
-                   help="camera TOML file (not needed for decoded .lfp.npz inputs, which carry theirs)")
+                   help="camera TOML file (not needed for decoded .lfp.npz inputs, which carry theirs, nor for Lytro "
+                        "captures, whose metadata gives one with the main lens focused at infinity)")
     p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
-    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) "
-                                                    "and corrects vignetting")
+    p.add_argument("--white", metavar="WHITE", help="white image (also a Lytro .raw with its metadata): "
+                                                    "calibrates the grid (without --calib) and corrects vignetting")
+    p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
+                                                      "capture's camera with the nearest zoom and focus steps")
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
@@ -79,7 +82,8 @@ def input_camera(args, paths):
     if args.camera:
         return Camera.from_toml(args.camera)
     if to_decode:
-        raise LfprocError(f"{to_decode[0]}: decoding a capture needs --camera CAM (a camera TOML file)")
+        from ..pipeline import camera_for_captures
+        return camera_for_captures(None, to_decode)    # Lytro metadata, else the error asking for --camera
     camera = LightField.read_camera(paths[0])
     if camera is None:
         raise LfprocError(f"{paths[0]}: this light field carries no camera; give --camera CAM")
@@ -91,20 +95,36 @@ def prepare_inputs(args, paths, camera=None) -> Inputs:
     input needs decoding. Call after every cheap check."""
     paths = tuple(paths)
     camera = camera or input_camera(args, paths)
-    setup = setup_from_args(args, camera) if any(not is_lightfield_file(p) for p in paths) else None
+    to_decode = [p for p in paths if not is_lightfield_file(p)]
+    setup = setup_from_args(args, camera, to_decode) if to_decode else None
     return Inputs(paths, camera, setup)
 
 
-def setup_from_args(args, camera=None):
-    """Camera, grid and white image from the parsed options (errors before any capture is read)."""
-    from ..camera import Camera
+def captures_of(args) -> list[str]:
+    """The capture paths of a command's positional RAW argument(s)."""
+    raw = getattr(args, "raw", None)
+    return [raw] if isinstance(raw, str) else list(raw or [])
+
+
+def camera_from_args(args):
+    """``--camera``, or for Lytro captures without it the camera in the first capture's metadata."""
+    from ..pipeline import camera_for_captures
+
+    return camera_for_captures(args.camera, captures_of(args))
+
+
+def setup_from_args(args, camera=None, captures=None):
+    """Camera, grid and white image from the parsed options (errors before any capture is read).
+
+    ``captures`` (default: the command's RAW arguments) are the inputs to decode: ``--white-dir``
+    picks the white image for the first, and a Lytro white image is checked against it.
+    """
     from ..pipeline import prepare_decoding
 
-    if camera is None and not args.camera:
-        raise LfprocError("decoding a capture needs --camera CAM (a camera TOML file)")
-    camera = camera or Camera.from_toml(args.camera)
+    camera = camera or camera_from_args(args)
     return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                            demosaic_method=args.demosaic)
+                            demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+                            captures=captures_of(args) if captures is None else list(captures))
 
 
 def require_output_folder(path: str) -> None:

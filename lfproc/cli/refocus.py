@@ -83,21 +83,23 @@ def run(args) -> int:
 
 
 def check_view_coverage(camera, a_values, lens_shape, source: str) -> None:
-    """Refuse slices at which no pixel averages every view (a garbage a), warn where most pixels do not."""
+    """Refuse slices that fewer than half the views reach (a garbage a); warn where most pixels miss some."""
     import warnings
 
     from .. import geometry
-    from ..refocus import full_view_fraction, max_full_view_a
+    from ..refocus import MIN_OVERLAPPING_VIEWS, full_view_fraction, max_usable_a, overlapping_view_fraction
     from .common import _mm
 
     m, (ny, nx) = camera.m_hat, lens_shape
-    limit = max_full_view_a(m, lens_shape)
-    beyond = [a for a in a_values if abs(a) > limit]
+    reached = overlapping_view_fraction(a_values, m, lens_shape)
+    beyond = [a for a, f in zip(a_values, reached) if f < MIN_OVERLAPPING_VIEWS]
     if beyond:
+        limit = max_usable_a(m, lens_shape)
         near, far = (float(d) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
-        raise LfprocError(f"{source}: at a={beyond[0]:g} no pixel of this {ny}x{nx}-lens capture sees all {m}x{m} "
-                          f"views (the outer views shift off the image); refocus within |a| <= {limit:.3g}, i.e. "
-                          f"{_mm(near)} (a={limit:+.3g}) to {_mm(far)} (a={-limit:+.3g})")
+        share = float(overlapping_view_fraction(beyond[0], m, lens_shape))
+        raise LfprocError(f"{source}: at a={beyond[0]:g} only {100 * share:.0f} % of the {m}x{m} views reach this "
+                          f"{ny}x{nx}-lens capture (the others shift off it); refocus within |a| < {limit:.3g}, i.e. "
+                          f"from {_mm(near)} (a=+{limit:.3g}) to {_mm(far)} (a=-{limit:.3g})")
     share = full_view_fraction(a_values, m, lens_shape)
     thin = [a for a, f in zip(a_values, share) if f < 0.5]
     if thin:

@@ -57,10 +57,11 @@ row whose y-taps read it.
 import sys
 import types
 
-from ._coverage import full_view_fraction, max_full_view_a
+from ._coverage import MIN_OVERLAPPING_VIEWS, full_view_fraction, max_usable_a, overlapping_view_fraction
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
 
-__all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_full_view_a"]
+__all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
+           "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS"]
 
 
 class _CallableModule(types.ModuleType):
