@@ -345,3 +345,21 @@ def test_point_cloud_of_a_plane_is_flat_and_scaled_like_the_object():
     last = points[-1]              # lens (4, 6): 3 pitches right of and 2 below the centre lens, seen inverted
     assert last[0] == pytest.approx(3 * cam.mla_pitch_mm * magnification, rel=1e-6) and last[0] < 0
     assert last[1] == pytest.approx(2 * cam.mla_pitch_mm * magnification, rel=1e-6)
+
+
+def test_lytro_sample_both_planes_found_at_their_distances(tmp_path):
+    """samples/lytro: an Illum-like capture of two planes, 9280 mm (a = 1.25) and 45780 mm (a = 0.25) from
+    the sensor (samples/lytro/README.md), decoded from the Lytro files with their calibration folder."""
+    from conftest import SAMPLES
+
+    lytro = SAMPLES / "lytro"
+    proc = run_cli("depth", lytro / "IMG_0001.lfr", "--white-dir", lytro / "caldata", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    distance = read_float_tiff(tmp_path / "IMG_0001_depth.tif")[..., 0]
+    known = distance[np.isfinite(distance)]
+    assert known.size > 0.7 * distance.size
+    for truth, share in ((9280.0, 0.3), (45780.0, 0.3)):
+        near_it = known[np.abs(known / truth - 1.0) < 0.1]
+        assert near_it.size > share * known.size, truth
+        assert abs(np.median(near_it) / truth - 1.0) < 0.03, (truth, np.median(near_it))
+    assert np.mean([(abs(d / 9280 - 1) < 0.1) or (abs(d / 45780 - 1) < 0.1) for d in known]) > 0.9

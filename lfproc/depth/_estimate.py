@@ -32,8 +32,9 @@ METHOD = "plane sweep over the refocus parameter a: variance across the views (c
 #: sweeps with more slices than this start with a coarse pass that finds the occupied range
 COARSE_PASS_MIN_SLICES = 16
 
-#: confidence of the coarse pass's estimates that counts as a surface found
-COARSE_PASS_CONFIDENCE = 0.5
+#: confidence of the coarse pass's estimates that counts as a surface found (low: missing a surface costs
+#: more than sweeping a little more)
+COARSE_PASS_CONFIDENCE = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,9 +83,9 @@ class DepthMap:
 
 
 def occupied_range(views, a_lo, a_hi, step, view_step, reach, weight) -> tuple[float, float]:
-    """The part of ``[a_lo, a_hi]`` the scene occupies, from a sweep at twice the step with half the views
-    (per axis) and linear interpolation (its pull towards integer ``a`` is far below the coarse step):
-    from the least to the largest confidently estimated ``a``, widened by one coarse step.
+    """The part of ``[a_lo, a_hi]`` the scene occupies, from a sweep at twice the step with linear
+    interpolation (its pull towards integer ``a`` is far below the coarse step): from the least to the
+    largest ``a`` estimated with some confidence, widened by one coarse step.
     Where nothing is confidently known the whole range is kept."""
     from ._confidence import confidence, cost_floor
     from ._cost import cost_volume
@@ -125,8 +126,9 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         fields up to 20 M view samples, more above; the baseline stays the same).
     coarse_pass : bool
         With more than :data:`COARSE_PASS_MIN_SLICES` slices to visit, first find the part of the
-        range the scene occupies with a cheap sweep (twice the step, half the views per axis) and
-        sweep finely only there (default). A surface the coarse pass misses comes out unknown.
+        range the scene occupies with a cheap sweep (twice the step, linear interpolation: about a
+        quarter of the fine sweep's work) and sweep finely only there (default). A surface the coarse
+        pass misses comes out unknown.
     outer_views : bool
         Also use the outer ring of views (default: not). Their samples lie on the border of the
         micro image, where decoding mixes in the neighbouring micro image (crosstalk): on decoded
@@ -189,7 +191,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
 
     if coarse_pass and len(a_values) > COARSE_PASS_MIN_SLICES:
         t0 = time.perf_counter()
-        a_lo, a_hi = occupied_range(views, a_lo, a_hi, step, min(2 * view_step, reach), reach, weight)
+        a_lo, a_hi = occupied_range(views, a_lo, a_hi, step, view_step, reach, weight)
         a_values = sweep_parameters(a_lo, a_hi, step)
         timings["coarse pass (occupied range)"] = time.perf_counter() - t0
 
