@@ -188,7 +188,7 @@ def median_time(fn, repeats):
 def speed_rows(repeats: int):
     import lfproc
     from lfproc import geometry
-    from lfproc.depth._cost import sweep_views
+    from lfproc.depth._cost import sweep_luminance, sweep_views
 
     lf = illum_light_field()
     camera = lf.camera
@@ -206,7 +206,7 @@ def speed_rows(repeats: int):
         steps.append((label, depth_map.timings_s))
     # the straightforward sweep: one refocus call per slice over all views (no fusion, no view step)
     a_values = lfproc.depth(lf, **cases[2][1]).a_searched
-    full = sweep_views(lf.views, 1, geometry.views_inside_aperture(camera))
+    full = sweep_views(sweep_luminance(lf.views, 1, None, geometry.views_inside_aperture(camera)))
     t0 = time.perf_counter()
     for a in a_values:
         lfproc.refocus(full, float(a), interpolation="cubic")

@@ -1,6 +1,6 @@
 """The all-in-focus image: every lens taken from the refocused slice that is sharp at its own depth.
 
-A handful of slices spanning the estimated ``a`` are rendered in one fused call of
+Up to six slices spanning the estimated ``a`` are rendered in one fused call of
 :func:`lfproc.refocus` (all views, all channels); each lens blends the two slices that bracket its
 estimate, linearly in ``a``. Lenses whose depth is unknown use their best (unconfident) estimate: on a
 textureless surface every slice looks the same anyway.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 #: the most slices rendered for the all-in-focus image
-MAX_ALLFOCUS_SLICES = 8
+MAX_ALLFOCUS_SLICES = 6
 
 
 def allfocus_slices(a_estimate: np.ndarray, center_index: int) -> np.ndarray:

@@ -57,9 +57,10 @@ def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
 
 
 def confidence(a_corr: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, a_defocus: np.ndarray,
-               center_index: int) -> np.ndarray:
-    """The confidence (0–1) of each estimate (module docstring)."""
-    h = dof_half_width_a(a_corr, center_index)
+               center_index: int, resolution: float = 1.0) -> np.ndarray:
+    """The confidence (0–1) of each estimate (module docstring); ``resolution`` > 1 widens ``h`` for a
+    sweep on a coarser lens grid (binned b × b lenses see b times less parallax per unit of ``a``)."""
+    h = dof_half_width_a(a_corr, center_index) * resolution
     with np.errstate(invalid="ignore"):
         spread = np.maximum(a_corr - a_low, a_high - a_corr)
         corr = 1.0 / (1.0 + (spread / h) ** 2)

@@ -71,27 +71,45 @@ def picked_views(m_hat: int, view_step: int, reach: int | None = None) -> np.nda
     return c + view_step * np.arange(-half, half + 1)
 
 
-def sweep_views(views: np.ndarray, view_step: int, view_weight: np.ndarray | None,
-                reach: int | None = None) -> np.ndarray:
-    """The light field the sweep refocuses: channels ``w·Y`` and ``w·Y²``.
+@dataclass(frozen=True, eq=False)
+class SweepLuminance:
+    """The luminance of the views a sweep uses, computed once for the coarse and the fine sweep.
 
-    Parameters
-    ----------
-    views : ndarray (m̂, m̂, Ny, Nx, C)
-    view_step : int
-        Use views ``c ± step·t`` only.
-    view_weight : ndarray (m̂, m̂) or None
-        Weight of each view (0 = outside the aperture); ``None`` = all 1.
+    ``y`` is ``(n, n, Ny, Nx)`` float32 for the views ``picked`` (:func:`picked_views`), ``weight`` their
+    ``(n, n)`` weights (``None`` = all 1), and a sweep at refocus parameter ``a`` shifts them by
+    ``view_step·a`` per step of the sub-lattice.
     """
+
+    y: np.ndarray
+    weight: np.ndarray | None
+    view_step: int
+
+
+def sweep_luminance(views: np.ndarray, view_step: int = 1, reach: int | None = None,
+                    view_weight: np.ndarray | None = None) -> SweepLuminance:
+    """Luminance and weights of the views ``c + step·t``, ``|step·t| ≤ reach`` (:func:`picked_views`)."""
     picked = picked_views(views.shape[0], view_step, reach)
-    y = luminance(views[np.ix_(picked, picked)])
+    weight = None if view_weight is None else np.asarray(view_weight, dtype=np.float32)[np.ix_(picked, picked)]
+    if weight is not None and np.all(weight == 1):
+        weight = None
+    return SweepLuminance(luminance(views[np.ix_(picked, picked)]), weight, int(view_step))
+
+
+def sweep_views(sweep: SweepLuminance, bin_lenses: int = 1) -> np.ndarray:
+    """The light field a sweep refocuses: channels ``w·Y`` and ``w·Y²``; with ``bin_lenses`` = b the
+    luminance is first averaged over b × b lenses (a coarser lens grid, on which parallax is a/b)."""
+    y = sweep.y
+    if bin_lenses > 1:
+        b = bin_lenses
+        n, _, ny, nx = y.shape
+        y = y[:, :, :ny // b * b, :nx // b * b].reshape(n, n, ny // b, b, nx // b, b).mean(axis=(3, 5))
     out = np.empty(y.shape + (2,), dtype=np.float32)
-    if view_weight is not None:
-        y *= view_weight[np.ix_(picked, picked)].astype(np.float32)[:, :, None, None]  # w·Y (w is 0 or 1)
-    out[..., 0] = y
     np.multiply(y, y, out=out[..., 1])
-    if view_weight is not None and not np.all((view_weight == 0) | (view_weight == 1)):
-        out[..., 1] /= np.maximum(view_weight[np.ix_(picked, picked)], 1e-12)[:, :, None, None]  # w·Y², not w²·Y²
+    out[..., 0] = y
+    if sweep.weight is not None:
+        w = sweep.weight[:, :, None, None]
+        out[..., 0] *= w
+        out[..., 1] *= w
     return out
 
 
@@ -118,19 +136,20 @@ def mean_view_weight(a_scaled, weight: np.ndarray, ny: int, nx: int) -> np.ndarr
     return (total / count).astype(np.float32)
 
 
-def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, reach: int | None = None,
-                view_weight: np.ndarray | None = None, interpolation: str = "linear") -> CostVolume:
+def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear",
+                bin_lenses: int = 1) -> CostVolume:
     """Variance across the views behind every lens for each refocus parameter (one fused refocus call).
 
     Parameters
     ----------
-    views : ndarray (m̂, m̂, Ny, Nx, C)
+    sweep : SweepLuminance
+        The views' luminance (:func:`sweep_luminance`).
     a_values : sequence of float
         Refocus parameters of the sweep.
-    view_step, reach, view_weight
-        See :func:`picked_views` and :func:`sweep_views`.
     interpolation : str
         Interpolation of the refocus kernel between lenses.
+    bin_lenses : int
+        Sweep on lenses binned b × b (:func:`sweep_views`); the volume is on that coarser grid.
 
     Returns
     -------
@@ -139,17 +158,15 @@ def cost_volume(views: np.ndarray, a_values, *, view_step: int = 1, reach: int |
     from ..refocus import refocus
 
     a = np.asarray(a_values, dtype=np.float64)
-    picked = picked_views(views.shape[0], view_step, reach)
-    if view_weight is not None and np.all(view_weight[np.ix_(picked, picked)]):
-        view_weight = None
-    stack = refocus(sweep_views(views, view_step, view_weight, reach), a * view_step, interpolation=interpolation)
+    shift = a * sweep.view_step / bin_lenses
+    stack = refocus(sweep_views(sweep, bin_lenses), shift, interpolation=interpolation)
     mean, mean_sq = stack[..., 0], stack[..., 1]
-    if view_weight is not None:
-        weight = mean_view_weight(a * view_step, view_weight[np.ix_(picked, picked)], *mean.shape[1:])
+    if sweep.weight is not None:
+        weight = mean_view_weight(shift, sweep.weight, *mean.shape[1:])
         np.maximum(weight, np.float32(1e-6), out=weight)
         mean /= weight
         mean_sq /= weight
     cost = mean_sq
     cost -= mean * mean
     np.maximum(cost, np.float32(0), out=cost)
-    return CostVolume(a, cost, mean, view_step)
+    return CostVolume(a, cost, mean, sweep.view_step)
