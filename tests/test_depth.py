@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import assert_clean_error, run_cli
 from scipy import ndimage
 
 import lfproc
@@ -17,8 +18,6 @@ from lfproc import Camera, LightField, geometry, simulate
 from lfproc.io import read_capture, read_metadata, write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield
 from lfproc.scene import Noise, Plane, Scene, Uniform
-
-from conftest import assert_clean_error, run_cli
 
 A_TRUE = {"card": 1.43, "blank": 1.1, "wall": 0.57}   # off the sweep's 0.1-spaced slices
 
@@ -41,15 +40,15 @@ def scene(tmp_path_factory):
     decoded = load_lightfield(str(folder / "capture.png"),
                               DecodeSetup(cam, sim.grid, read_capture(folder / "white.png", cam)))
     truth_a = np.array([A_TRUE["card"], A_TRUE["blank"], A_TRUE["wall"]])[np.maximum(sim.plane_label, 0)]
-    return dict(camera=cam, sim=sim, folder=folder, decoded=decoded, truth_a=truth_a,
-                ideal=LightField.from_views(sim.ideal_views, cam, sim.grid))
+    return {"camera": cam, "sim": sim, "folder": folder, "decoded": decoded, "truth_a": truth_a,
+                "ideal": LightField.from_views(sim.ideal_views, cam, sim.grid)}
 
 
 def region(sim, index, camera, margin=None):
     """Lenses that see plane ``index`` in every view: eroded by the largest parallax between planes
     (c·Δa lenses, occlusions) plus the aggregation window, and off the borders."""
     if margin is None:
-        margin = int(math.ceil(camera.center_index * (A_TRUE["card"] - A_TRUE["wall"]))) + 2
+        margin = math.ceil(camera.center_index * (A_TRUE["card"] - A_TRUE["wall"])) + 2
     mask = ndimage.binary_erosion(sim.plane_label == index, iterations=margin, border_value=0)
     return mask
 
@@ -168,7 +167,7 @@ def test_outer_ring_with_compressed_parallax_is_left_out_by_default(scene):
                 views[ky, kx] = ndimage.shift(views[ky, kx], back, order=3, mode="nearest")
     lf = LightField.from_views(views, cam, scene["sim"].grid)
     mask = region(scene["sim"], 2, cam)
-    bias = lambda d: np.nanmedian(d.a[mask] - scene["truth_a"][mask])  # noqa: E731
+    bias = lambda d: np.nanmedian(d.a[mask] - scene["truth_a"][mask])
     with_ring, without = lfproc.depth(lf, outer_views=True), lfproc.depth(lf)
     assert bias(with_ring) < -0.02 and abs(bias(without)) < 0.01, (bias(with_ring), bias(without))
 

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 import os
 
-from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
-    prepare_inputs, require_output_folder
+from .capture_loop import (
+    add_decode_options,
+    add_output_folder_option,
+    for_each_capture,
+    input_camera,
+    prepare_inputs,
+    require_output_folder,
+)
 from .common import parse_depth_range
 
 

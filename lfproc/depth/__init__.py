@@ -11,7 +11,7 @@ import types
 from ._estimate import METHOD, DepthMap, depth
 from ._outputs import write_depth_outputs
 
-__all__ = ["depth", "DepthMap", "write_depth_outputs", "METHOD"]
+__all__ = ["METHOD", "DepthMap", "depth", "write_depth_outputs"]
 
 
 class _CallableModule(types.ModuleType):

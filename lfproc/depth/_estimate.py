@@ -222,7 +222,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     sharp = allfocus(views, minimum.a, c, interpolation)
     timings["all-in-focus"] = time.perf_counter() - t0
 
-    f32 = lambda x: np.asarray(x, dtype=np.float32)  # noqa: E731
+    f32 = lambda x: np.asarray(x, dtype=np.float32)
     return DepthMap(distance_mm=f32(metric.distance_mm), confidence=f32(conf), near_mm=f32(metric.near_mm),
                     far_mm=f32(metric.far_mm), a=f32(a_known), allfocus=sharp, a_searched=a_values,
                     view_step=view_step, view_reach=reach, timings_s=timings)

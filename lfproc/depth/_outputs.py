@@ -53,7 +53,8 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     """
     from ..io import write_image, write_sidecar
     from ._estimate import depth
-    from ._pointcloud import point_cloud as make_points, write_ply
+    from ._pointcloud import point_cloud as make_points
+    from ._pointcloud import write_ply
     from ._preview import write_preview
 
     camera = camera if camera is not None else lf.camera
@@ -85,7 +86,7 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
         points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.distance_mm, depth_map.allfocus)
         path = os.path.join(outdir, stem + POINTS)
         meta = dict(common, unit="mm", content="x, y: object-space position from the optical axis; z: distance from "
-                    "the sensor (central view's chief ray through each lens, Eqs. 13-21)", points=int(len(points)))
+                    "the sensor (central view's chief ray through each lens, Eqs. 13-21)", points=len(points))
         write_ply(path, points, rgb, comment=f"lfproc depth point cloud, mm; source {source}")
         write_sidecar(path, meta)
         paths["points"] = path

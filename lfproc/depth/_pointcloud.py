@@ -89,9 +89,8 @@ def write_ply(path: str, points: np.ndarray, rgb: np.ndarray | None = None, comm
         header += ["property uchar red", "property uchar green", "property uchar blue"]
     header.append("end_header")
     try:
-        with atomic_path(path, suffix=".ply") as tmp:
-            with open(tmp, "wb") as fh:
-                fh.write(("\n".join(header) + "\n").encode("ascii", errors="replace"))
-                fh.write(record.tobytes())
+        with atomic_path(path, suffix=".ply") as tmp, open(tmp, "wb") as fh:
+            fh.write(("\n".join(header) + "\n").encode("ascii", errors="replace"))
+            fh.write(record.tobytes())
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write ({exc.strerror or exc}); check the folder and permissions") from None

@@ -50,7 +50,7 @@ def _nice_ticks(near_mm: float, far_mm: float, count: int = 5) -> list[float]:
             ticks.append(math.inf)
             continue
         d = 1.0 / inv
-        digits = 1 - int(math.floor(math.log10(d / 1000.0)))
+        digits = 1 - math.floor(math.log10(d / 1000.0))
         value = round(d / 1000.0, max(digits, 0)) * 1000.0
         if near_mm <= value <= far_mm and value not in ticks:
             ticks.append(value)
@@ -75,7 +75,7 @@ def preview_image(distance_mm: np.ndarray) -> np.ndarray:
     rgb = colour_map(np.nan_to_num(t))
     rgb[np.isnan(distance_mm)] = UNKNOWN_RGB
     ny, nx = distance_mm.shape
-    scale = max(1, int(round(TARGET_SIZE_PX / max(ny, nx))))
+    scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
     body = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
     height = max(body.shape[0], 160)
     bar_w, margin, label_w = 18, 10, 80
@@ -91,7 +91,7 @@ def preview_image(distance_mm: np.ndarray) -> np.ndarray:
     drawn: list[int] = []
     for tick in [near, far] + _nice_ticks(near, far):   # the ends first, then round values between
         inv = 0.0 if math.isinf(tick) else 1.0 / tick
-        y = y0 + int(round((1.0 - (inv - inv_far) / (inv_near - inv_far)) * (bar_h - 1)))
+        y = y0 + round((1.0 - (inv - inv_far) / (inv_near - inv_far)) * (bar_h - 1))
         if any(abs(y - other) < 14 for other in drawn):
             continue
         drawn.append(y)

@@ -72,7 +72,7 @@ def refine_minimum(cost: np.ndarray, a_values: np.ndarray, floor: float) -> Cost
     step = float(a_values[1] - a_values[0]) if k > 1 else 0.0
     best = np.argmin(cost, axis=0)
     interior = (best > 0) & (best < k - 1)
-    take = lambda i: np.take_along_axis(cost, i[None], axis=0)[0].astype(np.float64)  # noqa: E731
+    take = lambda i: np.take_along_axis(cost, i[None], axis=0)[0].astype(np.float64)
     c1 = take(best)
     if k >= 3:
         offset, curvature = parabola_vertex(take(np.maximum(best - 1, 0)), c1, take(np.minimum(best + 1, k - 1)))
