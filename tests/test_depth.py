@@ -274,7 +274,7 @@ def test_cli_takes_a_decoded_light_field_without_camera_options(scene, tmp_path)
     proc = run_cli("depth", tmp_path / "lf.lfp.npz", "--no-ply", "-o", tmp_path / "out")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "out" / "lf_depth.tif").is_file() and not (tmp_path / "out" / "lf_depth_points.ply").exists()
-    assert "depth known at" in proc.stdout
+    assert "depth known at" in proc.stdout and " m (1st to 99th percentile)" in proc.stdout
 
 
 def test_cli_bad_inputs_fail_cleanly_and_write_nothing(scene, tmp_path):

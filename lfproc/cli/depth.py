@@ -53,9 +53,7 @@ def check_depth_options(args, camera):
 
 
 def run(args) -> int:
-    import numpy as np
-
-    from ..depth import write_depth_outputs
+    from ..depth import summary_line, write_depth_outputs
     from ..pipeline import unique_stems
 
     require_output_folder(args.outdir)
@@ -71,9 +69,8 @@ def run(args) -> int:
                                       depth_range_mm=depth_range, point_cloud=not args.no_ply,
                                       min_confidence=min_confidence)
         depth_map = written.pop("depth_map")
-        known = float((~np.isnan(depth_map.distance_mm)).mean())
         progress.update(1)
-        print(f"{path}: depth known at {known:.0%} of {depth_map.a.size} lenses -> "
-              f"{args.outdir}/{stems[path]}_depth*.*, {stems[path]}_allfocus.tif")
+        print(f"{path}: {summary_line(depth_map)} -> {args.outdir}/{stems[path]}_depth*.*, "
+              f"{stems[path]}_allfocus.tif")
 
     return for_each_capture("depth", args.raw, work)

@@ -1,6 +1,6 @@
 """Metric depth from one light field: ``lfproc.depth(lf)`` and the outputs of ``lfproc depth``.
 
-Public names: :func:`depth` (also reachable as ``lfproc.depth(lf, ...)``), :class:`DepthMap`, and
+Public names: :func:`depth` (also reachable as ``lfproc.depth(lf, ...)``), :class:`DepthMap`, :func:`summary_line` and
 :func:`write_depth_outputs` (the files of ``lfproc depth`` for one capture). Importing this package
 is light; numba and the writers load on first use.
 """
@@ -9,9 +9,9 @@ import sys
 import types
 
 from ._estimate import METHOD, DepthMap, depth
-from ._outputs import write_depth_outputs
+from ._outputs import summary_line, write_depth_outputs
 
-__all__ = ["METHOD", "DepthMap", "depth", "write_depth_outputs"]
+__all__ = ["METHOD", "DepthMap", "depth", "summary_line", "write_depth_outputs"]
 
 
 class _CallableModule(types.ModuleType):

@@ -94,6 +94,20 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     return paths
 
 
+def summary_line(depth_map) -> str:
+    """One line for a terminal: how much is known and the range of the known distances (metres)."""
+    distance = depth_map.distance_mm
+    known = ~np.isnan(distance)
+    text = f"depth known at {known.mean():.0%} of {distance.size} lenses"
+    finite = distance[np.isfinite(distance)]
+    if finite.size:
+        near, far = (float(v) / 1000.0 for v in np.percentile(finite, [1, 99]))
+        text += f", {near:.3g} to {far:.3g} m (1st to 99th percentile)"
+    if np.isinf(distance).any():
+        text += ", some at infinity"
+    return text
+
+
 def _write_float(path: str, image: np.ndarray, metadata: dict) -> str:
     """A float32 single-channel TIFF that may hold NaN and inf (``lfproc.io.write_image`` refuses them,
     rightly for pictures), with ``metadata`` embedded as JSON in ImageDescription, plus its sidecar."""
