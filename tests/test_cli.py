@@ -230,3 +230,20 @@ def test_an_a_whose_views_miss_the_image_is_refused_with_the_usable_range(sample
     assert len(warning) == 1 and "fewer than half the pixels" in warning[0]
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "1", "-o", tmp_path / "ok")
     assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+
+
+def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file(tmp_path):
+    """Lytro files carry their camera; --white-dir picks the white image, in batch as in refocus."""
+    lytro = SAMPLES / "lytro"
+    args = ["--white-dir", lytro / "caldata", "--a", "0.25,1.25"]
+    proc = run_cli("batch", lytro / "IMG_0001.lfr", *args, "--workers", "1", "-o", tmp_path / "b")
+    assert proc.returncode == 0, proc.stderr
+    assert "MOD_000" in proc.stderr and "metadata" in proc.stderr      # which white image, whose camera
+    single = run_cli("refocus", lytro / "IMG_0001.lfr", *args, "-o", tmp_path / "r")
+    assert single.returncode == 0, single.stderr
+    from lfproc.io import read_image
+    for name in ("IMG_0001_a+0.250", "IMG_0001_a+1.250"):
+        np.testing.assert_array_equal(read_image(tmp_path / "b" / f"{name}.tif"),
+                                      read_image(tmp_path / "r" / f"{name}.tif"))
+        assert json.loads((tmp_path / "b" / f"{name}.json").read_text()) == \
+            json.loads((tmp_path / "r" / f"{name}.json").read_text())
