@@ -16,7 +16,8 @@ from importlib import import_module
 from ..errors import LfprocError
 
 #: subcommand modules in the order ``lfproc --help`` lists them
-COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "batch", "demo", "info", "camera")
+COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "depth", "batch", "demo", "info",
+            "camera")
 
 
 class _Parser(argparse.ArgumentParser):
