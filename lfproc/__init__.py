@@ -24,6 +24,7 @@ _LAZY = {
     "calibrate": ("lfproc.calibrate", None),
     "decode": ("lfproc.decode", None),
     "io": ("lfproc.io", None),
+    "depth": ("lfproc.depth", "depth"),
 }
 
 __all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", *_LAZY]

@@ -16,8 +16,8 @@ from importlib import import_module
 from ..errors import LfprocError
 
 #: subcommand modules in the order ``lfproc --help`` lists them
-COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "viewer", "batch", "demo", "info",
-            "camera")
+COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer", "batch", "demo",
+            "info", "camera")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -143,7 +143,8 @@ def _process(args, jobs, manifest, camera) -> int:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
         batch.decode_setup(first_to_decode)
     if jobs[0].refocus_a:
-        describe_slices(camera, jobs[0].refocus_a, args.depth_range)
+        describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
+                        integer=args.integer, max_slices=args.max_slices)
     start = time.perf_counter()
     interrupted = False
     try:

@@ -1,0 +1,70 @@
+"""How far each estimate can be trusted: the basin of the cost and a second, independent cue.
+
+Correspondence (the variance across the views, :mod:`._cost`) is precise where there is texture.
+Where there is none its cost is flat: the basin (:mod:`._refine`) is wide. The confidence of an
+estimate compares the basin's half-width ``s`` with half the DOF ``h`` of the slice at that ``a``
+(the depth resolution the camera itself has there, Eqs. 23–31):
+
+    confidence_corr = 1 / (1 + (s / h)²)
+
+The *defocus* cue — the sharpest slice of the refocused stack by its local gradient energy — comes
+from the same sweep at no extra cost and fails differently (it sees contrast, not agreement between
+views). Where both agree within the DOF the estimate stands; the further they disagree the lower the
+confidence:
+
+    confidence = confidence_corr / (1 + (Δ / 2h)⁴),   Δ = |a_corr − a_defocus|
+
+Estimates below :data:`MIN_CONFIDENCE`, or whose best slice is an end of the sweep, are unknown (NaN).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._refine import aggregate, refine_minimum
+from ._search import dof_half_width_a
+
+#: estimates less confident than this are reported as unknown (NaN)
+MIN_CONFIDENCE = 0.1
+
+#: contrast (relative to the median luminance) below which a texture counts as absent
+NOISE_CONTRAST = 0.01
+
+
+def cost_floor(luminance: np.ndarray) -> float:
+    """The cost (a variance) of a texture of :data:`NOISE_CONTRAST` relative contrast."""
+    level = float(np.median(luminance)) if luminance.size else 0.0
+    return (NOISE_CONTRAST * max(level, 1e-12)) ** 2
+
+
+def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
+    """The ``a`` of the sharpest slice per lens: largest aggregated gradient energy of the refocused luminance
+    (``(K, Ny, Nx)``), refined between slices like the correspondence cost."""
+    energy = np.zeros_like(luminance)
+    if luminance.shape[1] > 1:      # squared forward differences, each shared by the two lenses it joins
+        d = np.diff(luminance, axis=1)
+        d *= d
+        energy[:, 1:] += d
+        energy[:, :-1] += d
+    if luminance.shape[2] > 1:
+        d = np.diff(luminance, axis=2)
+        d *= d
+        energy[:, :, 1:] += d
+        energy[:, :, :-1] += d
+    energy = aggregate(energy)
+    np.subtract(energy.max(), energy, out=energy)
+    return refine_minimum(energy, a_values, 0.0).a
+
+
+def confidence(a_corr: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, a_defocus: np.ndarray,
+               center_index: int, resolution: float = 1.0) -> np.ndarray:
+    """The confidence (0–1) of each estimate (module docstring); ``resolution`` > 1 widens ``h`` for a
+    sweep on a coarser lens grid (binned b × b lenses see b times less parallax per unit of ``a``)."""
+    h = dof_half_width_a(a_corr, center_index) * resolution
+    with np.errstate(invalid="ignore"):
+        spread = np.maximum(a_corr - a_low, a_high - a_corr)
+        corr = 1.0 / (1.0 + (spread / h) ** 2)
+        corr = np.where(np.isfinite(spread), corr, 0.0)
+        delta = np.abs(a_corr - a_defocus)
+        agreement = 1.0 / (1.0 + (delta / (2.0 * h)) ** 4)
+    return np.nan_to_num(corr * agreement).astype(np.float32)

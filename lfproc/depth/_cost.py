@@ -1,0 +1,172 @@
+"""Matching cost of a sweep over the refocus parameter ``a``: the spread of the views behind each lens.
+
+For a scene point in focus at ``a`` every view ``k`` shows it at lens ``j + a·(c − k)`` (the contract's
+centred Eq. 9), so the samples that the refocused slice ``a`` averages all agree there: their variance
+across the views is only noise. Out of focus they sample different points and the variance grows
+(the *correspondence* cue). The variance is ``E[Y²] − E[Y]²`` over the views, and both means are what
+:func:`lfproc.refocus` computes when it refocuses a light field whose channels are ``Y`` and ``Y²``:
+the whole cost volume is one call of the fused multi-slice kernel, one pass over the views.
+
+Views outside the main lens aperture carry no light, and the decoder delivers views it cannot sample
+without bias as 0 everywhere (:func:`delivered_views`); these get weight 0: the refocused channels are ``w·Y`` and ``w·Y²``, and the mean weight of the views
+that count at each lens (a function of the geometry only, :func:`mean_view_weight`) normalises them.
+With many views a sub-lattice of every ``step``-th view around the central one is used: the same
+baseline at a fraction of the cost, its refocus parameter ``step·a``. The outer ring of views is left
+out by default (its samples straddle the border of the micro image: crosstalk after decoding).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: luminance weights (Rec. 709) for colour light fields
+LUMA_WEIGHTS = np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
+
+#: view samples (views × lenses) above which the sweep uses every second view (or more)
+FULL_VIEW_BUDGET = 20_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class CostVolume:
+    """The sweep's cost and refocused luminance, both ``(K, Ny, Nx)`` float32, at refocus parameters ``a``."""
+
+    a: np.ndarray           # (K,) float64, increasing
+    cost: np.ndarray        # variance of the views' luminance behind each lens, per slice
+    luminance: np.ndarray   # the refocused luminance (the slice itself), per slice
+    view_step: int
+
+
+def auto_view_step(reach: int, lens_count: int) -> int:
+    """The smallest view step whose views (offsets up to ``reach`` from the centre) stay within
+    :data:`FULL_VIEW_BUDGET` samples."""
+    for step in range(1, max(reach, 1) + 1):
+        n = 2 * (reach // step) + 1
+        if n * n * lens_count <= FULL_VIEW_BUDGET or n <= 3:
+            return step
+    return 1
+
+
+def delivered_views(views: np.ndarray, rows: int = 16) -> np.ndarray:
+    """``(m̂, m̂)`` booleans: views that carry a signal. The decoder delivers views it cannot sample without
+    bias (and views outside the aperture) as 0 everywhere; ``rows`` evenly spread lens rows are enough to
+    tell."""
+    sample = views[:, :, ::max(1, views.shape[2] // rows)]
+    return np.any(sample != 0, axis=tuple(range(2, views.ndim)))
+
+
+def luminance(views: np.ndarray) -> np.ndarray:
+    """``(…, C)`` float32 → ``(…)`` float32: Rec. 709 luma for three channels, the mean otherwise."""
+    if views.shape[-1] == 3:
+        return np.tensordot(views, LUMA_WEIGHTS, axes=([-1], [0])).astype(np.float32, copy=False)
+    return views.mean(axis=-1, dtype=np.float32)
+
+
+def picked_views(m_hat: int, view_step: int, reach: int | None = None) -> np.ndarray:
+    """Indices ``c + step·t`` with ``|step·t| ≤ reach`` (default c) of the views the sweep uses."""
+    c = (m_hat - 1) // 2
+    reach = c if reach is None else min(int(reach), c)
+    half = reach // view_step
+    return c + view_step * np.arange(-half, half + 1)
+
+
+@dataclass(frozen=True, eq=False)
+class SweepLuminance:
+    """The luminance of the views a sweep uses, computed once for the coarse and the fine sweep.
+
+    ``y`` is ``(n, n, Ny, Nx)`` float32 for the views ``picked`` (:func:`picked_views`), ``weight`` their
+    ``(n, n)`` weights (``None`` = all 1), and a sweep at refocus parameter ``a`` shifts them by
+    ``view_step·a`` per step of the sub-lattice.
+    """
+
+    y: np.ndarray
+    weight: np.ndarray | None
+    view_step: int
+
+
+def sweep_luminance(views: np.ndarray, view_step: int = 1, reach: int | None = None,
+                    view_weight: np.ndarray | None = None) -> SweepLuminance:
+    """Luminance and weights of the views ``c + step·t``, ``|step·t| ≤ reach`` (:func:`picked_views`)."""
+    picked = picked_views(views.shape[0], view_step, reach)
+    weight = None if view_weight is None else np.asarray(view_weight, dtype=np.float32)[np.ix_(picked, picked)]
+    if weight is not None and np.all(weight == 1):
+        weight = None
+    return SweepLuminance(luminance(views[np.ix_(picked, picked)]), weight, int(view_step))
+
+
+def sweep_views(sweep: SweepLuminance, bin_lenses: int = 1) -> np.ndarray:
+    """The light field a sweep refocuses: channels ``w·Y`` and ``w·Y²``; with ``bin_lenses`` = b the
+    luminance is first averaged over b × b lenses (a coarser lens grid, on which parallax is a/b)."""
+    y = sweep.y
+    if bin_lenses > 1:
+        b = bin_lenses
+        n, _, ny, nx = y.shape
+        y = y[:, :, :ny // b * b, :nx // b * b].reshape(n, n, ny // b, b, nx // b, b).mean(axis=(3, 5))
+    out = np.empty(y.shape + (2,), dtype=np.float32)
+    np.multiply(y, y, out=out[..., 1])
+    out[..., 0] = y
+    if sweep.weight is not None:
+        w = sweep.weight[:, :, None, None]
+        out[..., 0] *= w
+        out[..., 1] *= w
+    return out
+
+
+def mean_view_weight(a_scaled, weight: np.ndarray, ny: int, nx: int) -> np.ndarray:
+    """``(K, Ny, Nx)``: the mean of ``weight[ky, kx]`` over the views that count at each lens in slice ``a``.
+
+    A view counts where its sample position ``j + a·(c − k)`` lies in ``[0, N − 1]`` on both axes (the
+    contract's rule, separable), so the weighted sum is ``inside_y(k_y, j_y)ᵀ · W · inside_x(k_x, j_x)``
+    and the count the product of the per-axis counts: two small matrix products per slice.
+    """
+    m = weight.shape[0]
+    c = (m - 1) // 2
+    shifts = np.asarray(a_scaled, dtype=np.float64)[:, None] * (c - np.arange(m))[None, :]
+    nearest = np.round(shifts)
+    shifts = np.where(np.abs(shifts - nearest) < 1e-9, nearest, shifts)   # refocus's snapping
+
+    def inside(n):
+        pos = np.arange(n)[None, None, :] + shifts[:, :, None]
+        return ((pos >= 0) & (pos <= n - 1)).astype(np.float64)          # (K, m, n)
+
+    iy, ix = inside(ny), inside(nx)
+    total = np.einsum("kan,ab,kbm->knm", iy, weight.astype(np.float64), ix, optimize=True)
+    count = iy.sum(axis=1)[:, :, None] * ix.sum(axis=1)[:, None, :]
+    return (total / count).astype(np.float32)
+
+
+def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear",
+                bin_lenses: int = 1) -> CostVolume:
+    """Variance across the views behind every lens for each refocus parameter (one fused refocus call).
+
+    Parameters
+    ----------
+    sweep : SweepLuminance
+        The views' luminance (:func:`sweep_luminance`).
+    a_values : sequence of float
+        Refocus parameters of the sweep.
+    interpolation : str
+        Interpolation of the refocus kernel between lenses.
+    bin_lenses : int
+        Sweep on lenses binned b × b (:func:`sweep_views`); the volume is on that coarser grid.
+
+    Returns
+    -------
+    CostVolume
+    """
+    from ..refocus import refocus
+
+    a = np.asarray(a_values, dtype=np.float64)
+    shift = a * sweep.view_step / bin_lenses
+    stack = refocus(sweep_views(sweep, bin_lenses), shift, interpolation=interpolation)
+    mean, mean_sq = stack[..., 0], stack[..., 1]
+    if sweep.weight is not None:
+        weight = mean_view_weight(shift, sweep.weight, *mean.shape[1:])
+        np.maximum(weight, np.float32(1e-6), out=weight)
+        mean /= weight
+        mean_sq /= weight
+    cost = mean_sq
+    cost -= mean * mean
+    np.maximum(cost, np.float32(0), out=cost)
+    return CostVolume(a, cost, mean, sweep.view_step)

@@ -1,0 +1,138 @@
+"""The files of ``lfproc depth`` for one capture (contract, ARCHITECTURE.md), each with its sidecar.
+
+* ``STEM_depth.tif`` — float32, one channel, mm from the sensor, NaN = unknown (``inf`` = infinity);
+* ``STEM_depth_confidence.tif`` — float32, 0–1;
+* ``STEM_allfocus.tif`` — float32 linear, the light field's channels;
+* ``STEM_depth_preview.png`` — colour-mapped depth with a legend in metres;
+* ``STEM_depth_points.ply`` — the point cloud (optional).
+
+Every image embeds the same metadata as its sidecar ``NAME.json`` (``source``, ``unit``, ``method``,
+the searched range …). Everything is written atomically; a failure leaves no partial file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+#: output name suffixes
+DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence.tif", "_allfocus.tif",
+                                                "_depth_preview.png", "_depth_points.ply")
+
+
+def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
+                        depth_range_mm=None, point_cloud: bool = True, **depth_options) -> dict:
+    """Compute (unless ``depth_map`` is given) and write the depth outputs of one light field.
+
+    Parameters
+    ----------
+    outdir : str or path
+        Output folder (created if needed).
+    stem : str
+        File name prefix, e.g. the capture's name.
+    lf : LightField
+        The decoded light field (its camera gives the geometry unless ``camera`` is given).
+    depth_map : DepthMap, optional
+        An estimate already made by :func:`lfproc.depth`; computed here otherwise.
+    source : str, optional
+        The capture's path, recorded in every file's metadata.
+    depth_range_mm : (near, far), optional
+        Passed to :func:`lfproc.depth`.
+    point_cloud : bool
+        Also write ``STEM_depth_points.ply``.
+    **depth_options
+        Further keyword arguments of :func:`lfproc.depth`.
+
+    Returns
+    -------
+    dict
+        ``{"depth", "confidence", "allfocus", "preview"[, "points"]}`` → path written, and
+        ``"depth_map"`` → the :class:`DepthMap`.
+    """
+    from ..io import write_image, write_sidecar
+    from ._estimate import depth
+    from ._pointcloud import point_cloud as make_points
+    from ._pointcloud import write_ply
+    from ._preview import write_preview
+
+    camera = camera if camera is not None else lf.camera
+    if depth_map is None:
+        depth_map = depth(lf, depth_range_mm=depth_range_mm, camera=camera, **depth_options)
+    outdir = os.fspath(outdir)
+    os.makedirs(outdir, exist_ok=True)
+    common = dict(source=source, camera=camera.name if camera is not None else None, **depth_map.metadata())
+    if depth_range_mm is not None:
+        common["depth_range_mm"] = [float(v) for v in depth_range_mm]
+    known = np.isfinite(depth_map.distance_mm) | np.isinf(depth_map.distance_mm)
+    paths = {}
+    meta = dict(common, unit="mm", content="distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
+                known_fraction=float(known.mean()) if known.size else 0.0)
+    paths["depth"] = _write_float(os.path.join(outdir, stem + DEPTH), depth_map.distance_mm, meta)
+    meta = dict(common, unit="1", content="confidence of the depth, 0 (nothing known) to 1")
+    paths["confidence"] = _write_float(os.path.join(outdir, stem + CONFIDENCE), depth_map.confidence, meta)
+    meta = dict(common, unit="linear radiance", content="all-in-focus image: each lens from the slice sharp at its depth")
+    path = os.path.join(outdir, stem + ALLFOCUS)
+    write_image(path, depth_map.allfocus, meta, "tiff")
+    write_sidecar(path, meta)
+    paths["allfocus"] = path
+    meta = dict(common, unit="m", content="colour-mapped depth (red near, blue far, grey unknown), legend in metres")
+    path = os.path.join(outdir, stem + PREVIEW)
+    write_preview(path, depth_map.distance_mm)
+    write_sidecar(path, meta)
+    paths["preview"] = path
+    if point_cloud and camera is not None:
+        points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.distance_mm, depth_map.allfocus)
+        path = os.path.join(outdir, stem + POINTS)
+        meta = dict(common, unit="mm", content="x, y: object-space position from the optical axis; z: distance from "
+                    "the sensor (central view's chief ray through each lens, Eqs. 13-21)", points=len(points))
+        write_ply(path, points, rgb, comment=f"lfproc depth point cloud, mm; source {source}")
+        write_sidecar(path, meta)
+        paths["points"] = path
+    paths["depth_map"] = depth_map
+    return paths
+
+
+def summary_line(depth_map) -> str:
+    """One line for a terminal: how much is known and the range of the known distances (metres)."""
+    distance = depth_map.distance_mm
+    known = ~np.isnan(distance)
+    text = f"depth known at {known.mean():.0%} of {distance.size} lenses"
+    finite = distance[np.isfinite(distance)]
+    if finite.size:
+        near, far = (float(v) / 1000.0 for v in np.percentile(finite, [1, 99]))
+        text += f", {near:.3g} to {far:.3g} m (1st to 99th percentile)"
+    if np.isinf(distance).any():
+        text += ", some at infinity"
+    return text
+
+
+def _write_float(path: str, image: np.ndarray, metadata: dict) -> str:
+    """A float32 single-channel TIFF that may hold NaN and inf (``lfproc.io.write_image`` refuses them,
+    rightly for pictures), with ``metadata`` embedded as JSON in ImageDescription, plus its sidecar."""
+    import OpenImageIO as oiio
+
+    from ..atomic import atomic_path, json_safe
+    from ..errors import LfprocError
+    from ..io import write_sidecar
+
+    pixels = np.ascontiguousarray(np.asarray(image, dtype=np.float32)[:, :, None])
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 1, "float")
+    spec.attribute("Software", "lfproc")
+    spec.attribute("DateTime", "")
+    spec.attribute("Compression", "none")   # as lfproc.io writes float TIFFs: any TIFF reader opens them
+    spec.attribute("ImageDescription", json.dumps(json_safe(metadata), allow_nan=False))
+    for key in ("unit", "source", "method"):
+        if metadata.get(key) is not None:
+            spec.attribute(f"lfproc:{key}", str(metadata[key]))
+    with atomic_path(path) as tmp:
+        out = oiio.ImageOutput.create(tmp)
+        if out is None or not out.open(tmp, spec):
+            raise LfprocError(f"{path}: cannot write ({oiio.geterror()}); check that the folder is writable")
+        ok = out.write_image(pixels)
+        ok = out.close() and ok
+        if not ok:
+            raise LfprocError(f"{path}: writing failed; check the free disk space and permissions")
+    write_sidecar(path, metadata)
+    return path

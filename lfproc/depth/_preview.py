@@ -1,0 +1,115 @@
+"""A colour-mapped preview of a depth map with a legend in metres (numpy and Pillow only).
+
+Colour follows the inverse distance (proportional to the refocus parameter and to disparity, so equal
+steps of colour are equal steps of parallax): red near, blue far; unknown lenses are grey. The
+legend is a colour bar with its ticks labelled in metres from the sensor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: the colour ramp from far to near (RGB 0–255 anchors, interpolated linearly)
+RAMP = np.array([[40, 30, 120], [30, 90, 200], [20, 170, 210], [60, 200, 120], [200, 220, 50],
+                 [250, 150, 30], [210, 40, 30]], dtype=np.float64)
+UNKNOWN_RGB = (128, 128, 128)
+
+#: the preview's depth map is enlarged (nearest) to about this many pixels on its long side
+TARGET_SIZE_PX = 480
+
+
+def colour_map(t: np.ndarray) -> np.ndarray:
+    """``t`` in [0, 1] (0 far, 1 near) → uint8 RGB ``t.shape + (3,)``."""
+    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0) * (len(RAMP) - 1)
+    i = np.minimum(np.floor(t).astype(np.int64), len(RAMP) - 2)
+    f = (t - i)[..., None]
+    return np.round((1.0 - f) * RAMP[i] + f * RAMP[i + 1]).astype(np.uint8)
+
+
+def display_range_mm(distance_mm: np.ndarray) -> tuple[float, float]:
+    """Nearest and farthest distance shown: the 1st and 99th percentile of the known distances."""
+    known = distance_mm[np.isfinite(distance_mm)]
+    if known.size == 0:
+        return (1000.0, 2000.0) if not np.isinf(distance_mm).any() else (1000.0, math.inf)
+    near, far = (float(v) for v in np.percentile(known, [1, 99]))
+    if np.isinf(distance_mm).any():
+        far = math.inf
+    if far <= near:
+        far = near * 1.1
+    return near, far
+
+
+def _nice_ticks(near_mm: float, far_mm: float, count: int = 5) -> list[float]:
+    """Round distances (mm) spread evenly in inverse distance between near and far."""
+    inv_near, inv_far = 1.0 / near_mm, (0.0 if math.isinf(far_mm) else 1.0 / far_mm)
+    ticks = []
+    for inv in np.linspace(inv_near, inv_far, count):
+        if inv <= 0:
+            ticks.append(math.inf)
+            continue
+        d = 1.0 / inv
+        digits = 1 - math.floor(math.log10(d / 1000.0))
+        value = round(d / 1000.0, max(digits, 0)) * 1000.0
+        if near_mm <= value <= far_mm and value not in ticks:
+            ticks.append(value)
+    return ticks
+
+
+def _label(distance_mm: float) -> str:
+    if math.isinf(distance_mm):
+        return "inf"
+    metres = distance_mm / 1000.0
+    return f"{metres:.3g} m"
+
+
+def preview_image(distance_mm: np.ndarray) -> np.ndarray:
+    """uint8 RGB ``(H, W, 3)``: the enlarged colour-mapped depth map with a legend on its right."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    near, far = display_range_mm(distance_mm)
+    inv_near, inv_far = 1.0 / near, (0.0 if math.isinf(far) else 1.0 / far)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (1.0 / distance_mm - inv_far) / (inv_near - inv_far)
+    rgb = colour_map(np.nan_to_num(t))
+    rgb[np.isnan(distance_mm)] = UNKNOWN_RGB
+    ny, nx = distance_mm.shape
+    scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
+    body = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
+    height = max(body.shape[0], 160)
+    bar_w, margin, label_w = 18, 10, 80
+    canvas = Image.new("RGB", (body.shape[1] + margin + bar_w + label_w, height + 2 * margin), (255, 255, 255))
+    canvas.paste(Image.fromarray(body), (0, margin))
+    bar_h = height - 24
+    bar_t = np.linspace(1.0, 0.0, bar_h)[:, None].repeat(bar_w, axis=1)   # near at the top
+    x0, y0 = body.shape[1] + margin, margin + 12
+    canvas.paste(Image.fromarray(colour_map(bar_t)), (x0, y0))
+    draw = ImageDraw.Draw(canvas)
+    font = ImageFont.load_default()
+    draw.text((x0, margin - 8), "distance", fill=(0, 0, 0), font=font)
+    drawn: list[int] = []
+    for tick in [near, far] + _nice_ticks(near, far):   # the ends first, then round values between
+        inv = 0.0 if math.isinf(tick) else 1.0 / tick
+        y = y0 + round((1.0 - (inv - inv_far) / (inv_near - inv_far)) * (bar_h - 1))
+        if any(abs(y - other) < 14 for other in drawn):
+            continue
+        drawn.append(y)
+        draw.line([(x0 + bar_w, y), (x0 + bar_w + 4, y)], fill=(0, 0, 0))
+        draw.text((x0 + bar_w + 6, y - 5), _label(tick), fill=(0, 0, 0), font=font)
+    draw.text((x0, y0 + bar_h + 2), "grey: unknown", fill=(80, 80, 80), font=font)
+    return np.asarray(canvas)
+
+
+def write_preview(path: str, distance_mm: np.ndarray) -> None:
+    """Write :func:`preview_image` as an 8-bit PNG, atomically."""
+    from PIL import Image
+
+    from ..atomic import atomic_path
+    from ..errors import LfprocError
+
+    try:
+        with atomic_path(path, suffix=".png") as tmp:
+            Image.fromarray(preview_image(distance_mm)).save(tmp, format="PNG")
+    except OSError as exc:
+        raise LfprocError(f"{path}: cannot write ({exc.strerror or exc}); check the folder and permissions") from None
