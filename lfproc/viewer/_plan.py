@@ -12,7 +12,7 @@ from ..errors import LfprocError
 #: most slices on one page (a wider plan is thinned evenly in a)
 MAX_SLICES = 48
 def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
-    """The fewest slices whose DOFs cover the scene (:func:`lfproc.geometry.plan_slices`, as ``--depth-range``).
+    """The fewest slices whose DOFs cover the scene (:func:`lfproc.geometry.plan_depth_range`, as ``--depth-range``).
 
     The scene's range is the 2nd to 98th percentile of the refocus parameter of the lenses whose
     depth is known with at least ``focus.min_confidence`` (the whole sweep if fewer than 10 are),
@@ -27,9 +27,11 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     far = math.inf if a_lo <= a_inf else geometry.slice_distance_mm(camera, a_lo)
     near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
     near = min(near, far) if math.isfinite(near) else geometry.slice_distance_mm(camera, a_inf + 1.0)
-    try:
-        planned = geometry.plan_slices(camera, near, far, max_slices=4 * max_slices)
-    except LfprocError:  # DOFs that shrink to nothing (the model's singularity near a = -1): even steps in a
+    try:  # covers what can be covered (DOFs that shrink to nothing are left out, far part first)
+        planned = geometry.plan_depth_range(camera, near, far, max_slices=4 * max_slices).a
+    except LfprocError:  # nothing coverable: even steps in a
+        planned = np.array([])
+    if len(planned) == 0:
         planned = np.linspace(a_lo, a_hi, int(np.clip(np.ceil((a_hi - a_lo) * c) + 1, 2, max_slices)))
     if len(planned) > max_slices:
         planned = np.linspace(planned[0], planned[-1], max_slices)
