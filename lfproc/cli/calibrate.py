@@ -20,8 +20,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    import math
+    import sys
+
     from ..atomic import write_json_atomic
-    from ..calibrate import find_grid
+    from ..calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
     from ..camera import Camera
     from ..io import read_capture
 
@@ -34,14 +37,24 @@ def run(args) -> int:
     estimate = find_grid(capture.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=cfa,
                          source=args.white)
     grid = estimate.grid
+    pupil = implied_exit_pupil(grid.pitch_px, estimate.pitch_sigma_px, camera)
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
-                  camera=os.path.abspath(args.camera))
+                  camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,
+                  micro_image_scale=pupil.scale, micro_image_scale_sigma=pupil.scale_sigma,
+                  # null: the scale is at most 1, i.e. telecentric (or beyond) within the fit
+                  implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm)
     write_json_atomic(args.output, record)
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
+    warnings = list(estimate.warnings)
+    warnings.append(exit_pupil_warning(args.white, pupil, camera.exit_pupil_distance_mm))
+    for line in filter(None, warnings):
+        print(f"lfproc calibrate: {line}", file=sys.stderr)
+    implied = "telecentric" if math.isinf(pupil.distance_mm) else f"{pupil.distance_mm:.1f} mm"
     print(f"{args.output}: {grid.kind} grid of {grid.rows} x {grid.cols} lenses, pitch {grid.pitch_px:.4f} px, "
           f"rotation {grid.rotation_deg:.4f} deg, residual RMS {grid.residual_rms_px:.4f} px "
-          f"({int(estimate.inlier.sum())} lenses fitted)")
+          f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
+          f"micro image scale {pupil.scale:.6f} (exit pupil {implied})")
     return 0
 
 
