@@ -24,7 +24,7 @@ from ._lattice import LatticeModel, neighbour_lattice, robust_fit
 from ._lattice_guess import central_crop, lattice_guess_from_autocorrelation
 from ._measure import measure_window, plan_windows
 from ._monochrome import check_white
-from ._smooth_fit import best_smooth_fit, rms
+from ._smooth_fit import MIN_DEGREE, best_smooth_fit, cross_validated_rms, rms, robust_smooth_fit
 
 #: fewest well-measured lenses a lattice fit accepts
 MIN_LENSES = 6
@@ -174,22 +174,25 @@ def _fit_at_pitch(arr, cfa, pitch0, kind, approx_pitch_px, smoothing, source, re
 
 
 def _choose_model(xy, st, indexed, center, half) -> tuple[LatticeModel, np.ndarray, float]:
-    """The rigid lattice where it fits; a smooth one where that removes a clear part of its residual.
+    """The rigid lattice where it fits; a smooth one where that predicts the centres clearly better.
 
     The rigid fit is suspect when its inlier RMS exceeds `RIGID_SUSPECT_RMS_PX` or it rejects over 5 %
-    of the indexed centres; then the smooth fit wins if the rigid lattice's RMS over the smooth fit's
-    inliers is more than 1.25 times the smooth one's (and 0.005 px more).
+    of the indexed centres; then smooth fits are scored against it by cross-validation (`_smooth_fit`)
+    over the indexed centres: the smooth one wins if its score is below 0.8 times the rigid one's.
     """
     rigid, inlier = robust_fit(xy, st, indexed)
     rigid_model = LatticeModel(rigid)
     residual = rms(rigid_model, xy, st, inlier)
     if residual <= RIGID_SUSPECT_RMS_PX and inlier.sum() >= 0.95 * indexed.sum():
         return rigid_model, inlier, residual
-    smooth, smooth_inlier, smooth_residual = best_smooth_fit(xy, st, indexed, center, half)
-    rigid_there = rms(rigid_model, xy, st, smooth_inlier)
-    if rigid_there > 1.25 * smooth_residual + 0.005 and smooth_inlier.sum() >= MIN_LENSES:
-        return smooth, smooth_inlier, smooth_residual
-    return rigid_model, inlier, residual
+    # score the rigid lattice on the centres a smooth fit would keep (its own inliers drop the drift)
+    loose, _ = robust_smooth_fit(xy, st, indexed, MIN_DEGREE, center, half)
+    residual_loose = np.hypot(*(xy - loose.xy(st)).T)
+    kept = indexed & (residual_loose <= max(4.0 * float(np.median(residual_loose[indexed])) / 1.1774, 0.01))
+    smooth = best_smooth_fit(xy, st, kept, center, half, cross_validated_rms(xy, st, kept, 0, center, half))
+    if smooth is None or smooth[1].sum() < MIN_LENSES:
+        return rigid_model, inlier, residual
+    return smooth[0], smooth[1], smooth[2]
 
 
 def _pitch_sigma(model: LatticeModel, xy, st, inlier, residual) -> float:

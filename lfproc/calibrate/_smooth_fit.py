@@ -5,7 +5,10 @@ drifts from 7.4 to 8.0 px across the sensor. The lens centres are then modelled 
 best rigid lattice position and D a 2-D Legendre series (`lfproc.grid.SmoothDeviation`) in the
 normalised sensor position. The rigid part and D together are a polynomial of the lattice
 coordinates, so fitting the similarity first and D to its residuals is the joint least-squares fit.
-The degree is the lowest whose residual comes within 10 % of the best degree's (at most `MAX_DEGREE`).
+Each candidate (rigid = degree 0, or degree 2 … `MAX_DEGREE`) is scored by its 5-fold cross-validated
+RMS over its inliers (the error of predicting centres it was not fitted to), so a polynomial that
+follows the noise of few lenses scores worse than the rigid lattice; the lowest degree within 5 % of the
+best score wins.
 """
 
 from __future__ import annotations
@@ -73,21 +76,38 @@ def rms(model: LatticeModel, xy: np.ndarray, st: np.ndarray, inlier: np.ndarray)
     return float(np.sqrt(np.mean(np.sum((xy[inlier] - model.xy(st[inlier])) ** 2, axis=1))))
 
 
-def best_smooth_fit(xy: np.ndarray, st: np.ndarray, usable: np.ndarray, center,
-                    half) -> tuple[LatticeModel, np.ndarray, float]:
-    """The smooth fit of the lowest degree whose inlier RMS is within 10 % of the best degree's.
+def cross_validated_rms(xy: np.ndarray, st: np.ndarray, inlier: np.ndarray, degree: int, center, half,
+                        folds: int = 5) -> float:
+    """RMS of each inlier's distance from the model fitted (plainly) to the other folds' inliers."""
+    idx = np.flatnonzero(inlier)
+    fold = np.random.default_rng(0).permutation(len(idx)) % folds
+    squared = np.empty(len(idx))
+    for k in range(folds):
+        train, test = idx[fold != k], idx[fold == k]
+        rigid = fit_similarity(xy[train], st[train])
+        p = rigid.xy(st[train])
+        deviation = fit_deviation(p, xy[train] - p, degree, center, half) if degree > 0 else None
+        model = LatticeModel(rigid, deviation)
+        squared[fold == k] = np.sum((xy[test] - model.xy(st[test])) ** 2, axis=1)
+    return float(np.sqrt(np.mean(squared)))
 
-    Degrees run from `MIN_DEGREE` to `MAX_DEGREE`, as far as 5 centres per coefficient allow.
-    Returns the model, its inliers and their RMS.
+
+def best_smooth_fit(xy: np.ndarray, st: np.ndarray, usable: np.ndarray, center, half,
+                    rigid_score: float) -> tuple[LatticeModel, np.ndarray, float, float] | None:
+    """The best-scoring smooth fit (module docstring), or ``None`` when none beats ``rigid_score`` by 20 %.
+
+    Degrees run from `MIN_DEGREE` to `MAX_DEGREE`, as far as 10 centres per coefficient allow.
+    Returns the model, its inliers, their RMS and its cross-validated score.
     """
     fits = []
     for degree in range(MIN_DEGREE, MAX_DEGREE + 1):
-        if usable.sum() < 5 * len(_terms(degree)):
+        if usable.sum() < 10 * len(_terms(degree)):
             break
         model, inlier = robust_smooth_fit(xy, st, usable, degree, center, half)
-        fits.append((model, inlier, rms(model, xy, st, inlier)))
+        score = cross_validated_rms(xy, st, inlier, degree, center, half)
+        fits.append((model, inlier, rms(model, xy, st, inlier), score))
+    fits = [f for f in fits if f[3] < 0.8 * rigid_score]
     if not fits:
-        model, inlier = robust_smooth_fit(xy, st, usable, 1, center, half)
-        return model, inlier, rms(model, xy, st, inlier)
-    best = min(f[2] for f in fits)
-    return next(f for f in fits if f[2] <= 1.1 * best)
+        return None
+    best = min(f[3] for f in fits)
+    return next(f for f in fits if f[3] <= 1.05 * best)
