@@ -53,13 +53,16 @@ def grid_from_fit(kind: str, model, index: np.ndarray, shape, rms: float) -> Len
     index = index[on_sensor]
     for _ in range(64):  # each round drops one edge row or column
         grid, rows_from_top, q = _rectangle(kind, model, index, rms)
-        centres = grid.centers_xy_px()
-        off = ((centres[..., 0] < -0.5) | (centres[..., 0] > w - 0.5)
-               | (centres[..., 1] < -0.5) | (centres[..., 1] > h - 0.5))
-        if not off.any() or grid.rows < 2 or grid.cols < 2:
+        last_row, last_col = grid.rows - 1, grid.cols - 1
+        cols, rows = np.arange(grid.cols), np.arange(grid.rows)
+        edges = []
+        for row, col, mask in ((0, cols, rows_from_top == 0), (last_row, cols, rows_from_top == last_row),
+                               (rows, 0, q == 0), (rows, last_col, q == last_col)):
+            xy = grid.lens_xy(row, col)  # only the edges: inner lenses lie between them
+            off = (xy[:, 0] < -0.5) | (xy[:, 0] > w - 0.5) | (xy[:, 1] < -0.5) | (xy[:, 1] > h - 0.5)
+            edges.append((int(off.sum()), mask))
+        if max(e[0] for e in edges) == 0 or grid.rows < 2 or grid.cols < 2:
             return grid
-        edges = [(off[0].sum(), rows_from_top == 0), (off[-1].sum(), rows_from_top == grid.rows - 1),
-                 (off[:, 0].sum(), q == 0), (off[:, -1].sum(), q == grid.cols - 1)]
         index = index[~max(edges, key=lambda e: e[0])[1]]
     return grid
 

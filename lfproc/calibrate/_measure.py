@@ -2,7 +2,7 @@
 
 A white image of 41 Mpx holds some 230,000 micro images; a lattice fit needs a few thousand spread over
 the sensor. The image is therefore measured in a 5 × 5 layout of windows (the whole image when all its
-lenses fit the budget), each read from the white image itself: monochrome conversion, outlier repair,
+lenses fit `WHOLE_IMAGE_BUDGET`), each read from the white image itself: monochrome conversion, outlier repair,
 flattening, candidates and sub-pixel centring (steps 1, 3 and 4) never touch a full-size copy. A
 window has a margin of 3 pitches beyond its core, in which no centre is kept, so the smoothing of
 step 3 sees the same neighbourhood as in the whole image.
@@ -19,8 +19,10 @@ from ._flatten import candidate_centres, flatten
 from ._monochrome import mono_window, repair_outlier_pixels
 from ._symmetry_centres import refine_centres, symmetric_offsets
 
-#: symmetric sample pairs × lenses refined per image (bounds the time of step 4 whatever the size)
-SAMPLE_BUDGET = 2_500_000
+#: the whole image is measured when its lenses × symmetric sample pairs stay below this
+WHOLE_IMAGE_BUDGET = 1_500_000
+#: otherwise the windows together hold about this many lenses × pairs (bounds the time of step 4)
+WINDOW_BUDGET = 150_000
 #: windows per side when the image holds more lenses than the budget
 WINDOWS_PER_SIDE = 5
 
@@ -62,11 +64,11 @@ def plan_windows(shape, pitch: float, kind: str | None) -> list[Window]:
     h, w = shape
     pairs = len(symmetric_offsets(pitch)[0])
     cell = pitch * pitch * (math.sqrt(3.0) / 2.0 if kind == "hexagonal" else 1.0)
-    budget_lenses = SAMPLE_BUDGET / max(pairs, 1)
-    if h * w / cell <= budget_lenses:
+    if h * w / cell * pairs <= WHOLE_IMAGE_BUDGET:
         return [Window(0, h, 0, w, (0, h, 0, w))]
+    budget_lenses = WINDOW_BUDGET / max(pairs, 1)
     n = WINDOWS_PER_SIDE
-    side = max(math.sqrt(budget_lenses / (n * n) * cell), 8.0 * pitch)
+    side = max(math.sqrt(budget_lenses / (n * n) * cell), 6.0 * pitch)
     margin = int(math.ceil(3.0 * pitch)) + 2
     windows = []
     for fy in (np.arange(n) + 0.5) / n:

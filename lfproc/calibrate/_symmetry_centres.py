@@ -73,8 +73,11 @@ def refine_centres(smooth: np.ndarray, xy: np.ndarray, pitch: float, blur_varian
     for first in range(0, len(out), per_chunk):
         c = out[first:first + per_chunk].copy()
         g = np.zeros_like(c)
+        active = np.arange(len(c))  # lenses still moving: converged ones are not evaluated again
         for _ in range(iterations):
-            r, jac, w, _ = _symmetry_terms(coeffs, gradients, c, g, d, m)
+            if active.size == 0:
+                break
+            r, jac, w, _ = _symmetry_terms(coeffs, gradients, c[active], g[active], d, m)
             normal = np.einsum("nk,nki,nkj->nij", w, jac, jac)
             rhs = np.einsum("nk,nki,nk->ni", w, jac, r)
             trace = np.trace(normal, axis1=1, axis2=2)
@@ -86,10 +89,9 @@ def refine_centres(smooth: np.ndarray, xy: np.ndarray, pitch: float, blur_varian
             step = delta[:, :2]
             norm = np.hypot(step[:, 0], step[:, 1])
             step *= np.minimum(1.0, max_step / np.maximum(norm, 1e-300))[:, None]
-            c += step
-            g = np.clip(g + delta[:, 2:], -max_slope, max_slope)
-            if float(np.max(np.abs(step), initial=0.0)) < 1e-5:
-                break
+            c[active] += step
+            g[active] = np.clip(g[active] + delta[:, 2:], -max_slope, max_slope)
+            active = active[np.max(np.abs(step), axis=1) >= 1e-4]  # Gauss–Newton: what is left is far smaller
         r, _, w, energy = _symmetry_terms(coeffs, None, c, g, d, m)
         with np.errstate(divide="ignore", invalid="ignore"):
             asym[first:first + per_chunk] = np.where(energy > 0, (w * r * r).sum(1) / energy, np.inf)

@@ -23,7 +23,7 @@ def run(args) -> int:
     import math
     import sys
 
-    from ..atomic import write_json_atomic
+    from ..atomic import write_text_atomic
     from ..calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
     from ..camera import Camera
     from ..io import read_capture
@@ -43,7 +43,7 @@ def run(args) -> int:
                   micro_image_scale=pupil.scale, micro_image_scale_sigma=pupil.scale_sigma,
                   # null: the scale is at most 1, i.e. telecentric (or beyond) within the fit
                   implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm)
-    write_json_atomic(args.output, record)
+    write_text_atomic(args.output, grid_json_text(record))
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
     warnings = list(estimate.warnings)
@@ -56,6 +56,24 @@ def run(args) -> int:
           f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
           f"micro image scale {pupil.scale:.6f} (exit pupil {implied})")
     return 0
+
+
+def grid_json_text(record: dict) -> str:
+    """Strict JSON of a grid record, one top-level key per line.
+
+    Each value is encoded by the json module's C encoder (no indentation inside values): the
+    ``centers_xy_px`` list of a 41 Mpx sensor holds some 230,000 pairs, which an indented dump takes
+    seconds to write.
+    """
+    import json
+
+    from ..atomic import json_safe
+
+    items = []
+    for key, value in record.items():
+        safe = value if key == "centers_xy_px" else json_safe(value)  # centres: finite floats already
+        items.append(f"  {json.dumps(str(key))}: {json.dumps(safe, allow_nan=False)}")
+    return "{\n" + ",\n".join(items) + "\n}\n"
 
 
 def plot_grid_fit(white, cfa: str, estimate, path: str, zoom_lenses: int = 6) -> None:
