@@ -39,17 +39,20 @@ def lattice_guess_from_autocorrelation(image: np.ndarray, crop: int = 1024,
     y0, x0 = (h - ch) // 2, (w - cw) // 2
     patch = ndimage.gaussian_filter(image[y0:y0 + ch, x0:x0 + cw], 0.7)
     patch = (patch - patch.mean()) * np.outer(np.hanning(ch), np.hanning(cw))
-    power = np.abs(np.fft.rfft2(patch, s=(2 * ch, 2 * cw))) ** 2  # zero padded: no wrap-around
-    fy = np.fft.fftfreq(2 * ch)[:, None]
-    fx = np.fft.rfftfreq(2 * cw)[None, :]
+    from scipy import fft
+    # zero padded by half the crop: lags up to half the crop (all that is searched) do not wrap around
+    ny, nx = (fft.next_fast_len(ch + ch // 2 + 1, real=True) + 1) & ~1, (fft.next_fast_len(cw + cw // 2 + 1, real=True) + 1) & ~1
+    power = np.abs(fft.rfft2(patch, s=(ny, nx))) ** 2
+    fy = np.fft.fftfreq(ny)[:, None]
+    fx = np.fft.rfftfreq(nx)[None, :]
     power[np.hypot(fx, fy) < 1.0 / (2.0 * MAX_PITCH_PX)] = 0.0
-    acf = np.fft.fftshift(np.fft.irfft2(power, s=(2 * ch, 2 * cw)))
-    zero = acf[ch, cw]
+    acf = np.fft.fftshift(fft.irfft2(power, s=(ny, nx)))
+    zero = acf[ny // 2, nx // 2]
     if not (np.isfinite(zero) and zero > 0):
         return None
     acf /= zero
-    ly = np.arange(2 * ch)[:, None] - ch
-    lx = np.arange(2 * cw)[None, :] - cw
+    ly = np.arange(ny)[:, None] - ny // 2
+    lx = np.arange(nx)[None, :] - nx // 2
     lag = np.hypot(lx, ly)
     peaks = (acf == ndimage.maximum_filter(acf, size=3)) & (acf >= min_peak)
     peaks &= (lag >= MIN_PITCH_PX) & (lag <= min(MAX_PITCH_PX, min(ch, cw) / 2.0))
