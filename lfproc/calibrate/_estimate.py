@@ -153,7 +153,10 @@ def _fit_at_pitch(arr, cfa, pitch0, kind, approx_pitch_px, smoothing, source, re
         _, index, st, indexed = assign_and_fit(xy, usable, fit_kind, pitch1, rotation1, center, half)
     except NoLattice:
         raise LfprocError(_no_grid(source)) from None
-    model, inlier, residual = _choose_model(xy, st, indexed, center, half)
+    clean = indexed & (asym <= _clean_limit(asym[indexed]))
+    if clean.sum() < max(MIN_LENSES, 0.3 * indexed.sum()):
+        clean = indexed
+    model, inlier, residual = _choose_model(xy, st, indexed, clean, center, half)
     if inlier.sum() < MIN_LENSES or len(np.unique(index[inlier, 0])) < 2 or len(np.unique(index[inlier, 1])) < 2:
         raise LfprocError(f"{source}: only {int(inlier.sum())} micro lenses could be measured and a grid fit "
                           f"needs {MIN_LENSES} in 2 rows and columns; use a larger or brighter white image")
@@ -173,12 +176,14 @@ def _fit_at_pitch(arr, cfa, pitch0, kind, approx_pitch_px, smoothing, source, re
                         warnings=warnings)
 
 
-def _choose_model(xy, st, indexed, center, half) -> tuple[LatticeModel, np.ndarray, float]:
+def _choose_model(xy, st, indexed, clean, center, half) -> tuple[LatticeModel, np.ndarray, float]:
     """The rigid lattice where it fits; a smooth one where that predicts the centres clearly better.
 
-    The rigid fit is suspect when its inlier RMS exceeds `RIGID_SUSPECT_RMS_PX` or it rejects over 5 %
-    of the indexed centres; then smooth fits are scored against it by cross-validation (`_smooth_fit`)
-    over the indexed centres: the smooth one wins if its score is below 0.8 times the rigid one's.
+    The rigid fit (robust, over all ``indexed`` centres) is suspect when its inlier RMS exceeds
+    `RIGID_SUSPECT_RMS_PX` or it rejects over 5 % of them. Then the decision is taken on the ``clean``
+    centres only (`_clean_limit`): smooth fits are scored against the rigid one by cross-validation
+    (`_smooth_fit`), and a smooth one wins if its score is below 0.8 times the rigid one's; it is then
+    refitted over all indexed centres.
     """
     rigid, inlier = robust_fit(xy, st, indexed)
     rigid_model = LatticeModel(rigid)
@@ -186,13 +191,16 @@ def _choose_model(xy, st, indexed, center, half) -> tuple[LatticeModel, np.ndarr
     if residual <= RIGID_SUSPECT_RMS_PX and inlier.sum() >= 0.95 * indexed.sum():
         return rigid_model, inlier, residual
     # score the rigid lattice on the centres a smooth fit would keep (its own inliers drop the drift)
-    loose, _ = robust_smooth_fit(xy, st, indexed, MIN_DEGREE, center, half)
+    loose, _ = robust_smooth_fit(xy, st, clean, MIN_DEGREE, center, half)
     residual_loose = np.hypot(*(xy - loose.xy(st)).T)
-    kept = indexed & (residual_loose <= max(4.0 * float(np.median(residual_loose[indexed])) / 1.1774, 0.01))
+    kept = clean & (residual_loose <= max(4.0 * float(np.median(residual_loose[clean])) / 1.1774, 0.01))
     smooth = best_smooth_fit(xy, st, kept, center, half, cross_validated_rms(xy, st, kept, 0, center, half))
-    if smooth is None or smooth[1].sum() < MIN_LENSES:
+    if smooth is None:
         return rigid_model, inlier, residual
-    return smooth[0], smooth[1], smooth[2]
+    model, inlier = robust_smooth_fit(xy, st, indexed, smooth[0].deviation.degree, center, half)
+    if inlier.sum() < MIN_LENSES:
+        return rigid_model, robust_fit(xy, st, indexed)[1], residual
+    return model, inlier, rms(model, xy, st, inlier)
 
 
 def _pitch_sigma(model: LatticeModel, xy, st, inlier, residual) -> float:
@@ -215,6 +223,19 @@ def _asymmetry_limit(values: np.ndarray) -> float:
         return 0.0
     low, med = np.percentile(values, [25, 50])
     return max(4.0 * float(low), float(med), 1e-4)
+
+
+def _clean_limit(values: np.ndarray) -> float:
+    """Asymmetry up to which a micro image takes part in the lattice fit: 2.5 times the lower quartile.
+
+    Micro images cut by the main lens's rim (vignetted corners) are measured off-centre, outwards, by
+    amounts a smooth deviation could follow; their asymmetry gives them away, so the fits use only the
+    cleanly symmetric ones (at least 30 % of the indexed lenses, else all of them).
+    """
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return 0.0
+    return max(2.5 * float(np.percentile(values, 25)), 1e-4)
 
 
 def _merge_duplicates(xy: np.ndarray, asym: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
