@@ -75,7 +75,7 @@ class SmoothDeviation:
                 "coeffs_y": list(self.coeffs_y)}
 
     @classmethod
-    def from_json_dict(cls, data: dict) -> "SmoothDeviation":
+    def from_json_dict(cls, data: dict) -> SmoothDeviation:
         if data.get("basis", "legendre") != "legendre":
             raise LfprocError(f"unknown grid deviation basis {data.get('basis')!r}")
         return cls(degree=int(data["degree"]), center_xy_px=tuple(data["center_xy_px"]),
@@ -185,7 +185,7 @@ class LensGrid:
         }
 
     @classmethod
-    def from_json_dict(cls, data: dict, source: str = "grid") -> "LensGrid":
+    def from_json_dict(cls, data: dict, source: str = "grid") -> LensGrid:
         try:
             return cls(kind=str(data["grid"]), pitch_px=float(data["pitch_px"]),
                        rotation_deg=float(data["rotation_deg"]),

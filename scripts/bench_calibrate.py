@@ -35,7 +35,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from lfproc.grid import LensGrid  # noqa: E402
+from lfproc.grid import LensGrid
 
 SHAPE = (5368, 7728)
 PITCH_LENS_PX = 14.3       # the physical lens pitch in pixels (camera file: 0.0143 mm on 1 um pixels)

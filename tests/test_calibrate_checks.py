@@ -10,18 +10,17 @@
 """
 
 import json
-import math
 
 import numpy as np
 import pytest
+from conftest import run_cli
 from scipy import ndimage
 from scipy.spatial import cKDTree
+from whitegen import covering_grid, drifting_white, true_centres_inside, white_image
 
-from conftest import run_cli
 from lfproc.calibrate import find_grid, implied_exit_pupil
 from lfproc.camera import Camera
 from lfproc.grid import LensGrid
-from whitegen import covering_grid, drifting_white, true_centres_inside, white_image
 
 
 def nearest_rms(grid: LensGrid, truth: np.ndarray, pad: int = 0) -> tuple[float, float]:
@@ -93,7 +92,7 @@ def test_hot_dead_pixels_vignetted_corner_rotated_hexagonal_illum_pitch():
 
 
 def test_the_fitted_pitch_implies_the_exit_pupil_distance():
-    image, true = illum_like_white((600, 800))
+    image, _ = illum_like_white((600, 800))
     estimate = find_grid(image, kind="hexagonal")
     camera = Camera(pixel_pitch_mm=0.001, mla_pitch_mm=LENS_PITCH_PX / 1000.0, mla_focal_length_mm=F_S_MM,
                     main_focal_length_mm=9.5, image_distance_mm=9.5, grid="hexagonal", exit_pupil_distance_mm=D_A_MM)
@@ -171,6 +170,7 @@ def test_cli_reports_model_and_exit_pupil_and_warns_on_a_contradiction(tmp_path)
 
 def test_cli_warns_when_a_capture_is_given_as_the_white_image(tmp_path):
     import tifffile
+
     from lfproc.scene import Noise, Plane, Scene
     from lfproc.simulate import render
     camera_text = CAMERA_TOML.format(pixel=0.009, pitch=0.25, f_s=2.749, grid="rectangular", f_number=11.0, pupil="")

@@ -12,10 +12,10 @@ import json
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
+from whitegen import covering_grid, drifting_white, spot_white, true_centres_inside
 
 from lfproc.calibrate import find_grid
 from lfproc.grid import LensGrid, SmoothDeviation
-from whitegen import covering_grid, drifting_white, spot_white, true_centres_inside
 
 
 def fitted_centres(grid: LensGrid, pad: int = 3) -> np.ndarray:

@@ -18,7 +18,8 @@ from ._checks import ExitPupilEstimate, exit_pupil_warning, implied_exit_pupil, 
 from ._estimate import MIN_LENSES, PITCH_TOLERANCE, GridEstimate, estimate_grid, find_grid
 from ._flatten import Flattened, candidate_centres, flatten, smooth_large
 from ._grid_extent import grid_from_fit, lattice_indices_on_sensor
-from ._lattice import LatticeModel, Similarity, fit_similarity, lattice_index, neighbour_lattice, robust_fit, unit_coordinates
+from ._lattice import (LatticeModel, Similarity, fit_similarity, lattice_index, neighbour_lattice, robust_fit,
+                       unit_coordinates)
 from ._lattice_guess import MAX_PITCH_PX, MIN_PITCH_PX, lattice_guess_from_autocorrelation
 from ._monochrome import repair_outlier_pixels, white_to_mono
 from ._symmetry_centres import refine_centres, symmetric_offsets

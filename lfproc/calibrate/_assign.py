@@ -61,7 +61,7 @@ def _index(kind: str, model: LatticeModel, xy: np.ndarray, pitch: float):
 
 def _prediction_model(xy, st, sel, radius, center, half) -> LatticeModel:
     """The rigid fit, or where it leaves residuals above 2 % of the pitch, rigid plus a smooth deviation."""
-    rigid, inlier = robust_fit(xy, st, sel)
+    rigid, _ = robust_fit(xy, st, sel)
     model = LatticeModel(rigid)
     drifting = rms(model, xy, st, sel) > 0.02 * rigid.pitch
     if drifting and radius >= 9.0 and sel.sum() >= 40:

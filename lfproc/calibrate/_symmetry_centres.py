@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+
 def symmetric_offsets(pitch: float, radius: float = 0.8, full: float = 0.62,
                       max_per_axis: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """Half-plane offsets d (K, 2) within ``radius``·pitch and their weights m(|d|).
