@@ -96,11 +96,13 @@ def render(grid: LensGrid, strip: int = 128, seed: int = 0) -> np.ndarray:
     return out
 
 
-def timed(cmd: list[str], env: dict) -> tuple[float, float, float, str]:
+def timed(cmd: list[str], env: dict, cwd: str = ROOT) -> tuple[float, float, float, str]:
     """Wall seconds, CPU seconds (user + system), peak RSS (MB) of a command under /usr/bin/time -v, and
     its stdout+stderr."""
     t0 = time.perf_counter()
-    proc = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True, env=env)
+    # cwd: ``python -m`` puts the working directory first on sys.path, so it picks the checkout
+    proc = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True, env=env, cwd=cwd,
+                          check=False)
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed:\n{proc.stdout}\n{proc.stderr}")
@@ -151,11 +153,11 @@ def main() -> None:
     env = dict(os.environ, PYTHONPATH=ROOT, OMP_NUM_THREADS="1")
     floor_wall, floor_cpu, floor_rss, _ = timed([sys.executable, "-c", FLOOR, white], env)
     rows = []
-    runs = [("lfproc calibrate", ROOT)] + ([("baseline", os.path.abspath(args.baseline))] if args.baseline else [])
+    runs = [("lfproc calibrate", ROOT)] + ([("previous implementation (--baseline)", os.path.abspath(args.baseline))] if args.baseline else [])
     for label, root in runs:
         out = os.path.join(work, f"grid-{label.replace(' ', '_')}.json")
         wall, cpu, rss, text = timed([sys.executable, "-m", "lfproc", "calibrate", white, "--camera", camera, "-o", out],
-                                dict(env, PYTHONPATH=root))
+                                dict(env, PYTHONPATH=root), cwd=root)
         rms, worst, off, model, listed = accuracy(out, truth)
         rows.append((label, wall, cpu, rss, rms, worst, off, model, listed, text.strip().splitlines()[0]))
         print(label, wall, cpu, rss, rms, worst, off, model, listed)
