@@ -27,6 +27,11 @@ from .grid import LensGrid
 FILE_FORMAT = "lfproc-lightfield-1"
 
 
+def is_lightfield_file(path) -> bool:
+    """A light field written by ``lfproc decode`` (``NAME.lfp.npz``; any ``.npz``, any case), by its name."""
+    return os.fspath(path).lower().endswith(".npz")
+
+
 @dataclass(frozen=True, eq=False)
 class LightField:
     """A decoded light field: ``views`` shaped ``(m̂, m̂, Ny, Nx, C)`` plus optional camera and grid."""
@@ -88,19 +93,31 @@ class LightField:
                          grid_json=np.array(grid_json), format=np.array(FILE_FORMAT))
 
     @classmethod
+    def read_camera(cls, path: str | os.PathLike) -> Camera | None:
+        """The camera a light field file carries (``None`` if it has none), without reading its views."""
+        path = os.fspath(path)
+        camera_toml = str(_read_members(path, ("camera_toml",))["camera_toml"])
+        return Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
+
+    @classmethod
     def load(cls, path: str | os.PathLike) -> "LightField":
         path = os.fspath(path)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                if "format" not in data or str(data["format"]) != FILE_FORMAT:
-                    raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
-                views = data["views"]
-                camera_toml, grid_json = str(data["camera_toml"]), str(data["grid_json"])
-        except FileNotFoundError:
-            raise LfprocError(f"{path}: light field file not found; check the path") from None
-        except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:
-            raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
-                from None
+        members = _read_members(path, ("views", "camera_toml", "grid_json"))
+        views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
         return cls.from_views(views, camera, grid)
+
+
+def _read_members(path: str, names: tuple) -> dict:
+    """The named arrays of a light field file (only those are read), every failure as one LfprocError."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if "format" not in data or str(data["format"]) != FILE_FORMAT:
+                raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+            return {name: data[name] for name in names}
+    except FileNotFoundError:
+        raise LfprocError(f"{path}: light field file not found; check the path") from None
+    except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:
+        raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
+            from None

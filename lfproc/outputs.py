@@ -121,3 +121,17 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray) -> str:
     path = os.path.join(outdir, f"{stem}_refocus.gif")
     write_gif(path, frames * display_scale(images), duration_ms=150)
     return path
+
+
+def write_view_set(outdir: str, stem: str, source: str, lf, fmt: str = "tiff", *, mosaic: bool = False,
+                   gif: bool = False, inside_aperture: bool = False) -> list[str]:
+    """What ``lfproc views`` writes for one light field: the views (all, or those inside the main lens
+    aperture), optionally their mosaic (views outside the aperture black there) and an animation."""
+    keep = geometry.views_inside_aperture(lf.camera)
+    written = write_views(outdir, stem, source, lf.camera, lf.views, fmt, keep if inside_aperture else None)
+    if mosaic:
+        shown = np.where(keep[:, :, None, None, None], lf.views, np.float32(0)) if inside_aperture else lf.views
+        written.append(write_view_mosaic(outdir, stem, source, lf.camera, shown, fmt))
+    if gif:
+        written.append(write_view_gif(outdir, stem, lf.views, keep))
+    return written

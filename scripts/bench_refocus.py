@@ -80,7 +80,7 @@ def main(argv=None) -> int:
     start = time.perf_counter()
     from lfproc import LightField
     from lfproc.refocus import refocus
-    rf = importlib.import_module("lfproc.refocus")
+    rf = importlib.import_module("lfproc.refocus._refocus")
     import_s = time.perf_counter() - start
     compile_gather_s = first_call_seconds(refocus, "linear", 1.0)
     compile_interp_s = first_call_seconds(refocus, "linear", 0.5)

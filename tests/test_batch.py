@@ -257,6 +257,7 @@ def test_an_interrupted_run_leaves_no_partial_file_and_a_rerun_completes(data, r
     _, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 130, stderr
     assert "interrupted" in stderr
+    assert "rerun the same command to resume" in stderr and "of 4 captures" in stderr   # counts and the hint
     assert partial_files(out) == []
     first = manifest(out)
     assert first["summary"]["interrupted"] is True
@@ -318,14 +319,14 @@ def test_default_workers_follow_cores_and_memory(data, monkeypatch):
     sample = str(data / "captures" / "cap0.png")
     per_process = batch.PROCESS_BASE_BYTES + 150 * 200 * batch.BYTES_PER_SENSOR_PIXEL
     monkeypatch.setattr(os, "cpu_count", lambda: 64)
-    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 2 * 5.5 * per_process)
+    monkeypatch.setattr(batch._resources, "available_memory_bytes", lambda: 2 * 5.5 * per_process)
     assert batch.default_workers(sample) == 5            # half the memory holds 5.5 processes
-    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 1e15)
+    monkeypatch.setattr(batch._resources, "available_memory_bytes", lambda: 1e15)
     assert batch.default_workers(sample) == 64           # the cores
-    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 1.0)
+    monkeypatch.setattr(batch._resources, "available_memory_bytes", lambda: 1.0)
     assert batch.default_workers(sample) == 1            # never fewer than one
     assumed = batch.PROCESS_BASE_BYTES + 40e6 * batch.BYTES_PER_SENSOR_PIXEL
-    monkeypatch.setattr(batch, "available_memory_bytes", lambda: 2 * 3.5 * assumed)
+    monkeypatch.setattr(batch._resources, "available_memory_bytes", lambda: 2 * 3.5 * assumed)
     assert batch.default_workers(None) == 3              # unknown size: a 40-megapixel sensor is assumed
 
 

@@ -226,6 +226,17 @@ def test_levels_default_to_the_files_own_range(tmp_path):
         np.testing.assert_allclose(capture.data, pixels.astype(np.float64) / top, atol=1e-6)
 
 
+def test_black_level_at_or_above_the_files_white_is_refused(tmp_path):
+    """Issue 14: a level given explicitly and contradicted by the file is an error, not a division by <= 0."""
+    path = tmp_path / "cap8.png"
+    oiio_write(path, np.full((2, 2), 7, np.uint8), "uint8")
+    for camera in (make_camera(black_level=255), make_camera(black_level=300)):     # white defaults to 255
+        with pytest.raises(LfprocError, match="black_level .* is not below this file's white level 255") as info:
+            lio.read_capture(path, camera=camera)
+        assert str(path) in str(info.value)
+    assert lio.read_capture(path, camera=make_camera(black_level=254)).data[0, 0] == pytest.approx(-247.0)
+
+
 def test_read_image_is_as_stored(tmp_path):
     rgba = np.array([[[0, 255, 51, 102]]], np.uint8)
     oiio_write(tmp_path / "a.png", rgba, "uint8")
@@ -545,3 +556,20 @@ def test_metadata_must_be_a_dict(tmp_path):
     with pytest.raises(LfprocError, match="dict"):
         lio.write_image(tmp_path / "x.tif", np.zeros((2, 2), np.float32), metadata=[1, 2])
     assert folder_is_empty(tmp_path)
+
+
+def test_describe_camera_raw_and_image(tmp_path):
+    """``lfproc info``'s dict for a DNG (LibRaw's size and levels) and for a PNG (OpenImageIO's header)."""
+    path = tmp_path / "capture.dng"
+    write_dng(path, np.full((32, 48), 1000), BAYER_CODES["GRBG"], black=(10, 20, 30, 40), white=4095)
+    info = lio.describe_file(path)
+    assert (info["format"], info["raw_light_field"], info["width"], info["height"]) == ("camera-raw", True, 48, 32)
+    assert info["white_level"] == 4095 and info["bits_per_pixel"] == 12 and sorted(info["black_level"]) == \
+        [10, 20, 30, 40]
+    oiio_write(tmp_path / "rgb.png", np.zeros((3, 7, 3), np.uint8), "uint8")
+    info = lio.describe_file(tmp_path / "rgb.png")
+    assert (info["format"], info["width"], info["height"], info["channels"], info["bits_per_pixel"]) == \
+        ("image", 7, 3, 3, 8)
+    with pytest.raises(LfprocError, match="not a readable image, camera raw or Lytro file"):
+        (tmp_path / "junk.xyz").write_text("junk" * 10)
+        lio.describe_file(tmp_path / "junk.xyz")

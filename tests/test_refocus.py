@@ -19,7 +19,9 @@ from hypothesis import strategies as st
 import lfproc
 from lfproc import LfprocError, LightField
 
-rf = importlib.import_module("lfproc.refocus")   # the module (``lfproc.refocus`` may be bound to the function)
+rf = importlib.import_module("lfproc.refocus._refocus")      # the driver: _views_array, _bands, MIN_BAND_ROWS
+rf_plan = importlib.import_module("lfproc.refocus._plan")     # axis_plan, keys_cubic_weights
+rf_kernels = importlib.import_module("lfproc.refocus._kernels")
 
 INTERPOLATIONS = ("nearest", "linear", "cubic")
 RTOL, ATOL = 2e-5, 2e-5
@@ -130,7 +132,7 @@ def test_random_cases_match_reference(m, ny, nx, channels, a, interpolation, ups
 def test_offsets_with_rounding_error_count_as_whole_lenses():
     """1.1·10 = 11.000000000000002 in floating point: snapped to 11, so the view is read without
     interpolation and its last row (position exactly N − 1) still counts."""
-    plan = rf.axis_plan([1.1], m=21, n=14, upsample=1, interpolation="linear")
+    plan = rf_plan.axis_plan([1.1], m=21, n=14, upsample=1, interpolation="linear")
     assert plan.offset[0, 0, 0] == 11.0 and plan.ntaps[0, 0, 0] == 1 and plan.hi[0, 0, 0] == 2
     views = random_views(21, 14, 3, 1, seed=12)
     close(lfproc.refocus(views, 1.1, "cubic"), reference(views, 1.1, "cubic"))
@@ -327,11 +329,11 @@ def test_integer_a_is_a_pure_gather(monkeypatch, interpolation):
 
 
 def test_axis_plan_weights_sum_to_one_and_counts_are_separable():
-    plan = rf.axis_plan([0.3, -1.7, 2.0], m=5, n=9, upsample=2, interpolation="cubic")
+    plan = rf_plan.axis_plan([0.3, -1.7, 2.0], m=5, n=9, upsample=2, interpolation="cubic")
     used = np.arange(4)[None, None, None, :] < plan.ntaps[..., None]
     np.testing.assert_allclose(np.where(used, plan.weights, 0).sum(axis=-1), 1.0, atol=1e-12)
     assert plan.count.shape == (3, 17) and plan.count.min() >= 1 and plan.count.max() <= 5
-    np.testing.assert_allclose(rf.keys_cubic_weights(np.array([0.0]))[0], [0, 1, 0, 0])
+    np.testing.assert_allclose(rf_plan.keys_cubic_weights(np.array([0.0]))[0], [0, 1, 0, 0])
 
 
 # ------------------------------------------------------------------ errors
@@ -382,10 +384,10 @@ def test_non_finite_pixels_that_reach_a_slice_are_a_user_error():
 # ------------------------------------------------------------------ numba on-disk cache
 def _kernel_cache_misses_and_hits_in_a_new_process():
     code = ("import importlib, numpy as np, lfproc\n"
-            "rf = importlib.import_module('lfproc.refocus')\n"
+            "rf_kernels = importlib.import_module('lfproc.refocus._kernels')\n"
             "v = np.ones((3, 3, 4, 5, 1), np.float32)\n"
             "lfproc.refocus(v, [0, 1]); lfproc.refocus(v, 0.5)\n"
-            "k = (rf._gather_band, rf._interpolated_band)\n"
+            "k = (rf_kernels._gather_band, rf_kernels._interpolated_band)\n"
             "print(*(sum(sum(getattr(f.stats, n).values()) for f in k) for n in ('cache_misses', 'cache_hits')))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr

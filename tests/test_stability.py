@@ -123,11 +123,25 @@ class Exact:
         return self.trace((0, 0, 0, 0), (1, -Fr(a), 0, 0))
 
     def border_z(self, a, inner):
-        """Eq. 30: extreme pixels i = -c under lens 2ac and i = +c under lens 0, inner or outer border rays."""
+        """Eq. 30: extreme pixels i = -c under lens 2ac and i = +c under lens 0, inner or outer border rays.
+
+        Issue 12: a limit beyond the focus distance (its A = (2ac -/+ 1)/... below 0) is bounded by the
+        pair with the pixel borders swapped (the beams widen as 1 - A there); see lfproc.geometry._slices.
+        """
+        c, j = self.c, 2 * Fr(a) * self.c
+        h = Fr(1, 2)
+        if inner:
+            pb = -h if j + 1 >= 0 else h
+            return self.trace((-c, j, pb, h), (c, 0, -pb, -h))
+        pb = h if j - 1 >= 0 else -h
+        return self.trace((-c, j, pb, -h), (c, 0, -pb, h))
+
+    def border_parameter(self, a, inner):
+        """A of the border pair :meth:`border_z` traces: (2ac ± 1)/(2c ∓ 1) in front of the focus, else (2c ± 1)."""
         c, j = self.c, 2 * Fr(a) * self.c
         if inner:
-            return self.trace((-c, j, -Fr(1, 2), Fr(1, 2)), (c, 0, Fr(1, 2), -Fr(1, 2)))
-        return self.trace((-c, j, Fr(1, 2), -Fr(1, 2)), (c, 0, -Fr(1, 2), Fr(1, 2)))
+            return (j + 1) / (2 * c - 1) if j + 1 >= 0 else (j + 1) / (2 * c + 1)
+        return (j - 1) / (2 * c + 1) if j - 1 >= 0 else (j - 1) / (2 * c - 1)
 
     def distance(self, z):
         """Eq. 21/31 for a meeting point z beyond the front focal plane; inf when there is none."""
@@ -182,7 +196,7 @@ def test_slice_geometry_is_exact_to_rounding_over_the_whole_range(cam, a):
     if ex.c == 0:
         return   # a one-pixel micro image has no extreme pixel pair: Eq. 30 does not apply
     c = ex.c
-    a_minus, a_plus = (2 * Fr(a) * c + 1) / (2 * c - 1), (2 * Fr(a) * c - 1) / (2 * c + 1)
+    a_minus, a_plus = ex.border_parameter(a, inner=True), ex.border_parameter(a, inner=False)
     # the module computes a± = (2ac ± 1)/(2c ∓ 1) in floats: 3 roundings of magnitude (2|a|c + 1)/(2c - 1)
     alpha_error = 4 * U * (2 * a * c + 1) / (2 * c - 1)
     assert_within(geo.near_mm, ex.distance(ex.border_z(a, inner=True)), ex.error_bound(a_minus, alpha_error), "near")

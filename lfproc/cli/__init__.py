@@ -8,13 +8,15 @@ exit status 2; anything else is a bug and exits with status 1 and a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+import warnings
 from importlib import import_module
 
 from ..errors import LfprocError
 
 #: subcommand modules in the order ``lfproc --help`` lists them
-COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "batch", "demo")
+COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "batch", "demo", "info", "camera")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -41,10 +43,13 @@ def _version() -> str:
 
 
 def main(argv=None) -> int:
+    from .common import join_negative_values
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     try:
-        status = args.func(args)
+        with _plain_warnings(args.command):
+            status = args.func(args)
     except LfprocError as exc:
         print(f"lfproc {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -57,6 +62,18 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 130
     return int(status or 0)
+
+
+@contextlib.contextmanager
+def _plain_warnings(command: str):
+    """Warnings reach the user as one plain line on stderr, like errors (no Python source line)."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"lfproc {command}: warning: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.showwarning = show
+        yield
 
 
 if __name__ == "__main__":  # pragma: no cover

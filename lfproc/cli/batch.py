@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import os
 import signal
@@ -9,31 +10,30 @@ import sys
 import time
 
 from ..errors import LfprocError
-from .capture_loop import add_decode_options
-from .common import add_slice_planning_options
+from .capture_loop import add_decode_options, add_output_folder_option, require_output_folder
+from .common import add_slice_options, check_slice_options, describe_slices
+from .refocus import add_render_options, check_render_options
+from .views import add_view_options, check_view_options
 
 
 def register(sub) -> None:
     p = sub.add_parser("batch", help="process folders of captures in parallel (local or Dask), resumable",
                        description="Refocus and/or extract the views of many captures: inputs are files, folders or "
-                                   "glob patterns. Outputs and sidecars are those of lfproc refocus and lfproc views. "
+                                   "glob patterns. Outputs and sidecars are those of lfproc refocus and lfproc views, "
+                                   "and every per-capture option of those commands means the same here. "
                                    "A manifest (OUTDIR/lfproc-manifest.json) records each capture; a rerun skips "
                                    "completed captures whose inputs and parameters are unchanged. A capture that "
                                    "fails is recorded with its error and the rest complete; the exit status is 2 "
                                    "if any failed, 130 if interrupted (rerun to resume). See docs/batch.md.")
-    p.add_argument("inputs", nargs="+", metavar="INPUT", help="capture files, folders or glob patterns")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="capture files (or .lfp.npz light fields), folders or glob patterns")
     add_decode_options(p)
-    p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
-    which = p.add_mutually_exclusive_group()
-    which.add_argument("--refocus", metavar="LIST", help="refocus parameters a: numbers and ranges START:STOP[:STEP]")
-    add_slice_planning_options(p)
-    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
-                       help="the fewest slices whose depths of field cover this range (FAR may be inf)")
-    p.add_argument("--views", action="store_true", help="also write every viewpoint image")
-    p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"),
-                   help="tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, exr")
-    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
-                   help="interpolation between lenses for real a (default linear)")
+    add_output_folder_option(p)
+    which = add_slice_options(p)
+    which.add_argument("--refocus", dest="a", metavar="LIST", help=argparse.SUPPRESS)  # the old name of --a
+    add_render_options(p)
+    p.add_argument("--views", action="store_true", help="also write every viewpoint image (as lfproc views)")
+    add_view_options(p)
     p.add_argument("--workers", type=int, metavar="N",
                    help="local worker processes (default: from the cores and the memory a capture needs; "
                         "1 = in this process, with multi-threaded refocusing)")
@@ -49,46 +49,62 @@ def _abs(path):
 def run(args) -> int:
     from .. import batch
     from ..camera import Camera
+    from ..lightfield import LightField, is_lightfield_file
     from ..pipeline import unique_stems
     from .common import slice_parameters
 
-    camera = Camera.from_toml(args.camera)
-    if not args.calib and not args.white:
+    check_render_options(args)
+    check_slice_options(args)
+    sources = batch.expand_inputs(args.inputs)
+    to_decode = [s for s in sources if not is_lightfield_file(s)]
+    if to_decode and not args.camera:
+        raise LfprocError(f"{to_decode[0]}: decoding a capture needs --camera CAM (a camera TOML file)")
+    if to_decode and not args.calib and not args.white:
         raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
-    for path, flag in ((args.calib, "--calib"), (args.white, "--white")):
+    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
-    if args.refocus is None and args.depth_range is None and not args.views:
-        raise LfprocError("nothing to do: give --refocus LIST, --depth-range NEAR:FAR and/or --views")
+    if args.a is None and args.depth_range is None and args.at is None and not args.views:
+        raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM and/or --views")
+    if (args.mosaic or args.gif or args.inside_aperture) and not args.views:
+        raise LfprocError("--mosaic, --gif and --inside-aperture shape the views: add --views")
     if args.workers is not None and args.workers < 1:
         raise LfprocError(f"--workers must be >= 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         raise LfprocError("--workers sizes local processing; with --scheduler the cluster's workers run the "
                           "captures (start them with 'dask worker --nworkers N'): drop one of the two")
-    if (args.max_gap or args.integer) and args.depth_range is None:
-        raise LfprocError("--max-gap and --integer apply to --depth-range only")
-    if args.refocus is not None or args.depth_range is not None:
-        a_values = tuple(slice_parameters(camera, args.refocus, args.depth_range, None, args.max_gap, args.integer,
-                                          what="--refocus"))
+    if args.camera:
+        camera = Camera.from_toml(args.camera)
+        with open(args.camera, encoding="utf-8") as fh:
+            camera_toml = fh.read()
+    else:
+        camera, camera_toml = LightField.read_camera(sources[0]), ""
+        if camera is None:
+            raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
+    if args.views:
+        check_view_options(args, camera)
+    if args.a is not None or args.depth_range is not None or args.at is not None:
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                                          max_slices=args.max_slices))
     else:
         a_values = ()
+    require_output_folder(args.outdir)
     white = _abs(args.white)
     if args.calib and not args.white:  # decode with the white image the grid file recorded (as lfproc refocus
         from ..pipeline import read_grid  # does), and let its file stamp into every capture's fingerprint
 
         _, recorded = read_grid(args.calib)
         white = os.path.abspath(recorded) if recorded and os.path.isfile(recorded) else None
-    sources = batch.expand_inputs(args.inputs)
     stems = unique_stems(sources)
     outdir = os.path.abspath(args.outdir)
-    with open(args.camera, encoding="utf-8") as fh:
-        camera_toml = fh.read()
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
-                      bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic)
+                      bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
+                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture))
             for src in sources]
-    if not os.path.isdir(outdir):
+    first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
+    if not os.path.isdir(outdir) and first_to_decode is not None:
         # a first run: check the camera, white image and grid before anything is written (exit 2, nothing left)
-        batch.decode_setup(jobs[0])
+        batch.decode_setup(first_to_decode)
     try:
         os.makedirs(outdir, exist_ok=True)
     except OSError as exc:
@@ -97,14 +113,16 @@ def run(args) -> int:
     with batch.lock_outdir(outdir), _sigterm_as_interrupt():
         batch.remove_stale_partial_files(outdir)
         manifest = batch.Manifest(outdir, {
-            "camera": os.path.abspath(args.camera), "calib": _abs(args.calib), "white": white,
+            "camera": _abs(args.camera), "calib": _abs(args.calib), "white": white,
             "refocus_a": list(a_values), "views": bool(args.views), "format": args.format,
-            "interpolation": args.interpolation, "decode_interpolation": args.decode_interpolation,
-            "demosaic": args.demosaic, "scheduler": args.scheduler})
-        return _process(args, jobs, manifest)
+            "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
+            "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture),
+            "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
+            "scheduler": args.scheduler})
+        return _process(args, jobs, manifest, camera)
 
 
-def _process(args, jobs, manifest) -> int:
+def _process(args, jobs, manifest, camera) -> int:
     """Skip what is complete, run the rest, keep the manifest current; returns the exit status."""
     from tqdm import tqdm
 
@@ -118,9 +136,12 @@ def _process(args, jobs, manifest) -> int:
             manifest.record(job, batch.JobResult(job.source, "skipped"), fingerprints[job.source])
         else:
             todo.append(job)
-    if todo:
+    first_to_decode = next((job for job in todo if job.camera_toml), None)
+    if first_to_decode is not None:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
-        batch.decode_setup(todo[0])
+        batch.decode_setup(first_to_decode)
+    if jobs[0].refocus_a:
+        describe_slices(camera, jobs[0].refocus_a, args.depth_range)
     start = time.perf_counter()
     interrupted = False
     try:
@@ -147,13 +168,18 @@ def _process(args, jobs, manifest) -> int:
         interrupted = True
         if not args.scheduler:  # the local captures in progress have finished: nothing writes any more
             batch.remove_stale_partial_files(manifest.outdir)
-        raise
     finally:
         summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
                        interrupted=interrupted,
                        failed_captures=[{"source": s, "error": e} for s, e in failures])
         manifest.save(summary)
     print(format_summary(summary, manifest.path))
+    if interrupted:
+        left = len(jobs) - counts["done"] - counts["skipped"] - counts["failed"]
+        print(f"lfproc batch: interrupted with {counts['done']} done, {counts['skipped']} skipped, "
+              f"{counts['failed']} failed and {left} not started of {len(jobs)} captures; finished outputs are "
+              f"complete and nothing partial was written; rerun the same command to resume", file=sys.stderr)
+        return 130
     return 2 if failures else 0
 
 

@@ -1,54 +1,176 @@
-"""Options and the per-capture loop shared by ``decode``, ``refocus`` and ``views``."""
+"""Inputs and the per-capture loop shared by ``decode``, ``refocus``, ``views``, ``depth`` and ``viewer``.
+
+An input is a capture to decode (camera raw, TIFF/PNG/EXR, Lytro file) or a light field that
+``lfproc decode`` already wrote (``.lfp.npz``), which carries its own camera and grid: commands need no
+``--camera``, ``--calib`` or ``--white`` for those.
+"""
 
 from __future__ import annotations
 
+import os
 import sys
 import time
+from dataclasses import dataclass
 
 from ..errors import LfprocError
+from ..lightfield import is_lightfield_file
 
 
 def add_decode_options(p) -> None:
-    p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+    p.add_argument("--camera", metavar="CAM",
+                   help="camera TOML file (not needed for decoded .lfp.npz inputs, which carry theirs, nor for Lytro "
+                        "captures, whose metadata gives one with the main lens focused at infinity)")
     p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
-    p.add_argument("--white", metavar="WHITE", help="white image: calibrates the grid (without --calib) "
-                                                    "and corrects vignetting")
+    p.add_argument("--white", metavar="WHITE", help="white image (also a Lytro .raw with its metadata): "
+                                                    "calibrates the grid (without --calib) and corrects vignetting")
+    p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
+                                                      "capture's camera with the nearest zoom and focus steps")
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
                    help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
 
 
-def setup_from_args(args, camera=None):
-    """Camera, grid and white image from the parsed options (errors before any capture is read)."""
+def add_output_folder_option(p) -> None:
+    p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
+                   help="folder for the outputs (created if missing); every image gets a NAME.json sidecar")
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What a command needs to turn each input into a light field.
+
+    ``camera`` is the camera that plans slices before the first capture is read: ``--camera`` when
+    given, else the one the first decoded light field carries. ``setup`` (a
+    :class:`lfproc.pipeline.DecodeSetup`) is ``None`` when every input is already decoded.
+    """
+
+    paths: tuple
+    camera: object
+    setup: object = None
+
+    def camera_of(self, path: str):
+        """The camera that applies to one input (a decoded light field's own, else the decode setup's)."""
+        if is_lightfield_file(path):
+            from ..lightfield import LightField
+            return LightField.read_camera(path) or self.camera
+        return self.setup.camera
+
+    def load(self, path: str):
+        """The light field of one input: read it if decoded, else decode the capture."""
+        if is_lightfield_file(path):
+            from ..lightfield import LightField
+            lf = LightField.load(path)
+            if lf.camera is None:
+                raise LfprocError(f"{path}: this light field carries no camera; decode it again with "
+                                  f"'lfproc decode --camera CAM'")
+            return lf
+        from ..pipeline import load_lightfield
+        return load_lightfield(path, self.setup)
+
+
+def input_camera(args, paths):
+    """The camera that plans slices before any capture is read (cheap checks only): ``--camera`` when given,
+    else the one the first decoded light field carries."""
     from ..camera import Camera
+    from ..lightfield import LightField
+
+    for path in paths:
+        if not os.path.isfile(path):
+            raise LfprocError(f"{path}: no such file; check the path")
+    to_decode = [p for p in paths if not is_lightfield_file(p)]
+    if args.camera:
+        return Camera.from_toml(args.camera)
+    if to_decode:
+        from ..pipeline import camera_for_captures
+        return camera_for_captures(None, to_decode)    # Lytro metadata, else the error asking for --camera
+    camera = LightField.read_camera(paths[0])
+    if camera is None:
+        raise LfprocError(f"{paths[0]}: this light field carries no camera; give --camera CAM")
+    return camera
+
+
+def prepare_inputs(args, paths, camera=None) -> Inputs:
+    """The inputs ready to load: the grid is calibrated (or read) and the white image read, once, when any
+    input needs decoding. Call after every cheap check."""
+    paths = tuple(paths)
+    camera = camera or input_camera(args, paths)
+    to_decode = [p for p in paths if not is_lightfield_file(p)]
+    setup = setup_from_args(args, camera, to_decode) if to_decode else None
+    return Inputs(paths, camera, setup)
+
+
+def captures_of(args) -> list[str]:
+    """The capture paths of a command's positional RAW argument(s)."""
+    raw = getattr(args, "raw", None)
+    return [raw] if isinstance(raw, str) else list(raw or [])
+
+
+def camera_from_args(args):
+    """``--camera``, or for Lytro captures without it the camera in the first capture's metadata."""
+    from ..pipeline import camera_for_captures
+
+    return camera_for_captures(args.camera, captures_of(args))
+
+
+def setup_from_args(args, camera=None, captures=None):
+    """Camera, grid and white image from the parsed options (errors before any capture is read).
+
+    ``captures`` (default: the command's RAW arguments) are the inputs to decode: ``--white-dir``
+    picks the white image for the first, and a Lytro white image is checked against it.
+    """
     from ..pipeline import prepare_decoding
 
-    camera = camera or Camera.from_toml(args.camera)
+    camera = camera or camera_from_args(args)
     return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                            demosaic_method=args.demosaic)
+                            demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+                            captures=captures_of(args) if captures is None else list(captures))
 
 
 def require_output_folder(path: str) -> None:
-    """Fail before any work when OUTDIR exists but is not a folder (creating it is left to the writers)."""
-    import os
-
+    """Fail before any work when OUTDIR cannot be written: a file, a read-only folder, or a missing parent
+    that cannot be created. Nothing is created here (the writers create the folder)."""
+    path = os.path.abspath(path)
     if os.path.exists(path) and not os.path.isdir(path):
         raise LfprocError(f"{path}: cannot write there (it is a file, not a folder); choose another -o OUTDIR")
+    existing = path
+    while not os.path.exists(existing):
+        parent = os.path.dirname(existing)
+        if parent == existing:
+            break
+        existing = parent
+    if not os.path.isdir(existing) or not _can_create_files_in(existing):
+        raise LfprocError(f"{path}: cannot write there ({existing} is not a writable folder); "
+                          f"choose another output folder with -o")
+
+
+def _can_create_files_in(folder: str) -> bool:
+    """Whether a file can be created in ``folder`` (tried for real: permission bits say nothing to root, nor
+    about a read-only file system)."""
+    import tempfile
+
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".lfproc-probe-", dir=folder)
+    except OSError:
+        return False
+    os.close(fd)
+    os.remove(probe)
+    return True
 
 
 def for_each_capture(command: str, paths: list[str], work, total_steps: int | None = None) -> int:
     """Run ``work(path, progress)`` per capture; failures are reported and skipped, the rest complete.
 
-    ``progress`` is a tqdm bar (on stderr, only on a terminal) that ``work`` advances. Returns the exit
-    status: 0 if every capture succeeded, 2 if any failed (the summary names them).
+    ``progress`` is a tqdm bar (on stderr, only on a terminal) that ``work`` advances. With one capture a
+    failure is its one error line; with several, a summary line follows (what was done, what failed).
+    Returns the exit status: 0 if every capture succeeded, 2 if any failed.
     """
     from tqdm import tqdm
 
     failed, done = [], 0
     start = time.perf_counter()
     with tqdm(total=total_steps or len(paths), unit="img", disable=None, file=sys.stderr,
-              desc=f"lfproc {command}") as progress:
+              desc=f"lfproc {command}", leave=False) as progress:
         for path in paths:
             try:
                 work(path, progress)
@@ -56,9 +178,10 @@ def for_each_capture(command: str, paths: list[str], work, total_steps: int | No
             except LfprocError as exc:
                 failed.append(path)
                 progress.write(f"lfproc {command}: error: {exc}", file=sys.stderr)
-    elapsed = time.perf_counter() - start
-    summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"
-    if failed:
-        summary += f"; failed: {', '.join(failed)}"
-    print(summary, file=sys.stderr)
+    if len(paths) > 1:
+        elapsed = time.perf_counter() - start
+        summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"
+        if failed:
+            summary += f"; failed: {', '.join(failed)}"
+        print(summary, file=sys.stderr)
     return 2 if failed else 0

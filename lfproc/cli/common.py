@@ -58,36 +58,118 @@ def parse_depth_range(text: str) -> tuple[float, float]:
     return near, far
 
 
+FORMAT_HELP = ("image format: tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, "
+               "exr = half/float linear")
+INTERPOLATION_HELP = "interpolation between lenses for real a (default linear)"
+
+
 def dumps_strict(obj, **kwargs) -> str:
     """Strict JSON at full double precision; infinity becomes ``null``."""
     return json.dumps(json_safe(obj), allow_nan=False, **kwargs)
 
 
+#: the most slices one command renders unless --max-slices says otherwise (--a lists and --depth-range alike)
+DEFAULT_MAX_SLICES = 10000
+
+
+def add_slice_options(p) -> None:
+    """``--a`` / ``--depth-range`` / ``--at`` (one of them) and the planning options, as in every command."""
+    which = p.add_mutually_exclusive_group()
+    which.add_argument("--a", metavar="LIST",
+                       help="refocus parameters: numbers and ranges START:STOP[:STEP], e.g. --a -0.4:0.7:0.1")
+    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
+                       help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
+    which.add_argument("--at", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance (mm)")
+    add_slice_planning_options(p)
+    return which
+
+
 def add_slice_planning_options(p) -> None:
-    """``--max-gap`` and ``--integer``: compute fewer or cheaper slices for a ``--depth-range``."""
+    """``--max-gap``, ``--integer`` and ``--max-slices``: compute fewer or cheaper slices."""
     p.add_argument("--max-gap", type=float, default=0.0, metavar="MM",
                    help="with --depth-range: allow uncovered depths up to MM between slices (fewer slices)")
     p.add_argument("--integer", action="store_true",
                    help="with --depth-range: integer a only (fastest slices; may leave gaps, which are listed)")
+    p.add_argument("--max-slices", type=int, default=DEFAULT_MAX_SLICES, metavar="N",
+                   help=f"refuse to render more than N slices per capture (default {DEFAULT_MAX_SLICES})")
+
+
+def check_slice_options(args) -> None:
+    """Option combinations that make no sense, before any work."""
+    if (args.max_gap or args.integer) and args.depth_range is None:
+        raise LfprocError("--max-gap and --integer apply to --depth-range only")
+    if args.max_slices < 1:
+        raise LfprocError(f"--max-slices must be >= 1, got {args.max_slices}")
 
 
 def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
-                     integer=False, what: str = "--a") -> list[float]:
-    """The refocus parameters one of --a, --depth-range or --at asks for (holes reported on stderr)."""
+                     integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES) -> list[float]:
+    """The refocus parameters one of --a, --depth-range or --at asks for.
+
+    Every list is checked here, before any capture is read: no more than ``max_slices`` slices, no
+    duplicate a (two slices would write the same file).
+    """
     from .. import geometry
+    from ..outputs import slice_names
 
     if a_list is not None:
-        return parse_number_list(a_list, what)
+        values = parse_number_list(a_list, what)
+    elif depth_range is not None:
+        near, far = parse_depth_range(depth_range)
+        values = [float(a) for a in geometry.plan_slices(camera, near, far, max_gap_mm=max_gap_mm, integer=integer)]
+    elif at_mm is None:
+        raise LfprocError("give one of --a, --depth-range or --at")
+    elif not math.isfinite(at_mm):
+        raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
+    else:
+        values = [float(geometry.refocus_parameter(camera, at_mm))]
+    if len(values) > max_slices:
+        raise LfprocError(f"{what if a_list is not None else '--depth-range'} asks for {len(values)} slices, more "
+                          f"than --max-slices {max_slices}; use a coarser list, or raise --max-slices")
+    slice_names("check", values)   # duplicates raise here, not after the first capture was decoded
+    return values
+
+
+def describe_slices(camera, a_values, depth_range=None, out=None) -> None:
+    """One line per slice (a, distance, [near, far] in mm) and the depths no slice covers, on stdout."""
+    from .. import geometry
+
+    out = out or sys.stdout
+    geo = geometry.slice_geometry(camera, a_values)
+    print(f"{len(a_values)} slice(s):", file=out)
+    for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
+        print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
     if depth_range is not None:
         near, far = parse_depth_range(depth_range)
-        a_values = geometry.plan_slices(camera, near, far, max_gap_mm=max_gap_mm, integer=integer)
         holes = geometry.uncovered_depths(camera, a_values, near, far)
         if holes:
-            listed = ", ".join(f"{lo:.1f}..{hi:.1f}" for lo, hi in holes)
-            print(f"lfproc: note: no slice is in focus at {listed} mm", file=sys.stderr)
-        return [float(a) for a in a_values]
-    if at_mm is None:
-        raise LfprocError("give one of --a, --depth-range or --at")
-    if not math.isfinite(at_mm):
-        raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
-    return [float(geometry.refocus_parameter(camera, at_mm))]
+            listed = ", ".join(f"{_mm(lo)}..{_mm(hi)}" for lo, hi in holes)
+            print(f"  no slice is in focus at {listed}", file=out)
+        else:
+            print(f"  together in focus over all of {_mm(near)}..{_mm(far)}", file=out)
+
+
+def _mm(value: float) -> str:
+    return "inf mm" if math.isinf(value) else f"{value:.1f} mm"
+
+
+#: options whose value may start with '-' (a negative number or range): argparse would take it for an option
+NEGATIVE_VALUE_OPTIONS = ("--a", "--refocus", "--disparity", "--gap")
+
+
+def join_negative_values(argv: list[str]) -> list[str]:
+    """``--a -0.4:0.7`` → ``--a=-0.4:0.7``, so that negative lists work with or without ``=``."""
+    out, i = [], 0
+    while i < len(argv):
+        item = argv[i]
+        if item in NEGATIVE_VALUE_OPTIONS and i + 1 < len(argv) and _looks_negative(argv[i + 1]):
+            out.append(f"{item}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(item)
+        i += 1
+    return out
+
+
+def _looks_negative(text: str) -> bool:
+    return len(text) > 1 and text[0] == "-" and (text[1].isdigit() or text[1] == "." or text[1:4] == "inf")

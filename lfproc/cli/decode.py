@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from .capture_loop import add_decode_options, setup_from_args
+import os
+
+from .capture_loop import add_decode_options, require_output_folder, setup_from_args
 
 
 def register(sub) -> None:
     p = sub.add_parser("decode", help="decode a raw capture into a light field file",
                        description="Resample a capture along the fitted lens grid into m x m views and save them "
                                    "with the camera and grid (numpy .npz; see the README).")
-    p.add_argument("raw", metavar="RAW", help="raw capture (camera raw, TIFF, PNG, EXR)")
+    p.add_argument("raw", metavar="RAW", help="raw capture (camera raw, TIFF, PNG, EXR, Lytro)")
     add_decode_options(p)
     p.add_argument("-o", "--output", required=True, metavar="LF_FILE", help="output light field file (.lfp.npz)")
     p.set_defaults(func=run)
@@ -18,6 +20,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..pipeline import load_lightfield
 
+    require_output_folder(os.path.dirname(os.path.abspath(args.output)))
     setup = setup_from_args(args)
     lf = load_lightfield(args.raw, setup)
     lf.save(args.output)

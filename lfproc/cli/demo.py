@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 from ..errors import LfprocError
+from .capture_loop import require_output_folder
 
 SAMPLE_FILES = ("capture.png", "white.png", "camera.toml", "ground_truth.json")
 
@@ -45,6 +46,7 @@ def run(args) -> int:
     if missing:
         raise LfprocError(f"{sample}: the bundled sample is missing {', '.join(missing)}; run the demo from a source "
                           f"checkout (pip install -e .) or regenerate it with python scripts/make_samples.py")
+    require_output_folder(args.outdir)   # a read-only folder fails here, in one line, before any work
     out = Path(args.outdir)
     t0 = time.perf_counter()
 

@@ -1,8 +1,9 @@
-"""``lfproc geometry``: slice distances and DOF, and the virtual cameras, of a camera file."""
+"""``lfproc geometry``: slice distances and DOF, the virtual cameras and triangulation of a camera file."""
 
 from __future__ import annotations
 
 import math
+import re
 import sys
 
 from .common import dumps_strict, parse_number_list
@@ -10,12 +11,22 @@ from .common import dumps_strict, parse_number_list
 
 def register(sub) -> None:
     p = sub.add_parser("geometry", help="distance and DOF of refocused slices, position and tilt of views",
-                       description="Print the paraxial geometry (paper Eqs. 13-34) of a camera: for every "
-                                   "refocus parameter a its distance and depth of field from the sensor, and "
-                                   "for every view its virtual camera position, tilt and the baseline.")
+                       description="Print the paraxial geometry (paper Eqs. 13-34; a finite exit pupil as in "
+                                   "Hahne et al. 2018) of a camera: for every refocus parameter a its distance and "
+                                   "depth of field from the sensor, for every view its virtual camera position, "
+                                   "tilt and the baseline, and with --disparity the distance of points seen with "
+                                   "those disparities between views G apart. Negative lists work with or without "
+                                   "'=': --a -1:1 or --a=-1:1.")
+    # values such as "-1,2" or "-0.5:1" are arguments, not options (no option here looks like a number)
+    p._negative_number_matcher = re.compile(r"^-\.?\d")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
     p.add_argument("--a", default="0:5", metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
+    p.add_argument("--disparity", metavar="LIST",
+                   help="triangulate points seen with these disparities (view pixels, i.e. lenses, signed as "
+                        "PlenoptiSign's dx) between views --gap apart")
+    p.add_argument("--gap", type=int, default=1, metavar="G",
+                   help="with --disparity: views G apart (signed as PlenoptiSign's G; default 1)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
     p.add_argument("--wavelength-nm", type=float, default=550.0, help="wavelength for the Airy limit (default 550)")
@@ -31,32 +42,64 @@ def run(args) -> int:
     a_values = parse_number_list(args.a, "--a")
     if not (args.wavelength_nm > 0 and math.isfinite(args.wavelength_nm)):
         raise LfprocError(f"--wavelength-nm must be a positive number, got {args.wavelength_nm}")
+    if args.gap == 0:
+        raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
+    disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
     slices = geometry.slice_geometry(camera, a_values)
     views = geometry.view_geometry(camera)
+    check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
+    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()])
+    tri = None if disparities is None else geometry.triangulate(camera, disparities, args.gap)
     if args.plot:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
     if args.json:
-        print(dumps_strict({"slices": slices.records(), "views": views.records(),
-                            "baseline_mm": views.baseline_mm}))
+        print(dumps_strict(json_report(camera, slices, views, gaps, check, tri)))
         return 0
-    check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
-    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()])
-    sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera))
+    sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera, tri))
     return 0
+
+
+def camera_summary(camera) -> dict:
+    """The derived numbers the geometry rests on (JSON-ready; ``inf`` becomes null)."""
+    from .. import geometry
+    return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
+                sample_pitch_mm=camera.sample_pitch_mm,
+                image_distance_mm=camera.image_distance_mm, exit_pupil_distance_mm=camera.exit_pupil_distance_mm,
+                telecentric=camera.telecentric, micro_image_scale=geometry.micro_image_scale(camera),
+                virtual_camera_plane_mm=geometry.virtual_camera_plane_mm(camera),
+                infinity_a=geometry.infinity_parameter(camera))
+
+
+def json_report(camera, slices, views, gaps, check, tri) -> dict:
+    """The contract's keys (``slices``, ``views``, ``baseline_mm``, ``triangulation``) plus additive ones."""
+    out = {"slices": slices.records(), "views": views.records(), "baseline_mm": views.baseline_mm,
+           "integer_gaps": [dict(a=a, next_a=a + 1.0, near_mm=lo, far_mm=hi) for a, lo, hi in gaps],
+           "diffraction": check.record(), "camera": camera_summary(camera),
+           "provenance": dict(camera.provenance)}
+    if tri is not None:
+        out["triangulation"] = tri.records()
+    return out
 
 
 def _mm(value: float, width: int = 11) -> str:
     return f"{'inf':>{width}}" if math.isinf(value) else f"{value:>{width}.3f}"
 
 
-def format_table(camera, slices, views, gaps, check, path) -> str:
+def format_table(camera, slices, views, gaps, check, path, tri=None) -> str:
     """A readable table in the layout of the paper's Tables 2 and 4."""
+    from .. import geometry
+    pupil = ("exit pupil at infinity (telecentric)" if camera.telecentric else
+             f"exit pupil {camera.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
+             f"{geometry.micro_image_scale(camera):.6f})")
     out = [f"camera {camera.name or path}: m = {camera.m_hat} px per micro image, effective pixel pitch "
            f"{camera.effective_pixel_pitch_mm * 1e3:.3f} um, b_U - f_U = "
-           f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm",
-           "distances from the sensor [mm]",
-           f"{'a':>8} {'near d_a-':>11} {'d_a':>11} {'far d_a+':>11} {'DOF D_a':>11}"]
+           f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm, {pupil}"]
+    if camera.provenance:
+        out.append("where the camera's numbers came from:")
+        out += [f"  {key}: {text}" for key, text in camera.provenance]
+    out += ["distances from the sensor [mm]",
+            f"{'a':>8} {'near d_a-':>11} {'d_a':>11} {'far d_a+':>11} {'DOF D_a':>11}"]
     for r in slices.records():
         out.append(f"{r['a']:>8g} {_mm(r['near_mm'])} {_mm(r['distance_mm'])} {_mm(r['far_mm'])} {_mm(r['dof_mm'])}")
     for a, lo, hi in gaps:
@@ -66,6 +109,13 @@ def format_table(camera, slices, views, gaps, check, path) -> str:
     out.append(f"{'i':>5} {'position F_i [mm]':>18} {'tilt [deg]':>11}")
     for r in views.records():
         out.append(f"{r['i']:>5d} {r['position_mm']:>18.4f} {r['tilt_deg']:>11.4f}")
+    if tri is not None:
+        out.append("")
+        out.append("triangulation (PlenoptiSign's G and dx; distance from the sensor)")
+        out.append(f"{'G':>5} {'dx [px]':>9} {'B_G [mm]':>10} {'tilt [deg]':>11} {'distance':>11}")
+        for r in tri.records():
+            out.append(f"{r['gap']:>5} {r['disparity_px']:>9g} {r['baseline_mm']:>10.4f} {r['tilt_deg']:>11.4f} "
+                       f"{_mm(r['distance_mm'])}")
     out.append("")
     out.append(check.message())
     return "\n".join(out) + "\n"

@@ -1,56 +1,108 @@
-"""``lfproc refocus``: refocused slices of raw captures, each tagged with its distance and depth of field."""
+"""``lfproc refocus``: refocused slices of captures, each tagged with its distance and depth of field."""
 
 from __future__ import annotations
 
 import os
 
 from ..errors import LfprocError
-from .capture_loop import add_decode_options, for_each_capture, require_output_folder, setup_from_args
-from .common import add_slice_planning_options, slice_parameters
+from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
+    prepare_inputs, require_output_folder
+from .common import FORMAT_HELP, INTERPOLATION_HELP, add_slice_options, check_slice_options, describe_slices, \
+    slice_parameters
 
 
 def register(sub) -> None:
     p = sub.add_parser("refocus", help="refocus captures at given a, distance or depth range",
                        description="Decode each capture once and render all its slices (Eq. 9). Each slice is "
                                    "written with a sidecar (source, a, distance_mm, near_mm, far_mm, dof_mm), the "
-                                   "same fields embedded in the image metadata.")
-    p.add_argument("raw", nargs="+", metavar="RAW", help="raw captures")
+                                   "same fields embedded in the image metadata. Prints one line per slice: a, the "
+                                   "distance it focuses at and its depth of field.")
+    p.add_argument("raw", nargs="+", metavar="RAW",
+                   help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)
-    which = p.add_mutually_exclusive_group(required=True)
-    which.add_argument("--a", metavar="LIST", help="refocus parameters: numbers and ranges START:STOP[:STEP]")
-    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
-                       help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
-    which.add_argument("--at", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance")
-    add_slice_planning_options(p)
-    p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR")
-    p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"),
-                   help="tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB preview, exr")
-    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
-                   help="interpolation between lenses for real a (default linear)")
-    p.add_argument("--upsample", type=int, default=1, help="spatial upsampling factor of the slices (default 1)")
+    add_slice_options(p).required = True
+    add_output_folder_option(p)
+    add_render_options(p)
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
-    from ..camera import Camera
-    from ..outputs import write_slices
-    from ..pipeline import load_lightfield, unique_stems
-    from ..refocus import refocus
+def add_render_options(p) -> None:
+    """``--format``, ``--interpolation`` and ``--upsample`` of refocused slices (refocus and batch)."""
+    p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
+    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
+                   help=INTERPOLATION_HELP)
+    p.add_argument("--upsample", type=int, default=1, metavar="S",
+                   help="render slices on an S times finer grid than the lenses (default 1)")
 
+
+def check_render_options(args) -> None:
     if args.upsample < 1:
         raise LfprocError(f"--upsample must be an integer >= 1, got {args.upsample}")
-    if (args.max_gap or args.integer) and args.depth_range is None:
-        raise LfprocError("--max-gap and --integer apply to --depth-range only")
+
+
+def run(args) -> int:
+    from ..outputs import write_slices
+    from ..pipeline import unique_stems
+    from ..refocus import refocus
+
+    check_render_options(args)
+    check_slice_options(args)
     require_output_folder(args.outdir)
-    camera = Camera.from_toml(args.camera)
-    a_values = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer)
-    setup = setup_from_args(args, camera)  # calibration last: every cheap check fails first
     stems = unique_stems(args.raw)
+    camera = input_camera(args, args.raw)
+    plans, described = {}, set()
+
+    def slices_for(camera):
+        key = camera.to_toml()
+        if key not in plans:
+            plans[key] = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                                          max_slices=args.max_slices)
+        return key, plans[key]
+
+    def describe_once(key, camera, values):
+        """The slice table, printed when the first capture with this camera has rendered."""
+        if key not in described:
+            described.add(key)
+            describe_slices(camera, values, args.depth_range)
+
+    a_values = slices_for(camera)[1]   # every list is checked before any capture is read
+    inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
-        lf = load_lightfield(path, setup)
-        stack = refocus(lf, a_values, interpolation=args.interpolation, upsample=args.upsample)
-        write_slices(args.outdir, stems[path], os.path.abspath(path), setup.camera, a_values, stack, args.format)
-        progress.update(len(a_values))
+        lf = inputs.load(path)
+        key, values = slices_for(lf.camera)
+        check_view_coverage(lf.camera, values, lf.lens_shape, path)
+        stack = refocus(lf, values, interpolation=args.interpolation, upsample=args.upsample)
+        describe_once(key, lf.camera, values)
+        written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
+                               args.format)
+        progress.update(len(values))
+        print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
+
+
+def check_view_coverage(camera, a_values, lens_shape, source: str) -> None:
+    """Refuse slices that fewer than half the views reach (a garbage a); warn where most pixels miss some."""
+    import warnings
+
+    from .. import geometry
+    from ..refocus import MIN_OVERLAPPING_VIEWS, full_view_fraction, max_usable_a, overlapping_view_fraction
+    from .common import _mm
+
+    m, (ny, nx) = camera.m_hat, lens_shape
+    reached = overlapping_view_fraction(a_values, m, lens_shape)
+    beyond = [a for a, f in zip(a_values, reached) if f < MIN_OVERLAPPING_VIEWS]
+    if beyond:
+        limit = max_usable_a(m, lens_shape)
+        near, far = (float(d) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
+        share = float(overlapping_view_fraction(beyond[0], m, lens_shape))
+        raise LfprocError(f"{source}: at a={beyond[0]:g} only {100 * share:.0f} % of the {m}x{m} views reach this "
+                          f"{ny}x{nx}-lens capture (the others shift off it); refocus within |a| < {limit:.3g}, i.e. "
+                          f"from {_mm(near)} (a=+{limit:.3g}) to {_mm(far)} (a=-{limit:.3g})")
+    share = full_view_fraction(a_values, m, lens_shape)
+    thin = [a for a, f in zip(a_values, share) if f < 0.5]
+    if thin:
+        worst = max(thin, key=abs)
+        warnings.warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
+                      f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused")

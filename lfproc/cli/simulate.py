@@ -12,8 +12,9 @@ def register(sub) -> None:
                        description="Render the scene file SCENE.toml (docs/scene-format.md) through the paraxial "
                                    "SPC model and write DIR/capture.png and DIR/white.png (16-bit), "
                                    "DIR/camera.toml, DIR/ground_truth.npz (ideal_views, ideal_weight, "
-                                   "plane_label) and DIR/ground_truth.json (lens grid, planes with their refocus "
-                                   "parameter a, render options).")
+                                   "plane_label, depth_mm) and DIR/ground_truth.json (the micro image centre "
+                                   "grid, planes with their refocus parameter a, render options; with a finite "
+                                   "exit pupil also the lens grid).")
     p.add_argument("scene", metavar="SCENE.toml", help="scene file")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--seed", type=int, default=None, help="override [render] seed")
@@ -21,7 +22,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    import sys
+    import time
     from dataclasses import replace
+
+    from tqdm import tqdm
 
     from ..errors import LfprocError
     from ..scene import load_scene_file
@@ -33,15 +38,55 @@ def run(args) -> int:
         if args.seed < 0:
             raise LfprocError(f"--seed must be an integer >= 0, got {args.seed}")
         options = replace(options, seed=args.seed)
-    if os.path.exists(args.output) and not os.path.isdir(args.output):
-        raise LfprocError(f"{args.output}: exists and is not a folder; give a folder for -o")
-    capture = render(scene_file.camera, scene_file.scene, options.sensor_shape, **options.render_kwargs())
-    write_outputs(args.output, capture, scene_file, options)
-    grid = capture.grid
-    print(f"wrote {', '.join(OUTPUT_NAMES)} to {args.output}: {options.height_px}x{options.width_px} px, "
-          f"{grid.rows}x{grid.cols} {grid.kind} lenses of {grid.pitch_px:.4f} px, "
-          f"{len(capture.planes)} plane(s)")
+    _check_output_folder(args.output)
+    start = time.perf_counter()
+    # the same bar as refocus and views: on stderr, only on a terminal; here in percent of the traced rays
+    with tqdm(total=100, unit="%", disable=None, file=sys.stderr, desc="lfproc simulate",
+              bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]") as bar:
+        def progress(fraction: float, stage: str) -> None:
+            bar.set_description_str(f"lfproc simulate ({stage})", refresh=False)
+            bar.update(round(100 * fraction) - bar.n)
+
+        capture = render(scene_file.camera, scene_file.scene, options.sensor_shape, **options.render_kwargs(),
+                         progress=progress)
+        bar.set_description_str("lfproc simulate (writing)")
+        write_outputs(args.output, capture, scene_file, options)
+    print(summary(args.output, capture, time.perf_counter() - start))
     return 0
+
+
+def _check_output_folder(folder: str) -> None:
+    """Fail before rendering when ``folder`` cannot be created or written (nothing is created here)."""
+    from ..errors import LfprocError
+
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise LfprocError(f"{folder}: exists and is not a folder; give a folder for -o")
+    existing = os.path.abspath(folder)
+    while not os.path.exists(existing):
+        existing = os.path.dirname(existing)
+    if not os.path.isdir(existing) or not os.access(existing, os.W_OK | os.X_OK):
+        raise LfprocError(f"{folder}: cannot write there ({existing} is not a writable folder); give another -o")
+
+
+def summary(folder: str, capture, seconds: float) -> str:
+    """What ``lfproc simulate`` rendered and wrote: one line per file."""
+    grid, camera = capture.grid, capture.camera
+    height, width = capture.raw.shape
+    sensor = "mono" if camera.cfa == "none" else f"{camera.cfa} mosaic"
+    pupil = "telecentric" if camera.telecentric else f"exit pupil {camera.exit_pupil_distance_mm:g} mm"
+    arrays = "plane_label, depth_mm"
+    if capture.ideal_views is not None:
+        arrays += ", ideal_views " + "x".join(str(n) for n in capture.ideal_views.shape) + ", ideal_weight"
+    grids = "micro image grid" + ("" if camera.telecentric else " and lens grid")
+    lines = [f"lfproc simulate: rendered {height}x{width} px ({sensor}, {pupil}), {grid.rows}x{grid.cols} "
+             f"{grid.kind} micro images of {grid.pitch_px:.4f} px, {len(capture.planes)} plane(s) in {seconds:.1f} s",
+             f"  {os.path.join(folder, 'capture.png')}: the raw capture (16-bit)",
+             f"  {os.path.join(folder, 'white.png')}: its white image (16-bit)",
+             f"  {os.path.join(folder, 'camera.toml')}: the camera file",
+             f"  {os.path.join(folder, 'ground_truth.npz')}: {arrays}",
+             f"  {os.path.join(folder, 'ground_truth.json')}: {grids}, planes with distance and refocus a, "
+             f"render options"]
+    return "\n".join(lines)
 
 
 def write_outputs(folder: str, capture, scene_file, options) -> None:
@@ -51,11 +96,12 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
     from ..atomic import atomic_path, write_json_atomic, write_text_atomic
     from ..geometry import refocus_parameter
     from ..io import write_image
+    from ..simulate import micro_image_scale
 
     write_image(os.path.join(folder, "capture.png"), capture.raw)   # uint16: written exactly, 16-bit PNG
     write_image(os.path.join(folder, "white.png"), capture.white)
     write_text_atomic(os.path.join(folder, "camera.toml"), capture.camera.to_toml())
-    arrays = {"plane_label": capture.plane_label}
+    arrays = {"plane_label": capture.plane_label, "depth_mm": capture.depth_mm}
     if capture.ideal_views is not None:
         arrays.update(ideal_views=capture.ideal_views, ideal_weight=capture.ideal_weight)
     with atomic_path(os.path.join(folder, "ground_truth.npz")) as tmp:
@@ -83,4 +129,8 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
         "ideal_views": "ground_truth.npz: ideal_views (m, m, rows, cols, C), ideal_weight (m, m, rows, cols), "
                        "plane_label (rows, cols; -1 = background)",
     }
+    if not camera.telecentric:  # absent when telecentric: "grid" is then also the lens grid
+        truth["exit_pupil_distance_mm"] = camera.exit_pupil_distance_mm
+        truth["micro_image_scale"] = micro_image_scale(camera)
+        truth["lens_grid"] = capture.lens_grid.to_json_dict()
     write_json_atomic(os.path.join(folder, "ground_truth.json"), truth)

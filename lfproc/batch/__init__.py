@@ -1,0 +1,52 @@
+"""Batch processing: many captures, in parallel, resumable, locally or on a Dask cluster.
+
+A batch is a list of :class:`Job` — plain, picklable data: one capture and what to make of it. The
+same :func:`run_job` runs in this process, in a local process pool (:func:`run_local`) or on
+dask.distributed workers (:func:`run_dask`); each worker reads its capture and writes its outputs
+itself, atomically (:mod:`lfproc.atomic`), so no capture's pixels cross a process boundary (only the
+calibrated white image, once per local worker process) and no reader ever sees a half-written file.
+
+The manifest ``OUTDIR/lfproc-manifest.json`` (:class:`Manifest`) records, per capture, a fingerprint
+(the capture file's size and modification time, those of the white image and grid file, the camera
+file's text, the lfproc version and every parameter that shapes the outputs), the parameters, the
+outputs (names relative to OUTDIR), status and error. A rerun skips captures whose fingerprint matches
+a ``done`` entry whose outputs and sidecars all still exist, and redoes the rest. The manifest is
+rewritten atomically as results arrive (at most every :data:`MANIFEST_SAVE_INTERVAL_S` seconds, and
+always at the end or on interruption), so an interrupted batch resumes where it stopped: at worst the
+captures of the last few seconds are redone, overwriting their complete outputs with identical ones.
+
+One batch at a time may write to an OUTDIR: :func:`lock_outdir` holds an advisory lock on
+``OUTDIR/.lfproc-batch.lock`` for the duration of a run.
+"""
+
+from ._dask import run_dask
+from ._jobs import CAPTURE_EXTENSIONS, Job, JobResult, expand_inputs, file_stamp
+from ._local import run_local
+from ._manifest import (
+           LOCK_NAME,
+           MANIFEST_NAME,
+           MANIFEST_VERSION,
+           Manifest,
+           lock_outdir,
+           read_manifest,
+           remove_stale_partial_files,
+)
+from ._resources import (
+           BYTES_PER_SENSOR_PIXEL,
+           PROCESS_BASE_BYTES,
+           available_memory_bytes,
+           default_workers,
+)
+from ._worker import (
+           _GRID_SEEDS,
+           decode_setup,
+           init_pool_worker,
+           run_job,
+           seed_grids,
+           setup_key,
+)
+
+__all__ = ["CAPTURE_EXTENSIONS", "Job", "JobResult", "expand_inputs", "file_stamp", "LOCK_NAME", "MANIFEST_NAME",
+           "MANIFEST_VERSION", "Manifest", "lock_outdir", "read_manifest", "remove_stale_partial_files",
+           "available_memory_bytes", "default_workers", "decode_setup", "init_pool_worker", "run_job", "seed_grids",
+           "setup_key", "_GRID_SEEDS", "run_local", "run_dask", "BYTES_PER_SENSOR_PIXEL", "PROCESS_BASE_BYTES"]

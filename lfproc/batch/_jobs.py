@@ -1,0 +1,107 @@
+"""Jobs: one capture and what to make of it, as plain picklable data; input expansion."""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import json
+import os
+from dataclasses import dataclass, fields
+
+from ..errors import LfprocError
+
+#: image extensions a folder input is searched for (case-insensitive)
+CAPTURE_EXTENSIONS = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".rw2", ".pef", ".srw",
+                      ".tif", ".tiff", ".png", ".exr", ".lfr", ".lfp", ".raw", ".npz")
+#: Job fields that are not parameters of the outputs (where they go, and the camera file's text,
+#: which the fingerprint hashes separately)
+_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One capture to process; every field is plain data so it pickles cheaply to any worker.
+
+    Paths are absolute: a worker on another machine resolves them on the shared file system.
+    """
+
+    source: str                 # the capture, or a light field from lfproc decode (.lfp.npz)
+    stem: str                   # output name prefix
+    outdir: str                 # output folder
+    camera_toml: str            # the camera file's text ("" when every input is a decoded light field)
+    calib: str | None           # GRID.json (from lfproc calibrate) or None
+    white: str | None           # white image or None
+    refocus_a: tuple            # refocus parameters a (empty: no refocusing)
+    views: bool                 # write the viewpoint images
+    fmt: str = "tiff"
+    interpolation: str = "linear"
+    decode_interpolation: str = "linear"
+    demosaic: str = "fast"
+    upsample: int = 1           # refocused slices on an upsample-times finer grid
+    mosaic: bool = False        # with views: also the mosaic of all views
+    gif: bool = False           # with views: also the animation
+    inside_aperture: bool = False  # with views: only those inside the main lens aperture
+
+    def parameters(self) -> dict:
+        """The parameters that shape this capture's outputs, as recorded in the manifest."""
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
+                for f in fields(self) if f.name not in _NOT_PARAMETERS}
+
+    def fingerprint(self) -> str:
+        """Changes whenever the capture, the camera, the white image, the grid file, lfproc's version or
+        any parameter that shapes the outputs changes (not when OUTDIR moves)."""
+        from .. import __version__
+
+        payload = json.dumps([__version__, self.source, self.stem, self.camera_toml, self.parameters(),
+                              [file_stamp(p) for p in (self.source, self.calib, self.white)]],
+                             sort_keys=True, default=str)
+        return hashlib.sha256(payload.encode()).hexdigest()[:32]
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """What became of one capture: ``outputs`` are image paths (each with its sidecar ``NAME.json``)."""
+
+    source: str
+    status: str                 # "done" | "failed" | "skipped"
+    outputs: tuple = ()
+    error: str | None = None
+    seconds: float = 0.0
+
+
+def file_stamp(path: str | None) -> list | None:
+    """``[path, size, mtime_ns]`` of a file (size and time None if it is missing), or None for no path."""
+    if path is None:
+        return None
+    try:
+        st = os.stat(path)
+        return [path, st.st_size, st.st_mtime_ns]
+    except OSError:
+        return [path, None, None]
+
+
+def expand_inputs(inputs: list[str]) -> list[str]:
+    """Files, folders (their capture files, sorted by name) and glob patterns (sorted matches) → absolute
+    paths in the order given, without duplicates."""
+    found = []
+    for item in inputs:
+        if os.path.isdir(item):
+            names = sorted(os.listdir(item))
+            found += [os.path.join(item, n) for n in names
+                      if n.lower().endswith(CAPTURE_EXTENSIONS) and os.path.isfile(os.path.join(item, n))]
+        elif any(ch in item for ch in "*?["):
+            matches = sorted(glob.glob(item))
+            if not matches:
+                raise LfprocError(f"{item}: the pattern matches no file; check the pattern")
+            found += [m for m in matches if os.path.isfile(m)]
+        elif os.path.isfile(item):
+            found.append(item)
+        else:
+            raise LfprocError(f"{item}: no such file or folder; give capture files, folders or glob patterns")
+    unique = list(dict.fromkeys(os.path.abspath(p) for p in found))
+    if not unique:
+        raise LfprocError(f"no captures found in {' '.join(inputs)}; folders are searched for "
+                          f"{', '.join(CAPTURE_EXTENSIONS)}")
+    return unique
+
+

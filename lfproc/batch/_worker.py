@@ -1,0 +1,105 @@
+"""The worker side of a batch: one decode setup per process (calibrated once), and run_job."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+
+from ..errors import LfprocError
+from ._jobs import Job, JobResult, file_stamp
+
+#: per process: setup key -> DecodeSetup (the calibrated grid and white image), oldest first
+_SETUP_CACHE: dict = {}
+_GRID_SEEDS: dict = {}  # setup key -> LensGrid fitted by the parent process (see seed_grids)
+_SETUP_CACHE_SIZE = 4
+
+
+def setup_key(job: Job) -> tuple:
+    """What a decode setup depends on. The grid and white files' sizes and times are part of it, so a
+    long-lived Dask worker recalibrates when the white image or grid file is replaced."""
+    return (job.camera_toml, job.calib, job.white, job.decode_interpolation, job.demosaic,
+            json.dumps([file_stamp(job.calib), file_stamp(job.white)]))
+
+
+def decode_setup(job: Job):
+    """The :class:`lfproc.pipeline.DecodeSetup` of a job: one calibration per process, reused for all its
+    captures (and handed to local pool processes ready-made, see :func:`run_local`)."""
+    key = setup_key(job)
+    setup = _SETUP_CACHE.get(key)
+    if setup is None:
+        from ..camera import Camera
+        from ..pipeline import prepare_decoding
+
+        camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
+        setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
+                                 demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key))
+        while len(_SETUP_CACHE) >= _SETUP_CACHE_SIZE:
+            _SETUP_CACHE.pop(next(iter(_SETUP_CACHE)))
+        _SETUP_CACHE[key] = setup
+    return setup
+
+
+def seed_grids(grids: dict) -> None:
+    """Grids calibrated by the process that started the batch, keyed by :func:`setup_key`: a Dask
+    worker builds its setups from them instead of calibrating the white image again."""
+    _GRID_SEEDS.update(grids)
+
+
+def _portable_setups(jobs: list[Job]) -> dict:
+    """This process's setups for ``jobs``, without their per-shape decoders (cheap to rebuild), to pickle."""
+    import dataclasses
+
+    keys = {setup_key(job) for job in jobs}
+    return {key: dataclasses.replace(setup, _decoders={}) for key, setup in _SETUP_CACHE.items() if key in keys}
+
+
+def run_job(job: Job) -> JobResult:
+    """Process one capture; any error becomes a ``failed`` result (with its message), never an exception.
+
+    Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching them
+    here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
+    """
+    from ..lightfield import LightField, is_lightfield_file
+    from ..outputs import write_slices, write_view_set
+    from ..pipeline import load_lightfield
+
+    start = time.perf_counter()
+    try:
+        lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
+            load_lightfield(job.source, decode_setup(job))
+        if lf.camera is None:
+            raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
+        outputs = []
+        if job.refocus_a:
+            from ..refocus import refocus
+
+            stack = refocus(lf, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
+            outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt)
+        if job.views:
+            outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
+                                      gif=job.gif, inside_aperture=job.inside_aperture)
+        return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start)
+    except LfprocError as exc:
+        return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start)
+    except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
+        return JobResult(job.source, "failed", (), f"{job.source}: unexpected {type(exc).__name__}: {exc} "
+                                                   f"(a bug in lfproc; please report it)",
+                         time.perf_counter() - start)
+
+
+def init_pool_worker(setups: dict | None = None) -> None:
+    """Set up a local pool process: the parent's decode setups (no second calibration), one thread for
+    numba and OpenCV (parallelism comes from the processes), and Ctrl-C left to the parent, which lets
+    the captures in progress finish."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _SETUP_CACHE.update(setups or {})
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # read when numba is first imported, later in run_job
+    try:
+        import cv2
+        cv2.setNumThreads(1)
+    except ImportError:  # pragma: no cover
+        pass
+

@@ -1,0 +1,181 @@
+"""The camera: optical parameters of a Standard Plenoptic Camera and the quantities derived from them.
+
+All lengths are in millimetres. Validation lives in :mod:`._validation`, the camera file (TOML) in
+:mod:`._toml`; this module holds only the frozen dataclass.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field, replace
+
+from ._optics import image_distance_for_focus
+from ._validation import validate_camera
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Optical parameters of a Standard Plenoptic Camera (the paper's Table 1 and Section 5.1).
+
+    Parameters
+    ----------
+    pixel_pitch_mm : float
+        Physical sensor pixel pitch p_p.
+    mla_pitch_mm : float
+        Micro lens pitch p_m̂.
+    mla_focal_length_mm : float
+        Micro lens focal length f_s; the sensor sits f_s behind the MLA.
+    main_focal_length_mm : float
+        Main lens focal length f_U.
+    image_distance_mm : float
+        b_U, main lens (H2U) to MLA (H1s). Must be at least f_U.
+    mla_principal_plane_gap_mm, main_principal_plane_gap_mm : float
+        Separations H1s–H2s and H1U–H2U (negative where the planes are interchanged).
+    f_number : float or None
+        Main lens f-number, for the Airy limit (Eq. 22) and aperture checks.
+    grid : {"rectangular", "hexagonal"}
+    cfa : {"none", "RGGB", "BGGR", "GRBG", "GBRG"}
+    black_level : float
+        Raw black level for TIFF/PNG captures (0 by default).
+    white_level : float or None
+        Raw white level for TIFF/PNG captures; ``None`` (the default) takes the file's own maximum
+        (255 for 8-bit files, 65535 for 16-bit ones; camera raws always carry their own levels).
+    exit_pupil_distance_mm : float
+        d_A, the distance from the micro lens array to the main lens's exit pupil, towards the object.
+        ``inf`` (the default) is the image-side telecentric case of the 2014 paper; a finite value
+        shifts micro image centres outwards from their lenses (Hahne et al. 2018, PlenoptiSign's dA).
+    micro_image_px : int or None
+        Odd micro image size m̂ after resampling; ``None`` picks the largest odd integer not above
+        ``mla_pitch_mm / pixel_pitch_mm``. Always an ``int`` once constructed.
+    name : str
+        Optional label.
+    source : str
+        The file the camera came from (error messages only; not compared).
+    provenance : tuple of (str, str)
+        Where values came from, as (dotted camera-file key, short text) pairs, from the camera file's
+        optional ``[provenance]`` table (e.g. written by ``lfproc camera`` from Lytro metadata).
+    """
+
+    pixel_pitch_mm: float
+    mla_pitch_mm: float
+    mla_focal_length_mm: float
+    main_focal_length_mm: float
+    image_distance_mm: float
+    mla_principal_plane_gap_mm: float = 0.0
+    main_principal_plane_gap_mm: float = 0.0
+    f_number: float | None = None
+    grid: str = "rectangular"
+    cfa: str = "none"
+    black_level: float = 0.0
+    white_level: float | None = None
+    exit_pupil_distance_mm: float = math.inf
+    micro_image_px: int | None = None
+    name: str = ""
+    source: str = field(default="", compare=False, repr=False)
+    provenance: tuple = field(default=(), compare=False, repr=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "micro_image_px", validate_camera(self))
+
+    # ----------------------------------------------------------------- derived quantities
+    @property
+    def m_hat(self) -> int:
+        """Micro image size m̂ in pixels after resampling (odd)."""
+        return int(self.micro_image_px)
+
+    @property
+    def center_index(self) -> int:
+        """c = (m̂ − 1) / 2, the index of the central view."""
+        return (self.m_hat - 1) // 2
+
+    @property
+    def telecentric(self) -> bool:
+        """True when the exit pupil is at infinity (the 2014 paper's model)."""
+        return math.isinf(self.exit_pupil_distance_mm)
+
+    @property
+    def micro_image_scale(self) -> float:
+        """(d_A + f_s) / d_A: the micro image centre lattice is the lens lattice scaled by this about the axis.
+
+        Exactly 1.0 for a telecentric camera (Hahne et al. 2018: the chief ray through a lens centre
+        comes from the exit pupil centre, so it lands f_s·s/d_A further out than the lens at height s).
+        """
+        if self.telecentric:
+            return 1.0
+        return (self.exit_pupil_distance_mm + self.mla_focal_length_mm) / self.exit_pupil_distance_mm
+
+    @property
+    def micro_image_pitch_mm(self) -> float:
+        """Pitch of the micro image centres on the sensor: ``mla_pitch_mm × micro_image_scale``."""
+        return self.mla_pitch_mm * self.micro_image_scale
+
+    @property
+    def effective_pixel_pitch_mm(self) -> float:
+        """The contract's effective pixel pitch ``mla_pitch_mm / m̂`` (the lens pitch over m̂)."""
+        return self.mla_pitch_mm / self.m_hat
+
+    @property
+    def sample_pitch_mm(self) -> float:
+        """Spacing of the decoded samples under each lens: the micro image pitch over m̂.
+
+        The decoder resamples the calibrated micro image lattice (what a white image shows), one
+        micro image pitch ``mla_pitch_mm × micro_image_scale`` to m̂ samples. The geometry uses this
+        pitch; it is exactly :attr:`effective_pixel_pitch_mm` for a telecentric camera.
+        """
+        return self.micro_image_pitch_mm / self.m_hat
+
+    @property
+    def sensor_to_main_lens_mm(self) -> float:
+        """f_s + H1sH2s + b_U + H1UH2U: the constant path of Eqs. 21 and 31 (sensor to H1U)."""
+        return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
+                + self.main_principal_plane_gap_mm)
+
+    @property
+    def pitch_px(self) -> float:
+        """Micro lens pitch in physical sensor pixels (before resampling)."""
+        return self.mla_pitch_mm / self.pixel_pitch_mm
+
+    def raw_levels(self, type_max: float) -> tuple[float, float]:
+        """(black, white) for a file whose integer type saturates at ``type_max``.
+
+        The white level given in the camera file wins; without one, the file's own maximum.
+        """
+        white = float(type_max) if self.white_level is None else float(self.white_level)
+        return float(self.black_level), white
+
+    def provenance_of(self, key: str) -> str | None:
+        """Where the value of a dotted camera-file key came from, if the camera file says."""
+        return dict(self.provenance).get(key)
+
+    def with_focus_distance(self, focus_distance_mm: float) -> "Camera":
+        """A copy whose b_U focuses the main lens at ``focus_distance_mm`` (from the sensor)."""
+        return replace(self, image_distance_mm=image_distance_for_focus(
+            self.main_focal_length_mm, focus_distance_mm,
+            self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.main_principal_plane_gap_mm,
+            self.source or "camera"))
+
+    # ----------------------------------------------------------------- files (see ._toml)
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike) -> "Camera":
+        """Load a camera file (contract format); every problem raises `LfprocError` naming the file."""
+        from ._toml import camera_fields, read_camera_file
+        path = os.fspath(path)
+        return cls(**camera_fields(read_camera_file(path), source=path))
+
+    @classmethod
+    def from_toml_string(cls, text: str, source: str = "camera") -> "Camera":
+        """Load camera file text (e.g. stored inside a light field file)."""
+        from ._toml import camera_fields, parse_camera_text
+        return cls(**camera_fields(parse_camera_text(text, source), source=source))
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "camera") -> "Camera":
+        """Build a camera from the parsed TOML tables (see :mod:`lfproc.camera._toml`)."""
+        from ._toml import camera_fields
+        return cls(**camera_fields(data, source=source))
+
+    def to_toml(self) -> str:
+        """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision)."""
+        from ._toml import camera_to_toml
+        return camera_to_toml(self)

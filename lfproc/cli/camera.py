@@ -1,0 +1,44 @@
+"""``lfproc camera``: a contract camera file from a Lytro capture's metadata, with where each number came from."""
+
+from __future__ import annotations
+
+import sys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("camera", help="write a camera file from a Lytro file's metadata",
+                       description="Read the metadata of a Lytro capture or white image (.lfr/.lfp, or NAME.raw "
+                                   "with NAME.txt/.json) and write a camera file: pixel and lens pitch, hexagonal "
+                                   "tiling, micro lens focal length (MLA-to-sensor distance), main lens focal "
+                                   "length and f-number at the capture's zoom, exit pupil distance, levels, CFA. "
+                                   "What the metadata lacks (the focus distance, principal planes) comes from "
+                                   "--focus-distance or a default; the [provenance] table says which.")
+    p.add_argument("file", metavar="FILE", help="Lytro capture or white image")
+    p.add_argument("-o", "--output", required=True, metavar="CAMERA.toml", help="camera file to write")
+    p.add_argument("--focus-distance", type=float, metavar="MM",
+                   help="distance from the sensor the main lens was focused at, in mm (inf allowed); "
+                        "default: infinity (b_U = f_U)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..atomic import write_text_atomic
+    from ..errors import LfprocError
+    from ..io import is_lytro_file, lytro_camera, read_lytro_metadata
+    from ..io._checks import existing_file
+
+    path = existing_file(args.file)
+    if not is_lytro_file(path):
+        raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata); only Lytro "
+                          f"metadata describes the camera: write other camera files by hand (README)")
+    built = lytro_camera(read_lytro_metadata(path), args.focus_distance)
+    try:
+        write_text_atomic(args.output, built.to_toml())
+    except OSError as exc:
+        raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
+    cam = built.camera
+    defaults = [key for key, text in built.provenance if text.startswith("default")]
+    print(f"{args.output}: Lytro camera, {cam.pitch_px:.3f} px {cam.grid} lenses (m = {cam.m_hat}), f_s "
+          f"{cam.mla_focal_length_mm:.4f} mm, f_U {cam.main_focal_length_mm:.3f} mm, b_U "
+          f"{cam.image_distance_mm:.3f} mm; defaults (see [provenance]): {', '.join(defaults)}", file=sys.stdout)
+    return 0

@@ -1,0 +1,55 @@
+"""``lfproc info``: what a file is and holds (Lytro containers and raws, camera raws, images)."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("info", help="what a capture or image file is and holds",
+                       description="Describe a file without decoding it: format, whether it holds a raw light "
+                                   "field, size, bit depth, CFA, levels; for Lytro files the camera model and "
+                                   "serial, lens data and every section of the container with its SHA-1 check.")
+    p.add_argument("file", metavar="FILE", help="a capture, white image or picture: Lytro .lfr/.lfp or .raw with its "
+                                                "metadata, camera raw, TIFF, PNG, EXR, …")
+    p.add_argument("--json", action="store_true", help="print one JSON object (strict JSON: infinity is null)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..io import describe_file
+    from .common import dumps_strict
+
+    info = describe_file(args.file)
+    if args.json:
+        sys.stdout.write(dumps_strict(info, indent=1) + "\n")
+        return 0
+    sys.stdout.write(format_info(info))
+    return 0
+
+
+def format_info(info: dict) -> str:
+    """The description as aligned ``key: value`` lines, sections as a table."""
+    lines = []
+    for key, value in info.items():
+        if key in ("sections", "path"):
+            continue
+        if isinstance(value, dict):
+            value = ", ".join(f"{k} {_fmt(v)}" for k, v in value.items() if v is not None)
+        lines.append(f"{key:22s} {_fmt(value)}")
+    sections = info.get("sections") or []
+    if sections:
+        lines.append(f"sections ({len(sections)}):")
+        for s in sections:
+            lines.append(f"  {s['kind']} {s['length']:>10d} B  {s['sha1'][:17]}…  "
+                         f"{'ok' if s['sha1_ok'] else 'SHA-1 MISMATCH'}  {s['content']}")
+    return f"{info.get('path', '')}\n" + "\n".join(lines) + "\n"
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return "inf" if math.isinf(value) else f"{value:.6g}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_fmt(v) for v in value) + "]"
+    return str(value)

@@ -1,0 +1,30 @@
+"""The paper's paraxial ray model: where each refocused slice is focused, where each view looks from.
+
+Pure, vectorised functions of a :class:`~lfproc.camera.Camera`; no images, numpy only (``lfproc
+geometry`` stays light). Every distance is measured from the sensor, in millimetres. The 2014
+paper's image-side telecentric model, extended to a finite exit pupil (Hahne et al., IJCV 2018).
+
+Private modules: ``_slices`` (distance, DOF and inverse, Eqs. 13–31), ``_planning`` (slice planning,
+uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), ``_triangulation``
+(baseline, tilt and distance of a disparity), ``_exit_pupil`` (micro image drift),
+``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂).
+"""
+
+from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
+from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
+from ._ray_model import RayModel
+from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
+from ._slices import SliceGeometry, infinity_parameter, refocus_parameter, slice_distance_mm, slice_geometry
+from ._triangulation import Triangulation, triangulate
+from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, view_positions_mm, view_slopes,
+                     view_tilts_deg, views_inside_aperture)
+
+__all__ = [
+    "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
+    "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
+    "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
+    "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
+    "Triangulation", "triangulate",
+    "ViewGeometry", "baseline_mm", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
+    "view_tilts_deg", "views_inside_aperture",
+]

@@ -1,0 +1,45 @@
+"""Reading captures and images; writing images, GIFs and sidecars with lfproc's metadata.
+
+Reading
+    `read_capture` turns a sensor capture into a linear float32 `Capture`: Lytro containers
+    (``.lfp``/``.lfr``) and raw pairs (``NAME.raw`` + ``NAME.txt``/``.json``) with their own levels
+    and Bayer layout; camera raws (DNG, CR2, NEF, ARW, RAF, ORF, RW2, …) through LibRaw (rawpy),
+    which carries its own black and white levels and CFA pattern; TIFF, PNG, EXR and every other
+    format through OpenImageIO, with the levels and CFA of the camera file. `read_image` reads any
+    image as stored, for general use. `read_lytro_metadata` parses a Lytro file's metadata
+    (`LytroMetadata`); `describe_file` says what any file is and holds (``lfproc info``);
+    `lytro_camera` builds a `Camera` from Lytro metadata; `pick_white_image` picks a white image
+    from a calibration folder.
+
+Writing
+    `write_image` writes float32 linear images as float TIFF (the default for outputs), 16-bit
+    linear PNG, float EXR or 8-bit sRGB JPEG (for viewing only), and uint16 sensor data exactly,
+    with lfproc's metadata dict embedded (see ``_write.py`` for what each format keeps). The JSON
+    sidecar (`write_sidecar`, contract: ``NAME.EXT`` -> ``NAME.json``) holds the same dict for every
+    format. `write_gif` writes animated previews. All writers are atomic.
+
+OpenImageIO, rawpy and Pillow are imported inside the functions that use them, so importing this
+package is cheap (numpy only).
+"""
+
+from ._capture import Capture
+from ._describe import describe_file
+from ._gif import write_gif
+from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
+from ._lytro_camera import LytroCamera, lytro_camera
+from ._lytro_metadata import LytroMetadata
+from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
+from ._lytro_unpack import unpack_raw
+from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
+from ._oiio import read_image
+from ._read import RAW_EXTENSIONS, read_capture
+from ._sidecar import sidecar_path, write_sidecar
+from ._write import FORMATS, read_metadata, srgb_encode, write_image
+
+__all__ = [
+    "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
+    "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
+    "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",
+    "sidecar_path",
+    "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
+]

@@ -1,0 +1,197 @@
+"""What a file is and holds (``lfproc info``): Lytro containers and raw pairs, camera raws, images.
+
+The dict has the contract's keys (``ARCHITECTURE.md``, "lfproc info"): ``format``
+(``"lytro-container"``, ``"lytro-raw"``, ``"camera-raw"``, ``"image"``), ``raw_light_field``,
+``width``, ``height``, and for Lytro files ``camera_model`` and ``sections``; plus what else each
+kind of file tells (serial, bit depth, CFA, levels, lens and micro lens data).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from ..errors import LfprocError
+from ._checks import _NotThisFormat, existing_file
+
+
+def describe_file(path: str | os.PathLike) -> dict:
+    """Describe any capture or image file without decoding it.
+
+    Raises
+    ------
+    LfprocError
+        Missing, empty or unreadable files (a corrupt Lytro container is described, its bad sections
+        marked ``"sha1_ok": false``, as long as its structure can be parsed).
+    """
+    from ._lytro_read import is_lytro_file
+    from ._read import RAW_EXTENSIONS
+
+    from ..lightfield import is_lightfield_file
+
+    path = existing_file(path)
+    if is_lytro_file(path):
+        return _describe_lytro(path)
+    if is_lightfield_file(path):
+        return _describe_lightfield(path)
+    order = (_describe_camera_raw, _describe_image)
+    if os.path.splitext(path)[1].lower() not in RAW_EXTENSIONS:
+        order = order[::-1]
+    reasons = []
+    for describe in order:
+        try:
+            return describe(path)
+        except _NotThisFormat as exc:
+            reasons.append(str(exc))
+    raise LfprocError(f"{path}: not a readable image, camera raw or Lytro file ({'; '.join(reasons)}); "
+                      f"pass a capture or image file")
+
+
+def _describe_lytro(path: str) -> dict:
+    from ._lytro_container import has_container_extension, is_container, picture_kind, read_container
+    from ._lytro_read import metadata_sibling, open_lytro
+
+    info = {"path": path}
+    if has_container_extension(path) or is_container(path):
+        container = read_container(path, verify=False)
+        info.update(format="lytro-container", sections=_sections(container))
+        try:
+            lytro = open_lytro(path, verify=False)
+        except LfprocError as exc:
+            if "holds no raw light field" not in str(exc):
+                raise
+            info.update(raw_light_field=False, content=picture_kind(container.toc), width=None, height=None,
+                        camera_model=None)
+            return info
+    else:
+        lytro = open_lytro(path, pixels=False, check_size=False)
+        info.update(format="lytro-raw", metadata_file=metadata_sibling(path), sections=[])
+    info.update(_metadata_fields(lytro.metadata))
+    if info["format"] == "lytro-raw":
+        size = os.path.getsize(path)
+        info["size_matches_metadata"] = size == lytro.metadata.packed_bytes
+    info["raw_light_field"] = all(s["sha1_ok"] for s in info["sections"]) and info.get("size_matches_metadata", True)
+    return info
+
+
+def _metadata_fields(meta) -> dict:
+    black, white = meta.levels()
+
+    def mm(metres):
+        return None if metres is None else metres * 1e3
+
+    exit_pupil = math.inf if meta.exit_pupil_at_infinity else mm(meta.exit_pupil_offset_m)
+    return {
+        "camera_model": meta.model, "serial": meta.serial, "width": meta.width, "height": meta.height,
+        "bits_per_pixel": meta.bits_per_pixel, "endianness": meta.endianness, "cfa": meta.cfa,
+        "black_level": black.tolist(), "white_level": white.tolist(),
+        "modulation_frame": meta.modulation_frame,
+        "lens": {"focal_length_mm": mm(meta.focal_length_m), "f_number": meta.f_number,
+                 "exit_pupil_distance_mm": exit_pupil, "zoom_step": meta.zoom_step, "focus_step": meta.focus_step,
+                 "infinity_lambda": meta.infinity_lambda},
+        "sensor": {"pixel_pitch_mm": mm(meta.pixel_pitch_m)},
+        "mla": {"pitch_mm": mm(meta.lens_pitch_m), "tiling": meta.tiling,
+                "rotation_deg": None if meta.rotation_rad is None else math.degrees(meta.rotation_rad),
+                "sensor_offset_mm": None if meta.sensor_offset_m is None else [v * 1e3 for v in meta.sensor_offset_m]},
+    }
+
+
+def _sections(container) -> list[dict]:
+    roles = {}
+    _collect_references(container.toc, "", roles)
+    out = []
+    for section in container.sections:
+        data = bytes(container.data[section.offset:section.offset + min(section.length, 4)])
+        if section.kind == "LFM":
+            content = "table of contents (JSON)"
+        elif section.sha1.lower() in roles:
+            content = roles[section.sha1.lower()]
+        elif data.startswith(b"\xff\xd8"):
+            content = "JPEG image"
+        elif data.lstrip().startswith(b"{"):
+            content = "JSON"
+        else:
+            content = "data"
+        out.append({"kind": section.kind, "length": section.length, "sha1": section.sha1,
+                    "sha1_ok": section.sha1_ok, "content": content})
+    return out
+
+
+_ROLE_NAMES = {"imageRef": "image", "metadataRef": "frame metadata (JSON)",
+               "privateMetadataRef": "private metadata (JSON: serial numbers)"}
+
+
+def _collect_references(node, where: str, roles: dict) -> None:
+    """Map each ``sha1-…`` reference in the table of contents to what refers to it."""
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if isinstance(value, str) and value.lower().startswith("sha1-") and key.endswith("Ref"):
+                role = _ROLE_NAMES.get(key, key[:-3])
+                if key == "imageRef":
+                    role = "raw sensor image (packed)" if "frameArray" in where else f"image ({where or 'picture'})"
+                roles.setdefault(value.lower(), role)
+            else:
+                _collect_references(value, f"{where}.{key}" if where else key, roles)
+    elif isinstance(node, list):
+        for item in node:
+            _collect_references(item, where, roles)
+
+
+def _describe_lightfield(path: str) -> dict:
+    """A light field written by ``lfproc decode``: its views' shape from the array header (nothing loaded)."""
+    import zipfile
+
+    import numpy as np
+
+    try:
+        with zipfile.ZipFile(path) as archive, archive.open("views.npy") as member:
+            version = np.lib.format.read_magic(member)
+            read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                np.lib.format.read_array_header_2_0
+            shape, _, dtype = read_header(member)
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile) as exc:
+        raise LfprocError(f"{path}: not a readable light field file ({exc}); decode the capture again") from None
+    m, _, rows, cols, channels = shape if len(shape) == 5 else (None,) * 5
+    return {"path": path, "format": "lightfield", "raw_light_field": False, "decoded_light_field": True,
+            "width": cols, "height": rows, "views": m, "channels": channels, "dtype": str(dtype)}
+
+
+def _describe_camera_raw(path: str) -> dict:
+    import rawpy
+
+    try:
+        with rawpy.imread(path) as raw:
+            height, width = raw.raw_image_visible.shape
+            white = float(raw.white_level)
+            info = {"path": path, "format": "camera-raw", "raw_light_field": True, "width": int(width),
+                    "height": int(height), "black_level": [float(v) for v in raw.black_level_per_channel],
+                    "white_level": white, "bits_per_pixel": int(math.ceil(math.log2(white + 1))),
+                    "colour_channels": raw.color_desc.decode("ascii", "replace")[:int(raw.num_colors)]}
+    except rawpy.LibRawFileUnsupportedError:
+        raise _NotThisFormat("LibRaw: not a supported camera raw") from None
+    except rawpy.LibRawError as exc:
+        from ._libraw import _libraw_message
+        from ._read import RAW_EXTENSIONS
+
+        if os.path.splitext(path)[1].lower() not in RAW_EXTENSIONS:
+            raise _NotThisFormat(f"LibRaw: {_libraw_message(exc)}") from None
+        raise LfprocError(f"{path}: truncated or corrupt camera raw ({_libraw_message(exc)}); re-copy the file") \
+            from None
+    return info
+
+
+def _describe_image(path: str) -> dict:
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise _NotThisFormat(" ".join(str(oiio.geterror()).split()) or "OpenImageIO: unknown format")
+    try:
+        spec = inp.spec()
+        info = {"path": path, "format": "image", "file_format": inp.format_name(),
+                "raw_light_field": True, "width": spec.width, "height": spec.height,
+                "channels": spec.nchannels, "channel_names": list(spec.channelnames),
+                "pixel_type": str(spec.format), "bits_per_pixel": spec.format.size() * 8}
+    finally:
+        inp.close()
+    return info

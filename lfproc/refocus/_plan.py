@@ -1,0 +1,101 @@
+"""Sampling plans of the refocus kernels: per slice and axis, which lenses each output sample reads and
+with which weights (pure numpy; see the package docstring for the conventions)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: positions closer than this (in lenses) to an integer are snapped to it
+SNAP_TOLERANCE = 1e-9
+
+
+# ----------------------------------------------------------------------------- sampling plans (pure numpy)
+def keys_cubic_weights(t: np.ndarray) -> np.ndarray:
+    """Weights of the four taps ``floor(pos) − 1 … floor(pos) + 2`` for fraction ``t`` (Keys, a = −0.5).
+
+    This is the Catmull-Rom spline; the weights sum to one and reproduce the sample at ``t = 0``.
+    Returns an array shaped ``t.shape + (4,)``.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    return np.stack([((-0.5 * t + 1.0) * t - 0.5) * t,
+                     (1.5 * t - 2.5) * t * t + 1.0,
+                     ((-1.5 * t + 2.0) * t + 0.5) * t,
+                     (0.5 * t - 0.5) * t * t], axis=-1)
+
+
+def snap(x: np.ndarray) -> np.ndarray:
+    """``x`` with values within :data:`SNAP_TOLERANCE` of an integer replaced by that integer."""
+    x = np.asarray(x, dtype=np.float64)
+    nearest = np.round(x)
+    return np.where(np.abs(x - nearest) < SNAP_TOLERANCE, nearest, x)
+
+
+@dataclass(frozen=True)
+class AxisPlan:
+    """Where the output samples along one axis read each view: the separable half of Eq. 9.
+
+    Output index ``p = q·s + r`` (phase ``r`` of the upsampling ``s``) reads view index ``v`` of slice
+    ``k`` at position ``q + offset[k, v, r]``; it counts when ``lo[k, v, r] ≤ q ≤ hi[k, v, r]``
+    (``lo > hi``: never) and then takes the taps ``q + first + t`` (``t < ntaps``, clamped to the
+    array) with ``weights[..., t]``.
+    """
+
+    offset: np.ndarray   # (K, m, s) float64, snapped r/s + a·(c − v)
+    first: np.ndarray    # (K, m, s) int64
+    ntaps: np.ndarray    # (K, m, s) int64: 1, 2 or 4
+    weights: np.ndarray  # (K, m, s, 4) float64, unused taps 0
+    lo: np.ndarray       # (K, m, s) int64
+    hi: np.ndarray       # (K, m, s) int64
+    count: np.ndarray    # (K, P) int64: number of views that count at each output index
+
+    @property
+    def whole_lens(self) -> bool:
+        """True when every sample is a single unit-weight tap (a pure gather)."""
+        return bool(np.all(self.ntaps == 1) and np.all(self.weights[..., 0] == 1.0))
+
+
+def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str) -> AxisPlan:
+    """Sampling plan of one axis of length ``n`` for slices ``slopes`` of an m̂ = ``m`` light field."""
+    s = upsample
+    c = (m - 1) // 2
+    a = np.asarray(slopes, dtype=np.float64)[:, None, None]
+    v = np.arange(m)[None, :, None]
+    r = np.arange(s)[None, None, :]
+    with np.errstate(invalid="ignore", over="ignore"):     # |a| near 1e308 gives ±inf: outside
+        offset = snap(r / s + a * (c - v))
+    q_len = np.where(r == 0, n, n - 1)                       # outputs per phase: P = (n − 1)·s + 1
+    lo_f = np.maximum(0.0, np.ceil(-offset))
+    hi_f = np.minimum(q_len - 1.0, np.floor(n - 1.0 - offset))
+    lo = np.clip(lo_f, -1, n + 1).astype(np.int64)
+    hi = np.clip(hi_f, -1, n + 1).astype(np.int64)
+    valid = lo <= hi
+    safe = np.where(valid, offset, 0.0)                      # keeps huge |a| away from int conversion
+    weights = np.zeros(offset.shape + (4,))
+    if interpolation == "nearest":
+        first = np.floor(safe + 0.5)
+        ntaps = np.ones(offset.shape, dtype=np.int64)
+        weights[..., 0] = 1.0
+    else:
+        base = np.floor(safe)
+        frac = safe - base
+        whole = frac == 0.0
+        if interpolation == "linear":
+            first = base
+            ntaps = np.where(whole, 1, 2).astype(np.int64)
+            weights[..., 0] = 1.0 - frac
+            weights[..., 1] = frac
+        else:
+            first = np.where(whole, base, base - 1.0)
+            ntaps = np.where(whole, 1, 4).astype(np.int64)
+            weights[...] = np.where(whole[..., None], np.array([1.0, 0.0, 0.0, 0.0]), keys_cubic_weights(frac))
+    p = np.arange((n - 1) * s + 1)
+    q_of_p, r_of_p = p // s, p % s
+    inside = (lo[:, :, r_of_p] <= q_of_p) & (q_of_p <= hi[:, :, r_of_p])   # (K, m, P)
+    c_order = np.ascontiguousarray     # one memory layout, so the kernels compile once per dtype
+    return AxisPlan(offset=c_order(offset), first=c_order(first, dtype=np.int64), ntaps=c_order(ntaps),
+                    weights=c_order(weights), lo=c_order(lo), hi=c_order(hi),
+                    count=c_order(inside.sum(axis=1), dtype=np.int64))
+
+

@@ -1,0 +1,212 @@
+"""The public refocus function: argument checks, sampling plans, and the threaded band driver (Eq. 9)."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from concurrent.futures import ThreadPoolExecutor
+
+import numba
+import numpy as np
+
+from ..errors import LfprocError
+from ._kernels import _gather_band, _interpolated_band
+from ._plan import AxisPlan, axis_plan
+
+INTERPOLATIONS = ("nearest", "linear", "cubic")
+
+#: dtypes the kernels read directly; other real dtypes are converted (see the module docstring)
+NATIVE_DTYPES = (np.dtype(np.float32), np.dtype(np.float64), np.dtype(np.uint16))
+
+#: target size in bytes of one band's float64 accumulators (all slices of the call; the gather's
+#: float32 partial sums add half as much again): L2/L3-resident
+ACCUMULATOR_BUDGET_BYTES = 4 << 20
+
+#: the largest output (K·Ny'·Nx'·C float32 values) one call may produce, in bytes; an ``upsample`` that
+#: needs more raises LfprocError instead of running out of memory
+MAX_OUTPUT_BYTES = 16 << 30
+
+#: lower bound on band height, so that many slices in one call do not shrink bands to a few rows
+#: (each band also reads the rows its slices' shifts add on top: the shorter the band, the more)
+MIN_BAND_ROWS = 8
+
+
+# ----------------------------------------------------------------------------- public entry point
+def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarray:
+    """Refocused slice(s) of a light field by centred shift-and-sum (Eq. 9).
+
+    Parameters
+    ----------
+    lf : LightField or ndarray
+        A :class:`~lfproc.lightfield.LightField`, or an array shaped ``(m̂, m̂, Ny, Nx, C)`` with m̂ odd
+        (float32, float64, unsigned or signed integers; see the module docstring for precision).
+    a : float or sequence of float
+        Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
+        focuses nearer than a = 0. A sequence is rendered in one pass over the data.
+    interpolation : {"nearest", "linear", "cubic"}
+        How positions between lenses are read (module docstring). Irrelevant for integer ``a`` with
+        ``upsample = 1``, which is a pure gather.
+    upsample : int, optional
+        Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
+        position (py/s, px/s). ``1`` (default) is the lens grid itself. The output of the call (all K
+        slices) may take at most :data:`MAX_OUTPUT_BYTES` (16 GiB).
+
+    Returns
+    -------
+    ndarray, float32
+        ``(Ny', Nx', C)`` for a scalar ``a``, ``(K, Ny', Nx', C)`` for a sequence of K values.
+
+    Raises
+    ------
+    LfprocError
+        Empty or non-finite ``a``, unknown ``interpolation``, bad ``upsample`` (or an output above
+        :data:`MAX_OUTPUT_BYTES`), a malformed light field, non-finite pixels that reach a slice, or
+        finite float64 values beyond the float32 range.
+    """
+    views = _views_array(lf)
+    slopes, scalar = _slopes(a)
+    interpolation = _interpolation(interpolation)
+    upsample = _upsample(upsample)
+    m, _, ny, nx, channels = views.shape
+    _check_output_size(len(slopes), ny, nx, channels, upsample)
+    plan_y = axis_plan(slopes, m, ny, upsample, interpolation)
+    plan_x = axis_plan(slopes, m, nx, upsample, interpolation)
+    out = _render(views, plan_y, plan_x, upsample)
+    bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
+    if bad.any() and views.dtype == np.float32 and np.isfinite(views).all():
+        # finite float32 values near 3.4e38 overflow the float32 row sums: render again in float64
+        # (only on this failure path, so the usual call pays nothing)
+        out = _render(views.astype(np.float64), plan_y, plan_x, upsample)
+        bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
+    if bad.any():
+        first_bad = slopes[int(np.argmax(bad))]
+        if views.dtype == np.float64 and np.isfinite(views).all():
+            raise LfprocError(f"light field values exceed the float32 range; rescale them (largest magnitude "
+                              f"{float(np.abs(views).max()):.3g}, e.g. divide by it) before refocusing "
+                              f"(slice a={first_bad:g})")
+        raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={first_bad:g}; "
+                          "replace them (e.g. numpy.nan_to_num) before refocusing")
+    out = out.reshape(len(slopes), plan_y.count.shape[1], plan_x.count.shape[1], channels)
+    return out[0] if scalar else out
+
+
+# ----------------------------------------------------------------------------- input validation
+def _views_array(lf) -> np.ndarray:
+    """The ``(m̂, m̂, Ny, Nx, C)`` array of ``lf``, C-contiguous, in a dtype the kernels read."""
+    views = getattr(lf, "views", lf)
+    try:
+        views = np.asarray(views)
+    except Exception:  # pragma: no cover - exotic array-likes
+        raise LfprocError("refocus needs a LightField or an array shaped (m, m, Ny, Nx, C)") from None
+    if views.ndim != 5 or views.shape[0] != views.shape[1] or views.shape[0] % 2 == 0 or min(views.shape) < 1:
+        raise LfprocError(f"refocus needs views shaped (m, m, Ny, Nx, C) with m odd and no empty axis, "
+                          f"got shape {views.shape}; pass a LightField or reshape the array")
+    kind = views.dtype.kind
+    if views.dtype in NATIVE_DTYPES:
+        pass
+    elif kind in "iu":
+        views = views.astype(np.float32 if views.dtype.itemsize == 1 else np.float64)
+    elif kind == "f" and views.dtype.itemsize > 8:
+        views = views.astype(np.float64)      # longdouble: keep the precision float64 can hold
+    elif kind in "fb":
+        views = views.astype(np.float32)
+    else:
+        raise LfprocError(f"refocus needs real-valued views, got dtype {views.dtype}; convert to float32")
+    return np.ascontiguousarray(views)
+
+
+def _check_output_size(n_slices: int, ny: int, nx: int, channels: int, upsample: int) -> None:
+    """Refuse outputs above :data:`MAX_OUTPUT_BYTES` before allocating anything."""
+    size = n_slices * ((ny - 1) * upsample + 1) * ((nx - 1) * upsample + 1) * channels * 4
+    if size > MAX_OUTPUT_BYTES:
+        raise LfprocError(f"refocus: upsample={upsample} with {n_slices} slice(s) would produce "
+                          f"{size / 2**30:.1f} GiB of output (limit {MAX_OUTPUT_BYTES / 2**30:g} GiB); "
+                          "use a smaller upsample or fewer a values per call")
+
+
+def _slopes(a) -> tuple[tuple[float, ...], bool]:
+    """``a`` as a tuple of finite floats, and whether it was a scalar."""
+    arr = np.asarray(a, dtype=object) if not isinstance(a, np.ndarray) else a
+    if arr.ndim > 1:
+        raise LfprocError(f"refocus: a must be a number or a flat list of numbers, got shape {arr.shape}")
+    scalar = arr.ndim == 0
+    items = [arr.item()] if scalar else list(np.ravel(arr))
+    if not items:
+        raise LfprocError("refocus: the list of a values is empty; give at least one number")
+    values = []
+    for item in items:
+        if isinstance(item, (bool, np.bool_)) or not isinstance(item, (numbers.Real, np.integer, np.floating)):
+            raise LfprocError(f"refocus: a={item!r} is not a number; give real numbers like 0, 1.5, -2")
+        value = float(item)
+        if not math.isfinite(value):
+            raise LfprocError(f"refocus: a={value} is not finite; give finite numbers like 0, 1.5, -2")
+        values.append(value)
+    return tuple(values), scalar
+
+
+def _interpolation(name) -> str:
+    if name not in INTERPOLATIONS:
+        raise LfprocError(f"refocus: unknown interpolation {name!r}; use one of {', '.join(INTERPOLATIONS)}")
+    return name
+
+
+def _upsample(s) -> int:
+    if isinstance(s, (bool, np.bool_)) or not isinstance(s, (numbers.Integral, np.integer)) or s < 1:
+        raise LfprocError(f"refocus: upsample must be an integer >= 1, got {s!r}")
+    return int(s)
+
+
+# ----------------------------------------------------------------------------- driver
+def _thread_count() -> int:
+    """Worker threads: ``NUMBA_NUM_THREADS`` (default: the CPUs available)."""
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def _bands(n_slices: int, n_rows: int, row_len: int, threads: int) -> list[tuple[int, int]]:
+    """Output row ranges processed one per task: float64 accumulators of all slices near the budget,
+    and a number of bands that is a multiple of the thread count (so the threads finish together)."""
+    accumulator_bytes = n_slices * n_rows * row_len * 8
+    n_bands = max(threads, -(-accumulator_bytes // ACCUMULATOR_BUDGET_BYTES))
+    n_bands = min(n_bands, max(threads, n_rows // MIN_BAND_ROWS))   # many slices: keep bands tall
+    n_bands = min(n_rows, -(-n_bands // threads) * threads)
+    edges = [i * n_rows // n_bands for i in range(n_bands + 1)]          # sizes differ by at most one
+    return list(zip(edges[:-1], edges[1:]))
+
+
+def _phase0(arr: np.ndarray) -> np.ndarray:
+    """The ``r = 0`` phase of a ``(K, m, s)`` plan array, as a C-ordered ``(K, m)`` array."""
+    return np.ascontiguousarray(arr[:, :, 0])
+
+
+def _render(views: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, upsample: int) -> np.ndarray:
+    """Run the kernel that fits the plans over all bands of output rows; returns ``(K, Ny', Nx'·C)`` float32.
+
+    The band kernels release the GIL, so bands run in parallel on a thread pool; they write disjoint
+    rows of ``out``.
+    """
+    m, _, ny, nx, channels = views.shape
+    flat = views.reshape(m, m, ny, nx * channels)
+    n_slices, out_rows = plan_y.count.shape
+    out_cols = plan_x.count.shape[1]
+    out = np.empty((n_slices, out_rows, out_cols * channels), dtype=np.float32)
+    # per-view-row partial sums: float32 unless the views are float64 (module docstring, Precision)
+    part = np.zeros(0, dtype=np.float64 if views.dtype == np.float64 else np.float32)
+    if upsample == 1 and plan_y.whole_lens and plan_x.whole_lens:
+        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.lo), _phase0(plan_y.hi),
+                _phase0(plan_x.first), _phase0(plan_x.lo), _phase0(plan_x.hi), plan_y.count, plan_x.count)
+        kernel = _gather_band
+    else:
+        args = (flat, channels, upsample, plan_y.first, plan_y.ntaps, plan_y.weights, plan_y.lo, plan_y.hi,
+                plan_x.first, plan_x.ntaps, plan_x.weights.astype(part.dtype), plan_x.lo, plan_x.hi,
+                plan_y.count, plan_x.count)
+        kernel = _interpolated_band
+    threads = _thread_count()
+    bands = _bands(n_slices, out_rows, out_cols * channels, threads)
+    if threads == 1 or len(bands) == 1:
+        for row0, row1 in bands:
+            kernel(*args, row0, row1, part, out)
+    else:
+        with ThreadPoolExecutor(max_workers=min(threads, len(bands))) as pool:
+            list(pool.map(lambda rows: kernel(*args, rows[0], rows[1], part, out), bands))
+    return out
+

@@ -1,0 +1,232 @@
+"""The command line as a user meets it (issue 17): every command says what it did, agrees with the others,
+and checks what it can before the first capture is decoded. Each test runs ``python -m lfproc`` in a
+subprocess and checks the exit status and what it prints."""
+
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from lfproc import Camera, geometry
+from lfproc.cli import build_parser
+
+from conftest import SAMPLES, assert_clean_error, run_cli
+
+SAMPLE = SAMPLES / "sample"
+SLICE_LINE = re.compile(r"^\s+a=([+-]\d+\.\d+)\s+([\d.]+) mm\s+in focus \[([\d.]+) mm, ([\d.]+|inf) mm\]$")
+
+
+@pytest.fixture(scope="module")
+def sample(tmp_path_factory):
+    """The bundled sample, and its grid fitted once (so most tests decode without calibrating again)."""
+    folder = tmp_path_factory.mktemp("cli")
+    for name in ("capture.png", "white.png", "camera.toml"):
+        shutil.copy(SAMPLE / name, folder / name)
+    proc = run_cli("calibrate", folder / "white.png", "--camera", folder / "camera.toml", "-o", folder / "grid.json")
+    assert proc.returncode == 0, proc.stderr
+    return folder
+
+
+def decode_args(folder):
+    return ["--camera", folder / "camera.toml", "--calib", folder / "grid.json", "--white", folder / "white.png"]
+
+
+def test_refocus_prints_one_line_per_slice_with_distance_and_dof(sample, tmp_path):
+    camera = Camera.from_toml(sample / "camera.toml")
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--depth-range", "400:1300",
+                   "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = [SLICE_LINE.match(line) for line in proc.stdout.splitlines()]
+    rows = [m for m in rows if m]
+    written = sorted(p.name for p in tmp_path.glob("*.tif"))
+    assert len(rows) == len(written) >= 2
+    sidecars = sorted((json.loads(p.read_text()) for p in tmp_path.glob("*.json")), key=lambda d: d["a"])
+    rows = sorted(rows, key=lambda m: float(m.group(1)))
+    for m, side in zip(rows, sidecars):      # the printed numbers are the sidecars' (and the geometry's)
+        assert float(m.group(1)) == pytest.approx(side["a"], abs=5e-5)
+        geo = geometry.slice_geometry(camera, [side["a"]])
+        assert side["distance_mm"] == pytest.approx(float(geo.distance_mm[0]), rel=1e-12)
+        assert m.group(2) == f"{side['distance_mm']:.1f}"
+        assert m.group(3) == f"{side['near_mm']:.1f}"
+        assert m.group(4) == ("inf" if side["far_mm"] is None else f"{side['far_mm']:.1f}")
+    assert "in focus over all of 400.0 mm..1300.0 mm" in proc.stdout
+    assert "capture.png: " in proc.stdout and f"{len(written)} slice(s)" in proc.stdout
+    assert "captures done" not in proc.stderr        # one capture: no summary line
+
+
+def test_refocus_names_the_depths_it_leaves_uncovered(sample, tmp_path):
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--depth-range", "400:1300",
+                   "--integer", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    holes = [line for line in proc.stdout.splitlines() if "no slice is in focus at" in line]
+    assert len(holes) == 1 and re.search(r"[\d.]+ mm\.\.[\d.]+ mm", holes[0])
+
+
+@pytest.mark.parametrize("spelling", [["--a", "-0.4:0.6:0.2"], ["--a=-0.4:0.6:0.2"]])
+def test_negative_a_lists_work_with_and_without_equals(sample, tmp_path, spelling):
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *spelling, "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    names = sorted(p.stem for p in tmp_path.glob("*.tif"))
+    assert names == sorted(f"capture_a{a:+.3f}" for a in (-0.4, -0.2, 0.0, 0.2, 0.4, 0.6))
+
+
+def test_geometry_accepts_a_negative_list_without_equals(paper_camera):
+    proc = run_cli("geometry", "--camera", paper_camera, "--a", "-0.5:0.5:0.5", "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert [s["a"] for s in json.loads(proc.stdout)["slices"]] == [-0.5, 0.0, 0.5]
+
+
+def test_decoded_light_fields_are_inputs_of_refocus_views_and_batch(sample, tmp_path):
+    lf_path = tmp_path / "cap.lfp.npz"
+    proc = run_cli("decode", sample / "capture.png", *decode_args(sample), "-o", lf_path)
+    assert proc.returncode == 0, proc.stderr
+    direct = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "1", "-o", tmp_path / "direct")
+    assert direct.returncode == 0, direct.stderr
+    # no --camera, --calib or --white: the light field carries its camera and grid
+    proc = run_cli("refocus", lf_path, "--a", "1", "-o", tmp_path / "r")
+    assert proc.returncode == 0, proc.stderr
+    from_lf = json.loads((tmp_path / "r" / "cap_a+1.000.json").read_text())
+    assert from_lf["source"].endswith("cap.lfp.npz")
+    assert from_lf["distance_mm"] == json.loads((tmp_path / "direct" / "capture_a+1.000.json").read_text())[
+        "distance_mm"]
+    from lfproc.io import read_image
+    np.testing.assert_array_equal(read_image(tmp_path / "r" / "cap_a+1.000.tif"),
+                                  read_image(tmp_path / "direct" / "capture_a+1.000.tif"))
+    proc = run_cli("views", lf_path, "-o", tmp_path / "v")
+    assert proc.returncode == 0, proc.stderr
+    m = Camera.from_toml(sample / "camera.toml").m_hat
+    assert len(list((tmp_path / "v").glob("cap_view_*.tif"))) == m * m
+    proc = run_cli("batch", lf_path, "--a", "0,1", "--workers", "1", "-o", tmp_path / "b")
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_a+0.000.tif", "cap_a+1.000.tif"]
+
+
+def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_path):
+    proc = run_cli("batch", sample / "capture.png", *decode_args(sample), "--at", "650", "--upsample", "2",
+                   "--views", "--mosaic", "--inside-aperture", "--workers", "1", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    camera = Camera.from_toml(sample / "camera.toml")
+    a = float(geometry.refocus_parameter(camera, 650.0))
+    slices = list(tmp_path.glob("capture_a*.tif"))
+    assert len(slices) == 1 and slices[0].stem == f"capture_a{a:+.3f}"
+    from lfproc.io import read_image
+    ny, nx = read_image(slices[0]).shape[:2]
+    views = sorted(tmp_path.glob("capture_view_*.tif"))
+    vy, vx = read_image(views[0]).shape[:2]
+    assert (ny, nx) == (2 * vy - 1, 2 * vx - 1)                       # --upsample 2
+    assert len(views) == int(geometry.views_inside_aperture(camera).sum())   # --inside-aperture
+    assert (tmp_path / "capture_views_mosaic.tif").is_file()           # --mosaic
+    old = run_cli("batch", sample / "capture.png", *decode_args(sample), "--refocus", "1", "--workers", "1",
+                  "-o", tmp_path / "old")
+    assert old.returncode == 0, old.stderr                              # the old spelling still works
+
+
+def _options_without_help(parser, path=()):
+    import argparse
+    missing = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                missing += _options_without_help(sub, path + (name,))
+        elif action.help is None and not isinstance(action, argparse._HelpAction):
+            missing.append(" ".join(path + (action.option_strings[0] if action.option_strings else action.dest,)))
+    return missing
+
+
+def test_every_option_of_every_command_has_help():
+    assert _options_without_help(build_parser()) == []
+
+
+def test_a_warning_is_one_plain_line(sample, tmp_path):
+    grid = json.loads((sample / "grid.json").read_text())
+    grid["white_image"] = str(tmp_path / "gone.png")           # the recorded white image is missing
+    (tmp_path / "grid.json").write_text(json.dumps(grid))
+    proc = run_cli("refocus", sample / "capture.png", "--camera", sample / "camera.toml", "--calib",
+                   tmp_path / "grid.json", "--a", "0", "-o", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("lfproc refocus: warning: ") and "--white" in lines[0]
+    assert "UserWarning" not in proc.stderr and "warnings.warn" not in proc.stderr
+
+
+def test_demo_in_a_read_only_place_is_one_line(tmp_path):
+    assert_clean_error(run_cli("demo", "-o", "/proc/lfproc-demo"), "/proc/lfproc-demo")
+
+
+def test_output_folder_is_checked_before_any_capture_is_read(sample, tmp_path):
+    bad = tmp_path / "broken.png"
+    bad.write_bytes(b"not an image")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    # if the capture were read first, the error would name it; the folder must fail first
+    assert_clean_error(run_cli("refocus", bad, *decode_args(sample), "--a", "0", "-o", blocker / "out"),
+                       str(blocker))
+    assert_clean_error(run_cli("views", bad, *decode_args(sample), "-o", "/proc/lfproc-out"), "/proc/lfproc-out")
+
+
+def test_duplicate_a_is_refused_before_decoding(sample, tmp_path):
+    bad = tmp_path / "broken.png"
+    bad.write_bytes(b"not an image")
+    assert_clean_error(run_cli("refocus", bad, *decode_args(sample), "--a", "1,0,1", "-o", tmp_path / "o"),
+                       "duplicate")
+    assert not (tmp_path / "o").exists()
+
+
+def test_one_slice_limit_for_lists_and_ranges_with_a_flag_beyond_it(sample, tmp_path):
+    assert_clean_error(run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "0:1:0.0001",
+                               "-o", tmp_path), "10001 slices", "--max-slices")
+    assert_clean_error(run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "0:3",
+                               "--max-slices", "3", "-o", tmp_path), "4 slices", "--max-slices")
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "0:3", "--max-slices", "4",
+                   "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_one_failing_capture_is_one_line_several_get_a_summary(sample, tmp_path):
+    bad = tmp_path / "broken.png"
+    bad.write_bytes(b"not an image")
+    assert_clean_error(run_cli("refocus", bad, *decode_args(sample), "--a", "0", "-o", tmp_path / "o"), str(bad))
+    proc = run_cli("refocus", bad, sample / "capture.png", *decode_args(sample), "--a", "0", "-o", tmp_path / "o2")
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 2 and str(bad) in lines[0] and "1 of 2 captures done" in lines[1]
+
+
+def test_an_a_whose_views_miss_the_image_is_refused_with_the_usable_range(sample, tmp_path):
+    from lfproc.lightfield import LightField
+    from lfproc.refocus import max_usable_a
+    camera = Camera.from_toml(sample / "camera.toml")
+    proc = run_cli("decode", sample / "capture.png", *decode_args(sample), "-o", tmp_path / "cap.lfp.npz")
+    assert proc.returncode == 0, proc.stderr
+    lf = LightField.load(tmp_path / "cap.lfp.npz")
+    limit = max_usable_a(lf.m_hat, lf.lens_shape)
+    c, (ny, nx) = lf.center_index, lf.lens_shape
+
+    def views_reaching_the_image(a):
+        """Brute force (contract: view k is read at j + a·(c − k)): views with a sample inside the array."""
+        count = 0
+        for ky in range(lf.m_hat):
+            for kx in range(lf.m_hat):
+                jy = np.arange(ny) + a * (c - ky)
+                jx = np.arange(nx) + a * (c - kx)
+                count += bool(((jy >= 0) & (jy <= ny - 1)).any() and ((jx >= 0) & (jx <= nx - 1)).any())
+        return count / lf.m_hat ** 2
+
+    assert views_reaching_the_image(limit * 0.999) >= 0.5 > views_reaching_the_image(limit * 1.001)
+    proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "400", "-o", tmp_path / "o")
+    assert_clean_error(proc, "a=400", f"{limit:.3g}", "mm")
+    assert not (tmp_path / "o").exists()
+    near = float(geometry.slice_distance_mm(camera, limit))
+    assert f"{near:.1f} mm" in proc.stderr
+    # usable, but with a wide border band: written, with one plain warning line
+    a_wide = round(0.7 * (min(ny, nx) - 1) / (2 * c) + 0.3 * limit, 3)
+    proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", str(a_wide), "-o", tmp_path / "w")
+    assert proc.returncode == 0, proc.stderr
+    warning = [line for line in proc.stderr.splitlines() if "warning" in line]
+    assert len(warning) == 1 and "fewer than half the pixels" in warning[0]
+    proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "1", "-o", tmp_path / "ok")
+    assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
