@@ -188,3 +188,24 @@ def test_cli_warns_when_a_capture_is_given_as_the_white_image(tmp_path):
         assert bool(texture) == warned, proc.stderr
         if warned:
             assert len(texture) == 1 and str(path) in texture[0]
+
+
+def test_simulated_finite_exit_pupil_white_gives_micro_image_centres_and_the_exit_pupil():
+    # the simulator's white image with an exit pupil 20 mm in front of the array: micro images drift
+    # outwards; calibration finds the micro image centres (sim grid) and the distance they imply
+    from lfproc.simulate import render_white
+    camera = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
+                    image_distance_mm=50.0, f_number=4.0, grid="rectangular", exit_pupil_distance_mm=20.0)
+    shape = (480, 640)
+    white, micro_images = render_white(camera, shape, rotation_deg=0.3)
+    estimate = find_grid(white, kind="rectangular", approx_pitch_px=camera.pitch_px)
+    rms, worst = nearest_rms(estimate.grid, micro_images.centers_xy_px().reshape(-1, 2), pad=2)
+    assert rms <= 0.05 and worst <= 0.1, (rms, worst)
+    pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
+    assert pupil.scale == pytest.approx(camera.micro_image_scale, abs=3 * pupil.scale_sigma + 1e-4)
+    assert pupil.distance_mm == pytest.approx(20.0, rel=0.1)
+    assert not pupil.contradicts_camera
+    telecentric = Camera(**{**{f: getattr(camera, f) for f in ("pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm",
+                                                             "main_focal_length_mm", "image_distance_mm", "f_number",
+                                                             "grid")}})
+    assert implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, telecentric).contradicts_camera
