@@ -31,6 +31,7 @@ def run(args) -> int:
     from ..errors import LfprocError
     from ..scene import load_scene_file
     from ..simulate import render
+    from .capture_loop import require_output_folder
 
     scene_file = load_scene_file(args.scene)
     options = scene_file.options
@@ -38,14 +39,21 @@ def run(args) -> int:
         if args.seed < 0:
             raise LfprocError(f"--seed must be an integer >= 0, got {args.seed}")
         options = replace(options, seed=args.seed)
-    _check_output_folder(args.output)
+    require_output_folder(args.output)  # the same check as every command: before any work
     start = time.perf_counter()
     # the same bar as refocus and views: on stderr, only on a terminal; here in percent of the traced rays
     with tqdm(total=100, unit="%", disable=None, file=sys.stderr, desc="lfproc simulate",
               bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]") as bar:
+        shown = []
+
         def progress(fraction: float, stage: str) -> None:
-            bar.set_description_str(f"lfproc simulate ({stage})", refresh=False)
+            new_stage = not shown or shown[-1] != stage
+            if new_stage:
+                shown.append(stage)
+                bar.set_description_str(f"lfproc simulate ({stage})", refresh=False)
             bar.update(round(100 * fraction) - bar.n)
+            if new_stage:
+                bar.refresh()  # each stage is shown at least once, however fast
 
         capture = render(scene_file.camera, scene_file.scene, options.sensor_shape, **options.render_kwargs(),
                          progress=progress)
@@ -53,19 +61,6 @@ def run(args) -> int:
         write_outputs(args.output, capture, scene_file, options)
     print(summary(args.output, capture, time.perf_counter() - start))
     return 0
-
-
-def _check_output_folder(folder: str) -> None:
-    """Fail before rendering when ``folder`` cannot be created or written (nothing is created here)."""
-    from ..errors import LfprocError
-
-    if os.path.exists(folder) and not os.path.isdir(folder):
-        raise LfprocError(f"{folder}: exists and is not a folder; give a folder for -o")
-    existing = os.path.abspath(folder)
-    while not os.path.exists(existing):
-        existing = os.path.dirname(existing)
-    if not os.path.isdir(existing) or not os.access(existing, os.W_OK | os.X_OK):
-        raise LfprocError(f"{folder}: cannot write there ({existing} is not a writable folder); give another -o")
 
 
 def summary(folder: str, capture, seconds: float) -> str:

@@ -39,14 +39,12 @@ class LytroCamera:
     notes: tuple
 
     def to_toml(self) -> str:
-        """The camera file: notes as comments, the contract tables, then ``[provenance]``."""
+        """The camera file: notes as comments, then the contract tables and ``[provenance]`` (Camera.to_toml)."""
         lines = [f"# {note}" for note in self.notes]
         text = self.camera.to_toml()
         if self.camera.telecentric:
             text = text.replace("[decode]", "exit_pupil_distance_mm = inf\n[decode]", 1)
         lines.append(text.rstrip("\n"))
-        lines.append("[provenance]")
-        lines += [f'"{key}" = {_toml_string(value)}' for key, value in self.provenance]
         return "\n".join(lines) + "\n"
 
 
@@ -114,7 +112,7 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
         provenance.append(("main_lens.image_distance_mm",
                            f"flag: --focus-distance {focus_distance_mm:g} mm (thin-lens equation)"))
     provenance.append(("decode.micro_image_px", "default: largest odd integer not above pitch / pixel pitch"))
-    return LytroCamera(camera=_with_provenance(camera, provenance), provenance=tuple(provenance),
+    return LytroCamera(camera=replace(camera, provenance=tuple(provenance)), provenance=tuple(provenance),
                        notes=tuple(_notes(meta)))
 
 
@@ -134,16 +132,3 @@ def _notes(meta: LytroMetadata) -> list[str]:
         notes.append(f"levels per 2x2 position: black {black.tolist()}, white {white.tolist()} "
                      f"(Lytro files carry their own levels; the camera file's are not used for them)")
     return notes
-
-
-def _with_provenance(camera: Camera, provenance: list) -> Camera:
-    """Attach ``Camera.provenance`` where this Camera has the field (the geometry owner adds it)."""
-    import dataclasses
-
-    if any(f.name == "provenance" for f in dataclasses.fields(camera)):
-        return replace(camera, provenance=tuple(provenance))
-    return camera
-
-
-def _toml_string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'

@@ -28,10 +28,9 @@ _STOP_TOLERANCE = 1.0 + 1e-12  # the same tolerance as geometry.views_inside_ape
 def micro_image_scale(camera: Camera) -> float:
     """(d_A + f_s)/d_A: the micro image centre lattice over the lens lattice (1.0 when telecentric).
 
-    The same number as ``lfproc.geometry.micro_image_scale``; kept here so the simulator stands on its own.
+    ``camera.micro_image_scale``, the number ``lfproc.geometry.micro_image_scale`` gives too.
     """
-    d_a = camera.exit_pupil_distance_mm
-    return 1.0 if math.isinf(d_a) else (d_a + camera.mla_focal_length_mm) / d_a
+    return camera.micro_image_scale
 
 
 def default_grid(camera: Camera, sensor_shape, rotation_deg: float = 0.0, offset_px=(0.0, 0.0)) -> LensGrid:
