@@ -100,7 +100,10 @@ class ExitPupilEstimate:
     scale_sigma : float
         Its standard error from the fit.
     distance_mm : float
-        Implied exit pupil distance d_A (``inf`` when ``scale`` ≤ 1: telecentric or beyond).
+        Implied exit pupil distance d_A; ``inf`` when the scale is within `allowance` of 1 (the fit
+        cannot tell it from a telecentric lens).
+    range_mm : tuple of float
+        d_A for the scale ± `allowance` (the upper end ``inf`` when that reaches 1).
     expected_scale : float
         The scale the camera file's ``exit_pupil_distance_mm`` predicts (1.0 when telecentric).
     """
@@ -108,13 +111,25 @@ class ExitPupilEstimate:
     scale: float
     scale_sigma: float
     distance_mm: float
+    range_mm: tuple
     expected_scale: float
 
     @property
+    def allowance(self) -> float:
+        """3 standard errors of the fit plus the nominal pitches' tolerance (`NOMINAL_PITCH_TOLERANCE`)."""
+        return 3.0 * self.scale_sigma + NOMINAL_PITCH_TOLERANCE * self.expected_scale
+
+    @property
     def contradicts_camera(self) -> bool:
-        """Whether the scale differs from the camera file's beyond 3 sigma plus the nominal pitch tolerance."""
-        allowed = 3.0 * self.scale_sigma + NOMINAL_PITCH_TOLERANCE * self.expected_scale
-        return abs(self.scale - self.expected_scale) > allowed
+        """Whether the scale differs from the camera file's by more than the `allowance`."""
+        return abs(self.scale - self.expected_scale) > self.allowance
+
+    def describe(self) -> str:
+        """``"46.0 mm (40.2-53.8)"`` or ``"telecentric within the fit (>= 2400 mm)"``, for messages."""
+        low, high = self.range_mm
+        if math.isinf(self.distance_mm):
+            return "telecentric within the fit" + ("" if math.isinf(low) else f" (>= {low:.0f} mm)")
+        return f"{self.distance_mm:.1f} mm ({low:.1f}-{high:.1f})"
 
 
 def micro_image_scale(camera) -> float:
@@ -140,17 +155,20 @@ def implied_exit_pupil(pitch_px: float, pitch_sigma_px: float, camera) -> ExitPu
     """The exit pupil distance the fitted pitch implies, for ``camera`` (`lfproc.Camera`)."""
     lens_pitch_px = camera.pitch_px
     scale = pitch_px / lens_pitch_px
-    return ExitPupilEstimate(scale=scale, scale_sigma=pitch_sigma_px / lens_pitch_px,
-                             distance_mm=exit_pupil_from_scale(scale, camera),
-                             expected_scale=micro_image_scale(camera))
+    expected = micro_image_scale(camera)
+    sigma = pitch_sigma_px / lens_pitch_px
+    allowance = 3.0 * sigma + NOMINAL_PITCH_TOLERANCE * expected
+    distance = exit_pupil_from_scale(scale, camera) if scale - allowance > 1.0 else math.inf
+    span = (exit_pupil_from_scale(scale + allowance, camera), exit_pupil_from_scale(scale - allowance, camera))
+    return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=distance, range_mm=span,
+                             expected_scale=expected)
 
 
 def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance_mm: float) -> str | None:
     if not estimate.contradicts_camera:
         return None
-    implied = "telecentric (infinite)" if math.isinf(estimate.distance_mm) else f"{estimate.distance_mm:.1f} mm"
     given = "infinite (telecentric)" if math.isinf(camera_distance_mm) else f"{camera_distance_mm:.1f} mm"
-    return (f"{source}: warning: the micro image pitch implies an exit pupil distance of {implied} (scale "
+    return (f"{source}: warning: the micro image pitch implies an exit pupil distance of {estimate.describe()} (scale "
             f"{estimate.scale:.6f} +- {estimate.scale_sigma:.6f}) but the camera file says {given} "
             f"(scale {estimate.expected_scale:.6f}); set main_lens.exit_pupil_distance_mm, or check mla.pitch_mm "
             f"and sensor.pixel_pitch_mm")

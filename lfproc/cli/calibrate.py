@@ -41,8 +41,9 @@ def run(args) -> int:
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
                   camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,
                   micro_image_scale=pupil.scale, micro_image_scale_sigma=pupil.scale_sigma,
-                  # null: the scale is at most 1, i.e. telecentric (or beyond) within the fit
-                  implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm)
+                  # null: the fit cannot tell the scale from 1 (telecentric); the range's null end is infinity
+                  implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm,
+                  implied_exit_pupil_range_mm=[None if math.isinf(v) else v for v in pupil.range_mm])
     write_text_atomic(args.output, grid_json_text(record))
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
@@ -50,11 +51,10 @@ def run(args) -> int:
     warnings.append(exit_pupil_warning(args.white, pupil, camera.exit_pupil_distance_mm))
     for line in filter(None, warnings):
         print(f"lfproc calibrate: {line}", file=sys.stderr)
-    implied = "telecentric" if math.isinf(pupil.distance_mm) else f"{pupil.distance_mm:.1f} mm"
     print(f"{args.output}: {grid.kind} grid of {grid.rows} x {grid.cols} lenses, pitch {grid.pitch_px:.4f} px, "
           f"rotation {grid.rotation_deg:.4f} deg, residual RMS {grid.residual_rms_px:.4f} px "
           f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
-          f"micro image scale {pupil.scale:.6f} (exit pupil {implied})")
+          f"micro image scale {pupil.scale:.6f}, exit pupil {pupil.describe()}")
     return 0
 
 
