@@ -7,6 +7,7 @@ coordinate like the lens index j; the central view is k = c = (m̂ − 1)/2.
 File format (``.lfp.npz``, written by :meth:`LightField.save`): an uncompressed numpy ``.npz``
 archive with the members ``views`` (the array above), ``camera_toml`` (the camera file, a string;
 empty if none) and ``grid_json`` (the lens grid as written by ``lfproc calibrate``; empty if none),
+optionally ``view_mask`` ((m̂, m̂) bool, the views that carry light; absent when all do),
 plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it: ``np.load(path)["views"]``.
 """
 
@@ -34,11 +35,18 @@ def is_lightfield_file(path) -> bool:
 
 @dataclass(frozen=True, eq=False)
 class LightField:
-    """A decoded light field: ``views`` shaped ``(m̂, m̂, Ny, Nx, C)`` plus optional camera and grid."""
+    """A decoded light field: ``views`` shaped ``(m̂, m̂, Ny, Nx, C)`` plus optional camera and grid.
+
+    ``view_mask`` (m̂, m̂) bool, optional, marks the views that carry light: the decoder leaves views
+    outside the main lens aperture or too close to a micro image's rim at 0 (see :mod:`lfproc.decode`),
+    and refocusing averages over the marked views only, so slices keep the scene's brightness. ``None``:
+    every view carries light. The views it leaves out must be 0 (:meth:`from_views` sets them so).
+    """
 
     views: np.ndarray
     camera: Camera | None = None
     grid: LensGrid | None = None
+    view_mask: np.ndarray | None = None
 
     def __post_init__(self):
         v = self.views
@@ -46,12 +54,22 @@ class LightField:
             raise LfprocError(f"light field views must be shaped (m, m, Ny, Nx, C) with m odd, got {v.shape}")
         if min(v.shape) < 1:
             raise LfprocError(f"light field views must not be empty, got shape {v.shape}")
+        if self.view_mask is not None:
+            mask = np.asarray(self.view_mask, dtype=bool)
+            if mask.shape != v.shape[:2] or not mask.any():
+                raise LfprocError(f"light field view_mask must be {v.shape[0]}x{v.shape[0]} booleans marking at least "
+                                  f"one view, got shape {mask.shape}")
+            if not mask.all() and v[~mask].any():
+                raise LfprocError("light field views that view_mask leaves out must be 0 (refocusing sums every "
+                                  "view); build it with LightField.from_views, which zeroes them")
+            object.__setattr__(self, "view_mask", None if mask.all() else mask)
         if self.camera is not None and self.camera.m_hat != v.shape[0]:
             raise LfprocError(f"light field has {v.shape[0]}x{v.shape[0]} views but the camera's micro_image_px "
                               f"is {self.camera.m_hat}; decode with that camera or fix decode.micro_image_px")
 
     @classmethod
-    def from_views(cls, views, camera: Camera | None = None, grid: LensGrid | None = None) -> "LightField":
+    def from_views(cls, views, camera: Camera | None = None, grid: LensGrid | None = None,
+                   view_mask=None) -> "LightField":
         """Wrap an array shaped ``(m̂, m̂, Ny, Nx, C)``; it is converted to float32 (no copy if it already is)."""
         arr = np.asarray(views)
         if arr.dtype != np.float32:
@@ -60,7 +78,13 @@ class LightField:
                 arr = arr.astype(np.float32)
             if np.issubdtype(source.dtype, np.floating) and not np.isfinite(arr).all() and np.isfinite(source).all():
                 raise LfprocError("light field values exceed the float32 range (|x| > 3.4e38); rescale them first")
-        return cls(np.ascontiguousarray(arr), camera, grid)
+        arr = np.ascontiguousarray(arr)
+        if view_mask is not None:
+            unmarked = ~np.asarray(view_mask, dtype=bool)
+            if unmarked.shape == arr.shape[:2] and unmarked.any() and arr[unmarked].any():
+                arr = arr.copy() if arr is views else arr
+                arr[unmarked] = 0.0
+        return cls(arr, camera, grid, view_mask)
 
     @property
     def m_hat(self) -> int:
@@ -89,8 +113,9 @@ class LightField:
         grid_json = json.dumps(self.grid.to_json_dict()) if self.grid is not None else ""
         with atomic_path(path, suffix=".npz") as tmp:
             with open(tmp, "wb") as fh:
+                extra = {} if self.view_mask is None else {"view_mask": self.view_mask}
                 np.savez(fh, views=self.views, camera_toml=np.array(camera_toml),
-                         grid_json=np.array(grid_json), format=np.array(FILE_FORMAT))
+                         grid_json=np.array(grid_json), format=np.array(FILE_FORMAT), **extra)
 
     @classmethod
     def read_camera(cls, path: str | os.PathLike) -> Camera | None:
@@ -102,20 +127,22 @@ class LightField:
     @classmethod
     def load(cls, path: str | os.PathLike) -> "LightField":
         path = os.fspath(path)
-        members = _read_members(path, ("views", "camera_toml", "grid_json"))
+        members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask",))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
-        return cls.from_views(views, camera, grid)
+        return cls.from_views(views, camera, grid, members.get("view_mask"))
 
 
-def _read_members(path: str, names: tuple) -> dict:
+def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
     """The named arrays of a light field file (only those are read), every failure as one LfprocError."""
     try:
         with np.load(path, allow_pickle=False) as data:
             if "format" not in data or str(data["format"]) != FILE_FORMAT:
                 raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
-            return {name: data[name] for name in names}
+            members = {name: data[name] for name in names}
+            members.update({name: data[name] for name in optional if name in data})
+            return members
     except FileNotFoundError:
         raise LfprocError(f"{path}: light field file not found; check the path") from None
     except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:

@@ -147,6 +147,16 @@ def _white_from_folder(folder: str, capture_metadata, capture_path) -> str:
     return choice.path
 
 
+def white_image_for(captures, white: str | None = None, white_dir: str | None = None) -> str | None:
+    """``--white`` as given, or the white image ``--white-dir`` picks for the first capture (said on stderr)."""
+    if white is not None and white_dir is not None:
+        raise LfprocError("give --white WHITE or --white-dir DIR, not both")
+    if white_dir is None:
+        return white
+    first = captures[0] if captures else None
+    return _white_from_folder(white_dir, _lytro_metadata_of(first), first)
+
+
 def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: float | None = None) -> Camera:
     """The camera of ``--camera FILE``, or without one the camera in the first Lytro capture's metadata.
 
@@ -185,7 +195,7 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{path}: {exc}") from None
-    return LightField.from_views(views, setup.camera, decoder.output_grid)
+    return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered)
 
 
 def output_stem(path: str) -> str:

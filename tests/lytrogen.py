@@ -116,7 +116,7 @@ def section(magic: bytes, data: bytes, position: int, reference: str | None = No
 
 
 def container_bytes(packed: bytes, metadata: dict, private: dict | None, *, thumbnail=b"\xff\xd8\xff\xe0 jpeg",
-                    bad_sha1=False, with_raw=True, modulation=None) -> bytes:
+                    bad_sha1=False, with_raw=True, modulation=None, frame_without_raw_first=False) -> bytes:
     """A raw light field container: LFM first, then a thumbnail, private metadata, raw and metadata chunks
     (the raw is never the first chunk, so a reader must follow the references)."""
     chunks = {"thumb": thumbnail, "meta": json.dumps(metadata, indent=1).encode(),
@@ -127,7 +127,10 @@ def container_bytes(packed: bytes, metadata: dict, private: dict | None, *, thum
         frame["frame"]["imageRef"] = refs["raw"]
     if modulation is not None:
         frame["parameters"] = {"vendorContent": {"com.lytro.tags": {"modulationFrame": modulation}}}
-    toc = {"picture": {"frameArray": [frame], "viewArray": [], "accelerationArray": [], "derivationArray": []},
+    frames = [frame]
+    if frame_without_raw_first:     # e.g. a frame whose image lives elsewhere: only its metadata is here
+        frames.insert(0, {"frame": {"metadataRef": refs["meta"], "imageRef": "sha1-" + "0" * 40}})
+    toc = {"picture": {"frameArray": frames, "viewArray": [], "accelerationArray": [], "derivationArray": []},
            "thumbnailArray": [{"imageRef": refs["thumb"], "representation": "jpeg"}],
            "version": {"major": 1, "minor": 0}}
     out = bytearray(FILE_MAGIC + struct.pack(">II", 1, 0))

@@ -60,8 +60,24 @@ def test_refocus_names_the_depths_it_leaves_uncovered(sample, tmp_path):
     proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--depth-range", "400:1300",
                    "--integer", "-o", tmp_path)
     assert proc.returncode == 0, proc.stderr
-    holes = [line for line in proc.stdout.splitlines() if "no slice is in focus at" in line]
-    assert len(holes) == 1 and re.search(r"[\d.]+ mm\.\.[\d.]+ mm", holes[0])
+    printed = sorted((float(lo), float(hi)) for lo, hi in
+                     re.findall(r"no slice is in focus at ([\d.]+) mm\.\.([\d.]+) mm: a gap allowed by the integer",
+                                proc.stdout))
+    # the gaps, independently: the parts of 400..1300 mm outside every written slice's [near, far]
+    sides = [json.loads(p.read_text()) for p in tmp_path.glob("*.json")]
+    assert all(float(side["a"]).is_integer() for side in sides)
+    spans = sorted((side["near_mm"], side["far_mm"] if side["far_mm"] is not None else float("inf")) for side in sides)
+    gaps, reach = [], 400.0
+    for lo, hi in spans:
+        if lo > reach:
+            gaps.append((reach, min(lo, 1300.0)))
+        reach = max(reach, hi)
+    if reach < 1300.0:
+        gaps.append((reach, 1300.0))
+    gaps = [(lo, hi) for lo, hi in gaps if hi > lo]
+    assert len(printed) == len(gaps) >= 1
+    for (plo, phi), (lo, hi) in zip(printed, gaps):
+        assert plo == pytest.approx(lo, abs=0.06) and phi == pytest.approx(hi, abs=0.06)
 
 
 @pytest.mark.parametrize("spelling", [["--a", "-0.4:0.6:0.2"], ["--a=-0.4:0.6:0.2"]])
@@ -230,3 +246,20 @@ def test_an_a_whose_views_miss_the_image_is_refused_with_the_usable_range(sample
     assert len(warning) == 1 and "fewer than half the pixels" in warning[0]
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "1", "-o", tmp_path / "ok")
     assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+
+
+def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file(tmp_path):
+    """Lytro files carry their camera; --white-dir picks the white image, in batch as in refocus."""
+    lytro = SAMPLES / "lytro"
+    args = ["--white-dir", lytro / "caldata", "--a", "0.25,1.25"]
+    proc = run_cli("batch", lytro / "IMG_0001.lfr", *args, "--workers", "1", "-o", tmp_path / "b")
+    assert proc.returncode == 0, proc.stderr
+    assert "MOD_000" in proc.stderr and "metadata" in proc.stderr      # which white image, whose camera
+    single = run_cli("refocus", lytro / "IMG_0001.lfr", *args, "-o", tmp_path / "r")
+    assert single.returncode == 0, single.stderr
+    from lfproc.io import read_image
+    for name in ("IMG_0001_a+0.250", "IMG_0001_a+1.250"):
+        np.testing.assert_array_equal(read_image(tmp_path / "b" / f"{name}.tif"),
+                                      read_image(tmp_path / "r" / f"{name}.tif"))
+        assert json.loads((tmp_path / "b" / f"{name}.json").read_text()) == \
+            json.loads((tmp_path / "r" / f"{name}.json").read_text())

@@ -98,6 +98,10 @@ def test_provenance_survives_a_round_trip_and_nested_keys():
     cam = Camera.from_toml(ILLUM)
     again = Camera.from_toml_string(cam.to_toml())
     assert again.provenance == cam.provenance and again == cam
+    assert "[provenance]" not in cam.to_toml(include_provenance=False)
+    refocused = cam.with_focus_distance(2000.0)                     # stale provenance of b_U is dropped
+    assert refocused.provenance_of("main_lens.focus_distance_mm") is None
+    assert refocused.provenance_of("mla.pitch_mm") == cam.provenance_of("mla.pitch_mm")
     nested = Camera.from_toml_string(ILLUM.read_text().split("[provenance]")[0]
                                      + "[provenance]\nmla.pitch_mm = \"metadata\"\n")
     assert nested.provenance == (("mla.pitch_mm", "metadata"),) and nested.provenance_of("mla.pitch_mm") == "metadata"
@@ -133,3 +137,23 @@ def test_triangulation_command_stays_light():
             f"print([m for m in ('numba', 'cv2', 'OpenImageIO', 'rawpy', 'matplotlib') if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_geometry_of_a_camera_written_from_lytro_metadata_says_where_numbers_came_from(tmp_path):
+    """`lfproc camera` (lytro) writes [provenance]; `lfproc geometry` reads the file whole and prints it."""
+    import numpy as np
+    import lytrogen
+    doc = lytrogen.illum_document(8, 6, modulation=False)
+    lfr = lytrogen.write_container(tmp_path / "IMG_0001.LFR", np.full((6, 8), 500), 10, "little",
+                                   *lytrogen.frame_metadata_of(doc), modulation=False)
+    cam_file = tmp_path / "camera.toml"
+    assert run_cli("camera", lfr, "-o", cam_file).returncode == 0
+    cam = Camera.from_toml(cam_file)
+    assert cam.provenance_of("main_lens.image_distance_mm").startswith("default: focused at infinity")
+    assert not cam.telecentric
+    proc = run_cli("geometry", "--camera", cam_file, "--json")
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(proc.stdout)
+    assert data["provenance"]["mla.focal_length_mm"].startswith("metadata: devices.mla.sensorOffset.z")
+    table = run_cli("geometry", "--camera", cam_file).stdout
+    assert "main_lens.image_distance_mm: default: focused at infinity" in table

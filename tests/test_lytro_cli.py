@@ -74,9 +74,9 @@ def test_camera_file_from_metadata(tmp_path, illum_file):
     out = tmp_path / "camera.toml"
     proc = run_cli("camera", illum_file, "-o", out)
     assert proc.returncode == 0, proc.stderr
-    data = tomllib.loads(out.read_text())
-    provenance = data.pop("provenance")
-    cam = Camera.from_dict(data, source=str(out))
+    cam = Camera.from_toml(out)
+    provenance = dict(cam.provenance)
+    assert provenance == tomllib.loads(out.read_text())["provenance"]
     fixture = lytrogen.fixture("illum-white-image.TXT")["master"]["picture"]["frameArray"][0]["frame"]["metadata"]
     devices = fixture["devices"]
     assert cam.pixel_pitch_mm == pytest.approx(devices["sensor"]["pixelPitch"] * 1e3, rel=1e-12)
@@ -96,17 +96,14 @@ def test_camera_file_from_metadata(tmp_path, illum_file):
 def test_camera_focus_distance_flag_and_telecentric_f01(tmp_path, illum_file, f01_pair):
     out = tmp_path / "camera.toml"
     assert run_cli("camera", illum_file, "-o", out, "--focus-distance", "1000").returncode == 0
-    data = tomllib.loads(out.read_text())
-    provenance = data.pop("provenance")
-    cam = Camera.from_dict(data)
+    cam = Camera.from_toml(out)
+    provenance = dict(cam.provenance)
     f_u, b_u = cam.main_focal_length_mm, cam.image_distance_mm
     z = 1000 - cam.mla_focal_length_mm - b_u                    # object distance from the (thin) main lens
     assert 1 / f_u == pytest.approx(1 / b_u + 1 / z, rel=1e-12)
     assert provenance["main_lens.image_distance_mm"].startswith("flag: --focus-distance 1000")
     assert run_cli("camera", f01_pair, "-o", out).returncode == 0
-    data = tomllib.loads(out.read_text())
-    data.pop("provenance")
-    cam = Camera.from_dict(data)
+    cam = Camera.from_toml(out)
     assert math.isinf(cam.exit_pupil_distance_mm) and cam.cfa == "BGGR" and cam.m_hat == 9
 
 
@@ -151,11 +148,6 @@ def test_refocus_a_lytro_capture_with_its_calibration_folder(tmp_path):
         assert sidecar["distance_mm"] == pytest.approx(geometry.slice_distance_mm(camera, a), rel=1e-12)
 
 
-# Runs once the geometry owner's Camera reads the [provenance] table (issue 11's agreed interface);
-# before that merge, a camera file with [provenance] is refused as an unknown table, so the test would
-# only restate that.
-@pytest.mark.skipif("provenance" not in {f.name for f in __import__("dataclasses").fields(Camera)},
-                    reason="Camera.provenance (geometry owner) not merged yet")
 def test_readme_lytro_workflow_with_the_camera_file(tmp_path):
     from conftest import SAMPLES
     capture, caldata = SAMPLES / "lytro" / "IMG_0001.lfr", SAMPLES / "lytro" / "caldata"

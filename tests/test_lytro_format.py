@@ -54,6 +54,23 @@ def test_10bit_little_matches_a_python_loop(seed):
     assert got.ravel().tolist() == reference_unpack_10_little(data, 400)
 
 
+def unpackbits_10_little(data: bytes) -> np.ndarray:
+    """10-bit little-endian from the bits (numpy.unpackbits, MSB first per byte): pixel i of a group is byte i's
+    8 bits then bits 2i+1 and 2i of byte 4."""
+    bits = np.unpackbits(np.frombuffer(data, np.uint8)).reshape(-1, 5, 8).astype(np.int64)
+    msb = bits[:, :4, :].dot(1 << np.arange(7, -1, -1))                     # (N, 4)
+    low = np.stack([bits[:, 4, 7 - (2 * i + 1)] * 2 + bits[:, 4, 7 - 2 * i] for i in range(4)], axis=1)
+    return (msb * 4 + low).ravel()
+
+
+def test_10bit_little_over_several_blocks_matches_unpackbits():
+    rng = np.random.default_rng(3)
+    groups = 3 * 65536 + 7                                   # more than one of the reader's blocks, a ragged end
+    data = rng.integers(0, 256, size=5 * groups, dtype=np.uint8).tobytes()
+    got = lio.unpack_raw(data, groups, 4, 10, "little")          # 4 rows of `groups` pixels
+    np.testing.assert_array_equal(got.ravel(), unpackbits_10_little(data))
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_12bit_big_matches_a_python_loop_and_unpackbits(seed):
     rng = np.random.default_rng(seed)
@@ -115,6 +132,12 @@ def test_container_sections_follow_the_format(tmp_path):
     capture = lio.read_capture(path)
     assert capture.cfa == "GRBG"
     np.testing.assert_allclose(capture.data, (dn - 64.0) / (1023.0 - 64.0), rtol=1e-6)
+
+
+def test_the_raw_frame_is_found_by_reference_not_position(tmp_path):
+    """A first frame whose image is not in the file is passed over; the raw chunk is the third chunk."""
+    path, dn = small_illum(tmp_path, frame_without_raw_first=True)
+    np.testing.assert_allclose(lio.read_capture(path).data, (dn - 64.0) / 959.0, rtol=1e-6)
 
 
 @pytest.mark.parametrize("extension", [".LFR", ".lfp", ".LFP", ".bin"])

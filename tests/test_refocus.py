@@ -60,8 +60,9 @@ def _interp_matrix(pos, n, interpolation):
     return w
 
 
-def reference(views, a, interpolation="linear", upsample=1):
-    """out[py, px] = mean over inside (ky, kx) of views[ky, kx] sampled at (py/s + a(c-ky), px/s + a(c-kx))."""
+def reference(views, a, interpolation="linear", upsample=1, mask=None):
+    """out[py, px] = mean over inside (ky, kx) of views[ky, kx] sampled at (py/s + a(c-ky), px/s + a(c-kx)),
+    over the views ``mask`` marks (all without one); 0 where no marked view is inside."""
     views = np.asarray(views, dtype=np.float64)
     m, _, ny, nx, channels = views.shape
     c = (m - 1) // 2
@@ -74,14 +75,17 @@ def reference(views, a, interpolation="linear", upsample=1):
         y = _snap(py + a * (c - ky))
         wy = _interp_matrix(y, ny, interpolation)
         for kx in range(m):
+            if mask is not None and not mask[ky, kx]:
+                continue
             x = _snap(px + a * (c - kx))
             wx = _interp_matrix(x, nx, interpolation)
             inside = ((0 <= y) & (y <= ny - 1))[:, None] & ((0 <= x) & (x <= nx - 1))[None, :]
             sampled = np.einsum("pi,ijc,qj->pqc", wy, views[ky, kx], wx)
             total += np.where(inside[..., None], sampled, 0.0)
             count += inside
-    assert count.min() >= 1
-    return total / count[..., None]
+    if mask is None:
+        assert count.min() >= 1
+    return np.where(count[..., None] > 0, total / np.maximum(count, 1)[..., None], 0.0)
 
 
 def random_views(m, ny, nx, channels, seed=0, dtype=np.float32):
@@ -406,3 +410,37 @@ def test_second_process_loads_kernels_from_cache():
     if misses:
         misses, hits = _kernel_cache_misses_and_hits_in_a_new_process()
     assert (misses, hits) == (0, 2)
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+@pytest.mark.parametrize("upsample", [1, 2])
+def test_a_view_mask_averages_only_the_views_that_carry_light(interpolation, upsample):
+    """Views the decoder leaves at 0 (outside the aperture, at micro image rims) do not darken slices."""
+    m = 5
+    views = random_views(m, 9, 11, 2, seed=7)
+    yy, xx = np.mgrid[:m, :m] - (m - 1) / 2
+    mask = yy ** 2 + xx ** 2 <= 2.5                      # a disc of 9 views, like an aperture
+    views[~mask] = 0.0
+    lf = LightField.from_views(views, view_mask=mask)
+    for a in (0.0, 1.0, -1.7, 3.4):
+        close(lfproc.refocus(lf, a, interpolation, upsample), reference(views, a, interpolation, upsample, mask))
+    # a constant scene stays constant wherever a marked view reaches the pixel
+    flat = np.where(mask[:, :, None, None, None], np.float32(0.6), np.float32(0.0)) * np.ones((1, 1, 9, 11, 1))
+    out = lfproc.refocus(LightField.from_views(flat, view_mask=mask), [0.5, 2.0], interpolation, upsample)
+    assert np.allclose(out[out > 0], 0.6, rtol=1e-5) and (out > 0).mean() > 0.5
+
+
+def test_a_full_view_mask_is_no_mask():
+    views = random_views(3, 4, 5, 1)
+    assert LightField.from_views(views, view_mask=np.ones((3, 3), bool)).view_mask is None
+    with pytest.raises(LfprocError, match="view_mask"):
+        LightField.from_views(views, view_mask=np.zeros((3, 3), bool))
+
+
+def test_the_view_mask_survives_the_light_field_file(tmp_path):
+    views = random_views(3, 4, 5, 1)
+    mask = np.array([[False, True, False], [True, True, True], [False, True, False]])
+    LightField.from_views(views, view_mask=mask).save(tmp_path / "x.lfp.npz")
+    loaded = LightField.load(tmp_path / "x.lfp.npz")
+    np.testing.assert_array_equal(loaded.view_mask, mask)
+    close(lfproc.refocus(loaded, 1.0), reference(views, 1.0, mask=mask))

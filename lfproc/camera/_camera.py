@@ -149,11 +149,15 @@ class Camera:
         return dict(self.provenance).get(key)
 
     def with_focus_distance(self, focus_distance_mm: float) -> "Camera":
-        """A copy whose b_U focuses the main lens at ``focus_distance_mm`` (from the sensor)."""
+        """A copy whose b_U focuses the main lens at ``focus_distance_mm`` (from the sensor).
+
+        The provenance of b_U (or of a focus distance) no longer holds and is dropped.
+        """
+        stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
         return replace(self, image_distance_mm=image_distance_for_focus(
             self.main_focal_length_mm, focus_distance_mm,
             self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.main_principal_plane_gap_mm,
-            self.source or "camera"))
+            self.source or "camera"), provenance=tuple(p for p in self.provenance if p[0] not in stale))
 
     # ----------------------------------------------------------------- files (see ._toml)
     @classmethod
@@ -175,7 +179,10 @@ class Camera:
         from ._toml import camera_fields
         return cls(**camera_fields(data, source=source))
 
-    def to_toml(self) -> str:
-        """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision)."""
+    def to_toml(self, include_provenance: bool = True) -> str:
+        """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision).
+
+        ``include_provenance`` appends the ``[provenance]`` table (where the camera has one).
+        """
         from ._toml import camera_to_toml
-        return camera_to_toml(self)
+        return camera_to_toml(self, include_provenance)

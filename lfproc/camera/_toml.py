@@ -128,7 +128,7 @@ def parse_provenance(table, source: str) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
-def camera_to_toml(camera) -> str:
+def camera_to_toml(camera, include_provenance: bool = True) -> str:
     """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision)."""
     lines = []
     if camera.name:
@@ -147,7 +147,7 @@ def camera_to_toml(camera) -> str:
     if not camera.telecentric:
         lines.append(f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}")
     lines += ["[decode]", f"micro_image_px = {camera.m_hat}"]
-    if camera.provenance:
+    if include_provenance and camera.provenance:
         lines.append("[provenance]")
         lines += [f"{_toml_str(key)} = {_toml_str(text)}" for key, text in camera.provenance]
     return "\n".join(lines) + "\n"

@@ -50,17 +50,16 @@ def run(args) -> int:
     from .. import batch
     from ..camera import Camera
     from ..lightfield import LightField, is_lightfield_file
-    from ..pipeline import unique_stems
+    from ..pipeline import camera_for_captures, unique_stems, white_image_for
     from .common import slice_parameters
 
     check_render_options(args)
     check_slice_options(args)
     sources = batch.expand_inputs(args.inputs)
     to_decode = [s for s in sources if not is_lightfield_file(s)]
-    if to_decode and not args.camera:
-        raise LfprocError(f"{to_decode[0]}: decoding a capture needs --camera CAM (a camera TOML file)")
-    if to_decode and not args.calib and not args.white:
-        raise LfprocError("give --white WHITE (a white image) or --calib GRID.json (from lfproc calibrate)")
+    if to_decode and not (args.calib or args.white or args.white_dir):
+        raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
+                          "--calib GRID.json (from lfproc calibrate)")
     for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
@@ -77,6 +76,9 @@ def run(args) -> int:
         camera = Camera.from_toml(args.camera)
         with open(args.camera, encoding="utf-8") as fh:
             camera_toml = fh.read()
+    elif to_decode:   # Lytro captures carry their camera in their metadata; anything else needs --camera
+        camera = camera_for_captures(None, to_decode)
+        camera_toml = camera.to_toml()
     else:
         camera, camera_toml = LightField.read_camera(sources[0]), ""
         if camera is None:
@@ -89,8 +91,8 @@ def run(args) -> int:
     else:
         a_values = ()
     require_output_folder(args.outdir)
-    white = _abs(args.white)
-    if args.calib and not args.white:  # decode with the white image the grid file recorded (as lfproc refocus
+    white = _abs(white_image_for(to_decode, args.white, args.white_dir)) if to_decode else None
+    if args.calib and not white:  # decode with the white image the grid file recorded (as lfproc refocus
         from ..pipeline import read_grid  # does), and let its file stamp into every capture's fingerprint
 
         _, recorded = read_grid(args.calib)
@@ -141,7 +143,8 @@ def _process(args, jobs, manifest, camera) -> int:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
         batch.decode_setup(first_to_decode)
     if jobs[0].refocus_a:
-        describe_slices(camera, jobs[0].refocus_a, args.depth_range)
+        describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
+                        integer=args.integer, max_slices=args.max_slices)
     start = time.perf_counter()
     interrupted = False
     try:

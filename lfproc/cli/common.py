@@ -69,7 +69,7 @@ def dumps_strict(obj, **kwargs) -> str:
 
 
 #: the most slices one command renders unless --max-slices says otherwise (--a lists and --depth-range alike)
-DEFAULT_MAX_SLICES = 10000
+DEFAULT_MAX_SLICES = 10000     # = lfproc.geometry.MAX_SLICES (kept literal: this module loads no numpy)
 
 
 def add_slice_options(p) -> None:
@@ -116,7 +116,11 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
         values = parse_number_list(a_list, what)
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)
-        values = [float(a) for a in geometry.plan_slices(camera, near, far, max_gap_mm=max_gap_mm, integer=integer)]
+        plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
+                                         max_slices=max_slices)
+        values = [float(a) for a in plan.a]
+        if not values:
+            raise LfprocError(f"--depth-range {depth_range}: no slice can be planned ({plan.uncovered[0][2]})")
     elif at_mm is None:
         raise LfprocError("give one of --a, --depth-range or --at")
     elif not math.isfinite(at_mm):
@@ -130,8 +134,10 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     return values
 
 
-def describe_slices(camera, a_values, depth_range=None, out=None) -> None:
-    """One line per slice (a, distance, [near, far] in mm) and the depths no slice covers, on stdout."""
+def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm: float = 0.0,
+                    integer: bool = False, max_slices: int = DEFAULT_MAX_SLICES) -> None:
+    """One line per slice (a, distance, [near, far] in mm) and the depths no slice covers, with the
+    reason, on stdout. The planning options are those the slices were planned with."""
     from .. import geometry
 
     out = out or sys.stdout
@@ -139,14 +145,15 @@ def describe_slices(camera, a_values, depth_range=None, out=None) -> None:
     print(f"{len(a_values)} slice(s):", file=out)
     for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
-    if depth_range is not None:
-        near, far = parse_depth_range(depth_range)
-        holes = geometry.uncovered_depths(camera, a_values, near, far)
-        if holes:
-            listed = ", ".join(f"{_mm(lo)}..{_mm(hi)}" for lo, hi in holes)
-            print(f"  no slice is in focus at {listed}", file=out)
-        else:
-            print(f"  together in focus over all of {_mm(near)}..{_mm(far)}", file=out)
+    if depth_range is None:
+        return
+    near, far = parse_depth_range(depth_range)
+    plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
+                                     max_slices=max_slices)
+    for lo, hi, why in plan.uncovered:
+        print(f"  no slice is in focus at {_mm(lo)}..{_mm(hi)}: {why}", file=out)
+    if not plan.uncovered:
+        print(f"  together in focus over all of {_mm(near)}..{_mm(far)}", file=out)
 
 
 def _mm(value: float) -> str:

@@ -25,5 +25,6 @@ def run(args) -> int:
     lf = load_lightfield(args.raw, setup)
     lf.save(args.output)
     m, _, ny, nx, ch = lf.views.shape
-    print(f"{args.output}: {m}x{m} views of {ny}x{nx} lenses, {ch} channel(s)")
+    lit = int((lf.views != 0).any(axis=(2, 3, 4)).sum())
+    print(f"{args.output}: {m}x{m} views ({lit} carry light) of {ny}x{nx} lenses, {ch} channel(s)")
     return 0

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import re
 import sys
 
 from .common import dumps_strict, parse_number_list
@@ -17,8 +16,6 @@ def register(sub) -> None:
                                    "tilt and the baseline, and with --disparity the distance of points seen with "
                                    "those disparities between views G apart. Negative lists work with or without "
                                    "'=': --a -1:1 or --a=-1:1.")
-    # values such as "-1,2" or "-0.5:1" are arguments, not options (no option here looks like a number)
-    p._negative_number_matcher = re.compile(r"^-\.?\d")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
     p.add_argument("--a", default="0:5", metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
@@ -29,7 +26,8 @@ def register(sub) -> None:
                    help="with --disparity: views G apart (signed as PlenoptiSign's G; default 1)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
-    p.add_argument("--wavelength-nm", type=float, default=550.0, help="wavelength for the Airy limit (default 550)")
+    p.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM",
+                   help="wavelength for the Airy limit (default 550)")
     p.set_defaults(func=run)
 
 
@@ -91,7 +89,7 @@ def format_table(camera, slices, views, gaps, check, path, tri=None) -> str:
     from .. import geometry
     pupil = ("exit pupil at infinity (telecentric)" if camera.telecentric else
              f"exit pupil {camera.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
-             f"{geometry.micro_image_scale(camera):.6f})")
+             f"{geometry.micro_image_scale(camera):.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} um apart)")
     out = [f"camera {camera.name or path}: m = {camera.m_hat} px per micro image, effective pixel pitch "
            f"{camera.effective_pixel_pitch_mm * 1e3:.3f} um, b_U - f_U = "
            f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm, {pupil}"]

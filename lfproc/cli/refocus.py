@@ -63,7 +63,8 @@ def run(args) -> int:
         """The slice table, printed when the first capture with this camera has rendered."""
         if key not in described:
             described.add(key)
-            describe_slices(camera, values, args.depth_range)
+            describe_slices(camera, values, args.depth_range, max_gap_mm=args.max_gap, integer=args.integer,
+                            max_slices=args.max_slices)
 
     a_values = slices_for(camera)[1]   # every list is checked before any capture is read
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first

@@ -39,13 +39,11 @@ class LytroCamera:
     notes: tuple
 
     def to_toml(self) -> str:
-        """The camera file: notes as comments, then the contract tables and ``[provenance]`` (Camera.to_toml)."""
-        lines = [f"# {note}" for note in self.notes]
+        """The camera file: notes as comments, then the contract tables with ``[provenance]`` last."""
         text = self.camera.to_toml()
-        if self.camera.telecentric:
+        if self.camera.telecentric:   # said explicitly: the metadata's "effectively infinite" offset
             text = text.replace("[decode]", "exit_pupil_distance_mm = inf\n[decode]", 1)
-        lines.append(text.rstrip("\n"))
-        return "\n".join(lines) + "\n"
+        return "\n".join(f"# {note}" for note in self.notes) + "\n" + text
 
 
 def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) -> LytroCamera:

@@ -3,6 +3,7 @@ with which weights (pure numpy; see the package docstring for the conventions)."
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,6 +51,12 @@ class AxisPlan:
     hi: np.ndarray       # (K, m, s) int64
     count: np.ndarray    # (K, P) int64: number of views that count at each output index
 
+    def inside(self, n: int, upsample: int) -> np.ndarray:
+        """``(K, m, P)`` booleans: whether view v's sample counts at output index p (as ``count`` sums)."""
+        p = np.arange((n - 1) * upsample + 1)
+        q_of_p, r_of_p = p // upsample, p % upsample
+        return (self.lo[:, :, r_of_p] <= q_of_p) & (q_of_p <= self.hi[:, :, r_of_p])
+
     @property
     def whole_lens(self) -> bool:
         """True when every sample is a single unit-weight tap (a pure gather)."""
@@ -90,12 +97,9 @@ def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str) -> Axis
             first = np.where(whole, base, base - 1.0)
             ntaps = np.where(whole, 1, 4).astype(np.int64)
             weights[...] = np.where(whole[..., None], np.array([1.0, 0.0, 0.0, 0.0]), keys_cubic_weights(frac))
-    p = np.arange((n - 1) * s + 1)
-    q_of_p, r_of_p = p // s, p % s
-    inside = (lo[:, :, r_of_p] <= q_of_p) & (q_of_p <= hi[:, :, r_of_p])   # (K, m, P)
     c_order = np.ascontiguousarray     # one memory layout, so the kernels compile once per dtype
-    return AxisPlan(offset=c_order(offset), first=c_order(first, dtype=np.int64), ntaps=c_order(ntaps),
-                    weights=c_order(weights), lo=c_order(lo), hi=c_order(hi),
-                    count=c_order(inside.sum(axis=1), dtype=np.int64))
+    plan = AxisPlan(offset=c_order(offset), first=c_order(first, dtype=np.int64), ntaps=c_order(ntaps),
+                    weights=c_order(weights), lo=c_order(lo), hi=c_order(hi), count=np.zeros((0, 0), np.int64))
+    return dataclasses.replace(plan, count=c_order(plan.inside(n, s).sum(axis=1), dtype=np.int64))
 
 

@@ -87,7 +87,27 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={first_bad:g}; "
                           "replace them (e.g. numpy.nan_to_num) before refocusing")
     out = out.reshape(len(slopes), plan_y.count.shape[1], plan_x.count.shape[1], channels)
+    mask = getattr(lf, "view_mask", None)
+    if mask is not None:
+        out *= _masked_mean_factor(np.asarray(mask, dtype=bool), plan_y, plan_x, ny, nx, upsample)[..., None]
     return out[0] if scalar else out
+
+
+def _masked_mean_factor(mask: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, ny: int, nx: int,
+                        upsample: int) -> np.ndarray:
+    """Per slice and output pixel: (views inside the array) / (marked views inside the array).
+
+    The kernels average over every view whose sample lies inside the array, counting the unmarked ones
+    (which hold 0); this factor turns that into the mean over the marked views alone. The marked views
+    that count at output (py, px) number ``inside_y[py]ᵀ · mask · inside_x[px]``: one small matrix
+    product per slice. Where no marked view reaches a pixel the slice is 0.
+    """
+    inside_y = plan_y.inside(ny, upsample).astype(np.float64)     # (K, m, Py)
+    inside_x = plan_x.inside(nx, upsample).astype(np.float64)     # (K, m, Px)
+    marked = np.einsum("kvp,vw,kwq->kpq", inside_y, mask.astype(np.float64), inside_x)
+    every = plan_y.count[:, :, None] * plan_x.count[:, None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(marked > 0, every / marked, 0.0).astype(np.float32)
 
 
 # ----------------------------------------------------------------------------- input validation

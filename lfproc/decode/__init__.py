@@ -1,0 +1,63 @@
+"""Decoding: resample a sensor image along the fitted lens lattice into m̂ × m̂ views (paper Section 5.1).
+
+Real captures rarely have an odd, integer number of pixels per micro lens, or a lattice aligned with
+the pixel rows. The paper resamples the raw image so every micro image is m̂ × m̂ pixels with m̂ odd
+(9 µm pixels under 250 µm lenses → m̂ = 25 at an effective pitch of 10 µm). Here that is ``cv2.remap``
+over bands of lens rows:
+
+* **Sample positions** (``_positions``). View (ky, kx) of lens (r, q) is read at the lens centre
+  (``grid.lens_xy``) plus ``(kx − c)·s·u + (ky − c)·s·v`` sensor pixels, with s = pitch_px / m̂ the
+  effective pixel and (u, v) the lattice axes. The maps are laid out as ``(ky, kx, r)`` rows by ``q``
+  columns, so ``remap`` writes the contract's ``(m̂, m̂, Ny, Nx, C)`` array directly.
+* **Devignetting** (``_decoder``). The white image is demosaiced and resampled the same way, and the
+  decoded value is ``remap(capture) / remap(white)``: the scene radiance in units of the white image,
+  white balance included for colour sensors. Samples where the white image is darker than
+  ``dark_fraction`` of its bright level in any channel carry no signal and are set to 0 in every
+  channel (never NaN, never one channel alone: that would colour them).
+* **Delivered views** (``_view_mask``): only views whose samples read their own lens's lit micro image
+  are delivered; the others are 0 everywhere — see *the refocus bias* below.
+* **Whole lenses** (``_whole_lenses``): by default the grid is cropped to the lenses whose delivered
+  samples all lie on the sensor, so no partial lens leaks black or extrapolated samples; the light
+  field's grid is the cropped one, so lens indices stay those of refocusing and depth.
+* **Demosaicing** (``_demosaic``, Bayer captures) of the sensor strip a band reads, before resampling:
+  ``"fast"`` is bilinear (linear, so the ratio above stays an exact weighted average of radiance);
+  ``"careful"`` is OpenCV's edge-aware (EA) variant.
+* **Interpolation** (``_resample``): ``"nearest"``, ``"linear"``, ``"cubic"``, ``"lanczos"``.
+* **Hexagonal grids** (``_hexagonal``) are decoded at their own lens centres, then each view is
+  resampled onto a rectangular lens grid of the same pitch (:func:`hex_to_rect`), band by band.
+
+The refocus bias (issue 13) and its cause
+    A refocus sweep over a decoded capture used to peak at a lower a than the truth (1.78 for a true
+    1.93 on an RGGB render of 12 px lenses at m̂ = 11; 3 % too far). Per-view parallax measurements
+    against the simulator's ideal views located it: the inner views were right, the outer ones had
+    compressed parallax (a ≈ 1.82 for |k − c| = 5). A decoded sample is ``K·capture / K·white`` for its
+    kernel K (sensor pixel ⊗ demosaicing ⊗ interpolation, ±2.5 px for bilinear Bayer + linear remap).
+    Where K reaches past the edge of the lens's own lit micro image, the dark part weighs nothing after
+    the division, so the sample's white-weighted centroid — the ray direction it really stands for —
+    moves inwards, and lit pixels of the neighbouring micro image enter as crosstalk. The sample
+    positions, the effective pitch (pitch/m̂ in both the decoder and ``geometry``) and the truth were
+    right. The fix measures that centroid from the white image itself (``_view_mask``) and delivers
+    only views whose centroid is within ``centroid_tolerance`` (0.1 effective pixel) of nominal; a
+    sweep then peaks within 0.002 of the true a (``tests/test_decode_bias.py``). The cost: fewer
+    views at the rim (for 12 px lenses at f-number match, 45 of 121 with Bayer demosaicing, 69 mono).
+    Two measurement traps found on the way: linearly interpolated refocusing peaks towards integer a
+    (1.93 → 2.00 on exactly shifted synthetic views), and the simulator's ideal views that the stop
+    cuts partly (weight < 1) have the same inward centroid (ideal views with them: 1.896).
+
+Crosstalk. With micro images that fill their cells, the outer ring of views reads the neighbouring
+micro image; those views are not delivered (above).
+
+The white image's views depend only on the white image, the grid and the settings, so a
+:class:`Decoder` computes them once and then decodes any number of captures.
+"""
+
+from ._decoder import Decoder, decode, decode_capture, make_decoder
+from ._demosaic import DEMOSAIC_METHODS, demosaic, to_channels
+from ._hexagonal import hex_to_rect
+from ._positions import remap_maps, sample_positions
+from ._resample import INTERPOLATIONS, resample_views
+from ._view_mask import centroid_errors
+
+__all__ = ["DEMOSAIC_METHODS", "INTERPOLATIONS", "Decoder", "centroid_errors", "decode", "decode_capture",
+           "demosaic", "hex_to_rect", "make_decoder", "remap_maps", "resample_views", "sample_positions",
+           "to_channels"]

@@ -1,0 +1,199 @@
+"""The :class:`Decoder`: white-image devignetting and the banded decode of captures into views."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LfprocError
+from ..grid import LensGrid
+from ._demosaic import DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, to_channels
+from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
+from ._positions import band_maps, check_m_hat, sensor_rows_read
+from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
+from ._view_mask import faithful_views
+from ._whole_lenses import crop_to_whole_lenses
+
+#: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
+BAND_BYTES = 32 * 2**20
+#: samples of the white image's views used for its bright level (a strided subset beyond this)
+LEVEL_SAMPLES = 4_000_000
+
+
+def _band_rows(m_hat: int, cols: int, channels: int) -> int:
+    return max(2, BAND_BYTES // max(1, m_hat * m_hat * cols * channels * 4))
+
+
+def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
+              interpolation: str) -> np.ndarray:
+    """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
+
+    Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
+    """
+    margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
+    y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0])
+    strip = to_channels(sensor[y0:y1], cfa, demosaic_method)
+    channels = strip.shape[2]
+    out = np.empty((m_hat, m_hat * len(rows), grid.cols, channels), dtype=np.float32)
+    flag = cv_flag(interpolation)
+    if strip.shape[0] == 0:
+        out[...] = 0.0
+    else:
+        strip = np.ascontiguousarray(strip)
+        for ky, (map_x, map_y) in enumerate(band_maps(grid, m_hat, rows, y0)):
+            remap_into(out[ky], strip, map_x, map_y, flag)
+    return out.reshape(m_hat, m_hat, len(rows), grid.cols, channels)
+
+
+@dataclass(frozen=True, eq=False)
+class Decoder:
+    """Decodes captures that share one white image and grid (see :mod:`lfproc.decode`).
+
+    Build it with :func:`make_decoder`; call it on a sensor image to get the views.
+    """
+
+    grid: LensGrid               # the lenses decoded: the input grid cropped to whole lenses
+    m_hat: int
+    cfa: str
+    interpolation: str
+    demosaic_method: str
+    sensor_shape: tuple          # (H, W) of the white image, which every capture must share
+    channels: int
+    inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C) on ``grid``: 1 / white views where delivered, else 0
+    output_grid: LensGrid        # lens positions of the decoded light field (rectangular, also for hex input)
+    views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
+
+    def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
+        """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
+
+        ``cfa`` is the capture's colour filter when known: it must be the white image's.
+        """
+        sensor = np.asarray(sensor)
+        if sensor.shape[:2] != self.sensor_shape:
+            raise LfprocError(f"capture is {sensor.shape[1]}x{sensor.shape[0]} px but the white image is "
+                              f"{self.sensor_shape[1]}x{self.sensor_shape[0]}; use the white image of the same camera")
+        if cfa is not None and cfa != self.cfa and sensor.ndim == 2:
+            raise LfprocError(f"capture has colour filter {cfa} but the white image has {self.cfa}; "
+                              f"use a white image of the same camera and mode")
+        if np.issubdtype(sensor.dtype, np.floating) and not np.all(np.isfinite(sensor)):
+            raise LfprocError("the capture contains NaN or infinite pixels; replace them (e.g. numpy.nan_to_num) "
+                              "before decoding")
+        if channel_count(sensor, self.cfa) != self.channels:
+            raise LfprocError(f"capture has {channel_count(sensor, self.cfa)} channels but the white image has "
+                              f"{self.channels}; use a white image taken with the same camera settings")
+        m, grid = self.m_hat, self.grid
+        out_grid = self.output_grid
+        out = np.empty((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
+        step = _band_rows(m, grid.cols, self.channels)
+        for r0 in range(0, out_grid.rows, step):
+            out_rows = range(r0, min(r0 + step, out_grid.rows))
+            rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
+            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation)
+            views *= self.inverse_white[:, :, rows.start:rows.stop]
+            if grid.kind == "hexagonal":
+                hex_rows_to_rect(views, rows.start, out_rows, out[:, :, out_rows.start:out_rows.stop])
+            else:
+                out[:, :, out_rows.start:out_rows.stop] = views
+        return out
+
+
+def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
+                   interpolation: str, dark_fraction: float, delivered: np.ndarray) -> np.ndarray:
+    """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
+    channels = channel_count(white, cfa)
+    inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
+    step = _band_rows(m_hat, grid.cols, channels)
+    for r0 in range(0, grid.rows, step):
+        rows = range(r0, min(r0 + step, grid.rows))
+        inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation)
+    flat = inverse.reshape(-1)
+    subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
+    bright = float(np.percentile(subset, 99)) if subset.size else 0.0
+    if not bright > 0:
+        raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
+    threshold = np.float32(dark_fraction * bright)
+    for ky in range(m_hat):      # per view row: the boolean temporaries stay small
+        w = inverse[ky]
+        # a sample carries signal only where every channel does: one dark channel alone would turn a
+        # neutral sample magenta or green
+        signal = np.broadcast_to((w > threshold).all(axis=-1, keepdims=True), w.shape)
+        np.divide(np.float32(1.0), w, out=w, where=signal)
+        w[~signal] = 0.0
+    inverse[~delivered] = 0.0
+    return inverse
+
+
+def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
+                 interpolation: str = "linear", demosaic_method: str = "fast",
+                 dark_fraction: float = 0.05, centroid_tolerance: float | None = 0.1,
+                 crosstalk_tolerance: float = 0.25, whole_lenses: bool = True) -> Decoder:
+    """Prepare a :class:`Decoder`: the views it delivers, the lenses it keeps, the white's inverse views.
+
+    Parameters
+    ----------
+    white : ndarray
+        White image (linear), ``(H, W)`` mosaic/mono or ``(H, W, C)``.
+    grid : LensGrid
+        Fitted lattice (``lfproc.calibrate.estimate_grid``).
+    m_hat : int
+        Odd micro image size after resampling (``camera.m_hat``).
+    cfa : str
+        Bayer pattern of 2-D mosaics, or ``"none"``.
+    dark_fraction : float
+        Samples whose white value is below this fraction of the white's bright level (its 99th
+        percentile) in any channel carry no signal and decode to 0 in every channel.
+    centroid_tolerance : float or None
+        A view is delivered only where its samples' white-weighted centroid lies within this many
+        effective pixels of its nominal position (see :mod:`lfproc.decode`); other views are 0.
+        ``None`` delivers every view the white image lights (biased parallax at the micro image edges).
+    crosstalk_tolerance : float
+        ... and where at most this share of the samples' white comes from other lenses' cells.
+    whole_lenses : bool
+        Crop the grid to the lenses whose delivered samples all lie on the sensor (default); ``False``
+        keeps every lens of ``grid`` (partial lenses then read 0 past the sensor border).
+    """
+    m_hat = check_m_hat(m_hat)
+    if not 0 <= dark_fraction < 1:
+        raise LfprocError(f"dark_fraction must be in [0, 1), got {dark_fraction}")
+    if centroid_tolerance is not None and not centroid_tolerance > 0:
+        raise LfprocError(f"centroid_tolerance must be a positive number of effective pixels or None, "
+                          f"got {centroid_tolerance}")
+    check_cfa(cfa)
+    check_method(demosaic_method)
+    cv_flag(interpolation)
+    white = np.asarray(white)
+    if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
+        raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
+    check_remap_size(white.shape[0], white.shape[1], grid.cols)
+    if centroid_tolerance is None:
+        delivered = np.ones((m_hat, m_hat), dtype=bool)
+    else:
+        delivered = faithful_views(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction,
+                                   centroid_tolerance, crosstalk_tolerance)
+    if whole_lenses:
+        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape)
+    if grid.kind == "hexagonal":
+        check_hex_size(grid.rows, grid.cols)
+    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered)
+    output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
+    assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
+    return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
+                   channel_count(white, cfa), inverse, output_grid, delivered)
+
+
+def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):
+    """Decode one sensor image into views ``(m̂, m̂, Ny, Nx, C)``; see :func:`make_decoder` for options."""
+    return make_decoder(white, grid, m_hat, cfa, **options)(sensor)
+
+
+def decode_capture(capture, white, grid: LensGrid, camera, **options):
+    """Decode a :class:`lfproc.io.Capture` with its white image into a :class:`~lfproc.LightField`."""
+    from ..lightfield import LightField
+
+    decoder = make_decoder(white.data, grid, camera.m_hat, white.cfa, **options)
+    try:
+        views = decoder(capture.data, capture.cfa)
+    except LfprocError as exc:
+        raise LfprocError(f"{capture.source}: {exc}") from None
+    return LightField.from_views(views, camera, decoder.output_grid, decoder.views_delivered)

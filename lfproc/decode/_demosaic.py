@@ -1,0 +1,76 @@
+"""Demosaicing of linear Bayer mosaics (OpenCV) and the conversion of any sensor image to ``(H, W, C)``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import LfprocError
+
+DEMOSAIC_METHODS = ("fast", "careful")
+#: OpenCV's Bayer codes are named after the second row's pixels: our top-left 2x2 -> their name
+_CV_BAYER = {"RGGB": "BayerBG", "BGGR": "BayerRG", "GRBG": "BayerGB", "GBRG": "BayerGR"}
+#: how far (pixels) each method reads around a pixel: bilinear reads the 3x3 neighbourhood; OpenCV's
+#: edge-aware variant reads up to two pixels away
+DEMOSAIC_REACH_PX = {"fast": 1, "careful": 2}
+
+
+def check_cfa(cfa: str) -> None:
+    """LfprocError unless ``cfa`` is ``"none"`` or a Bayer pattern lfproc knows."""
+    if cfa != "none" and cfa not in _CV_BAYER:
+        raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
+
+
+def check_method(method: str) -> None:
+    if method not in DEMOSAIC_METHODS:
+        raise LfprocError(f"unknown demosaic method {method!r}; use one of {', '.join(DEMOSAIC_METHODS)}")
+
+
+def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
+    """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
+
+    ``"fast"`` is bilinear interpolation (linear, so a ratio of two demosaiced images stays an exact
+    weighted average); ``"careful"`` is OpenCV's edge-aware (EA) variant. The data are shifted and
+    scaled into 16 bits for OpenCV (its demosaicing works on integers) and back, so linear values keep
+    1/65535 of their range as precision; negative values (noise below the black level) are kept.
+    """
+    if cfa not in _CV_BAYER:
+        raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
+    check_method(method)
+    import cv2
+
+    data = np.asarray(mosaic, dtype=np.float32)
+    if not np.all(np.isfinite(data)):   # the 16-bit conversion below would turn them into silent zeros
+        raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
+                          "(e.g. numpy.nan_to_num) before decoding")
+    # offset by the minimum so negative (noise below black) values survive: bilinear weights sum to 1,
+    # so adding the offset back afterwards is exact
+    low = min(float(data.min()), 0.0) if data.size else 0.0
+    top = float(data.max()) - low if data.size else 0.0
+    scale = 65535.0 / top if top > 0 else 1.0
+    as_u16 = np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16)
+    code = getattr(cv2, f"COLOR_{_CV_BAYER[cfa]}2RGB" + ("_EA" if method == "careful" else ""))
+    rgb = cv2.cvtColor(as_u16, code).astype(np.float32)
+    rgb *= np.float32(1.0 / scale)
+    rgb += np.float32(low)
+    return rgb
+
+
+def to_channels(image: np.ndarray, cfa: str, method: str) -> np.ndarray:
+    """A sensor image as ``(H, W, C)`` float32: demosaiced if it is a Bayer mosaic."""
+    data = np.asarray(image)
+    if data.ndim == 2:
+        if cfa != "none":
+            return demosaic(data, cfa, method)
+        return data.astype(np.float32, copy=False)[:, :, None]
+    if data.ndim == 3:
+        return data.astype(np.float32, copy=False)
+    raise LfprocError(f"a sensor image must be 2-D or (H, W, C), got shape {data.shape}")
+
+
+def channel_count(image: np.ndarray, cfa: str) -> int:
+    """How many channels :func:`to_channels` gives for ``image``."""
+    if image.ndim == 2:
+        return 3 if cfa != "none" else 1
+    if image.ndim == 3:
+        return int(image.shape[2])
+    raise LfprocError(f"a sensor image must be 2-D or (H, W, C), got shape {image.shape}")

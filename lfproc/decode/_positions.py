@@ -1,0 +1,82 @@
+"""Where every view sample is read on the sensor, and the ``cv2.remap`` maps that read them.
+
+View (ky, kx) of lens (r, q) is read at the lens centre plus ``(kx − c)·s·u + (ky − c)·s·v`` sensor
+pixels, with s = pitch_px / m̂ the effective pixel (the geometry's ``pitch_mm / m̂``, Section 5.1) and
+(u, v) the lattice axes. Lens centres always come from the grid itself (:meth:`LensGrid.lens_xy`),
+so any lattice the grid describes, rigid or not, is sampled at its own centres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import LfprocError
+from ..grid import LensGrid
+
+
+def check_m_hat(m_hat: int) -> int:
+    """``m_hat`` as an int, or LfprocError unless it is odd and at least 1."""
+    if m_hat < 1 or m_hat % 2 == 0:
+        raise LfprocError(f"micro image size must be odd and >= 1, got {m_hat}")
+    return int(m_hat)
+
+
+def view_offsets_px(grid: LensGrid, m_hat: int) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (x, y) in sensor pixels of every view sample from its lens centre, each ``(m̂, m̂)``.
+
+    View k sits (k − c)·pitch/m̂ from the centre along each lattice axis (contract: view index and
+    lens index increase with the sensor coordinate).
+    """
+    m_hat = check_m_hat(m_hat)
+    c = (m_hat - 1) // 2
+    k = (np.arange(m_hat) - c) * (grid.pitch_px / m_hat)
+    u, v = grid.axes
+    return k[None, :] * u[0] + k[:, None] * v[0], k[None, :] * u[1] + k[:, None] * v[1]
+
+
+def lens_centers(grid: LensGrid, rows: range | None = None) -> np.ndarray:
+    """Centres (x, y) of the lenses of ``rows`` (default all), shape ``(len(rows), cols, 2)``, via ``grid.lens_xy``."""
+    rows = range(grid.rows) if rows is None else rows
+    r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
+    return grid.lens_xy(r, q)
+
+
+def sample_positions(grid: LensGrid, m_hat: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sensor positions (x, y) of every view sample, each shaped ``(m̂, m̂, rows, cols)``, float64."""
+    off_x, off_y = view_offsets_px(grid, m_hat)
+    centers = lens_centers(grid)
+    x = centers[None, None, :, :, 0] + off_x[:, :, None, None]
+    y = centers[None, None, :, :, 1] + off_y[:, :, None, None]
+    return x, y
+
+
+def band_maps(grid: LensGrid, m_hat: int, rows: range, y0: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
+    """float32 remap maps of lens ``rows`` for every view row ky, each ``(m̂·len(rows), cols)``.
+
+    Map rows run over (kx, r), so one ``remap`` per view row writes ``views[ky, :, rows]``. ``y0`` is
+    subtracted from y: the maps read a sensor strip that starts at row ``y0``.
+    """
+    off_x, off_y = view_offsets_px(grid, m_hat)
+    centers = lens_centers(grid, rows).astype(np.float32)
+    cx = centers[None, :, :, 0]
+    cy = centers[None, :, :, 1] - np.float32(y0)
+    shape = (m_hat * len(rows), grid.cols)
+    return [((cx + off_x[ky, :, None, None].astype(np.float32)).reshape(shape),
+             (cy + off_y[ky, :, None, None].astype(np.float32)).reshape(shape)) for ky in range(m_hat)]
+
+
+def remap_maps(grid: LensGrid, m_hat: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The float32 ``cv2.remap`` maps of every view row ky over all lenses, each ``(m̂·rows, cols)``."""
+    return band_maps(grid, m_hat, range(grid.rows))
+
+
+def sensor_rows_read(grid: LensGrid, m_hat: int, rows: range, margin: int, height: int) -> tuple[int, int]:
+    """The sensor rows ``[y0, y1)`` that the samples of lens ``rows`` read, widened by ``margin`` and
+    clipped to the sensor; ``y0`` is even so that a Bayer strip keeps the mosaic's phase."""
+    _, off_y = view_offsets_px(grid, m_hat)
+    ys = lens_centers(grid, rows)[..., 1]
+    lo = float(ys.min()) + float(off_y.min()) - margin
+    hi = float(ys.max()) + float(off_y.max()) + margin
+    y0 = max(0, int(np.floor(lo))) & ~1
+    y1 = min(height, int(np.ceil(hi)) + 1)
+    return y0, max(y1, y0)
