@@ -6,6 +6,10 @@ by +90°. Lens (r, q) — row r, column q — sits at
 
 * rectangular: ``origin + q·pitch·u + r·pitch·v``
 * hexagonal:   ``origin + (q + (r mod 2)/2)·pitch·u + r·(√3/2)·pitch·v`` (odd rows shifted by half a pitch)
+
+A non-rigid lattice (a micro lens array that is not perfectly regular, or distorted optics) adds a smooth
+`SmoothDeviation` to these rigid positions: lens centre = rigid position p + D(p), where D is a
+polynomial in the sensor position p (so it does not depend on how the lenses are numbered).
 """
 
 from __future__ import annotations
@@ -18,6 +22,65 @@ import numpy as np
 from .errors import LfprocError
 
 ROW_SPACING = {"rectangular": 1.0, "hexagonal": math.sqrt(3.0) / 2.0}
+
+
+@dataclass(frozen=True)
+class SmoothDeviation:
+    """A smooth offset field D(x, y) of lens centres from the rigid lattice, in sensor pixels.
+
+    D is a 2-D Legendre series of total degree ``degree`` in the normalised sensor position
+    ``((x − cx)/hx, (y − cy)/hy)``; ``coeffs_x`` and ``coeffs_y`` hold its ``(degree + 1)²`` coefficients
+    (row-major, index [i, j] multiplying P_i(x̂)·P_j(ŷ); those with i + j > degree are 0).
+
+    Parameters
+    ----------
+    degree : int
+    center_xy_px, half_size_px : tuple of float
+        (cx, cy) and (hx, hy) of the normalisation (the sensor's centre and half size).
+    coeffs_x, coeffs_y : tuple of float
+    """
+
+    degree: int
+    center_xy_px: tuple
+    half_size_px: tuple
+    coeffs_x: tuple
+    coeffs_y: tuple
+
+    def __post_init__(self):
+        n = (int(self.degree) + 1) ** 2
+        values = [float(v) for v in (*self.center_xy_px, *self.half_size_px, *self.coeffs_x, *self.coeffs_y)]
+        if (self.degree < 0 or len(self.coeffs_x) != n or len(self.coeffs_y) != n or len(self.center_xy_px) != 2
+                or len(self.half_size_px) != 2 or not all(math.isfinite(v) for v in values)
+                or min(self.half_size_px) <= 0):
+            raise LfprocError(f"grid deviation: degree {self.degree} needs {n} finite coefficients per axis "
+                              f"and a positive half size")
+        for name in ("center_xy_px", "half_size_px", "coeffs_x", "coeffs_y"):
+            object.__setattr__(self, name, tuple(float(v) for v in getattr(self, name)))
+        object.__setattr__(self, "degree", int(self.degree))
+
+    def offsets_at(self, xy) -> np.ndarray:
+        """D at sensor positions ``xy`` (..., 2): the offsets (dx, dy), shape (..., 2)."""
+        from numpy.polynomial import legendre
+        xy = np.asarray(xy, dtype=np.float64)
+        xn = (xy[..., 0] - self.center_xy_px[0]) / self.half_size_px[0]
+        yn = (xy[..., 1] - self.center_xy_px[1]) / self.half_size_px[1]
+        shape = (self.degree + 1, self.degree + 1)
+        cx = np.reshape(self.coeffs_x, shape)
+        cy = np.reshape(self.coeffs_y, shape)
+        return np.stack([legendre.legval2d(xn, yn, cx), legendre.legval2d(xn, yn, cy)], axis=-1)
+
+    def to_json_dict(self) -> dict:
+        return {"basis": "legendre", "degree": self.degree, "center_xy_px": list(self.center_xy_px),
+                "half_size_px": list(self.half_size_px), "coeffs_x": list(self.coeffs_x),
+                "coeffs_y": list(self.coeffs_y)}
+
+    @classmethod
+    def from_json_dict(cls, data: dict) -> SmoothDeviation:
+        if data.get("basis", "legendre") != "legendre":
+            raise LfprocError(f"unknown grid deviation basis {data.get('basis')!r}")
+        return cls(degree=int(data["degree"]), center_xy_px=tuple(data["center_xy_px"]),
+                   half_size_px=tuple(data["half_size_px"]), coeffs_x=tuple(data["coeffs_x"]),
+                   coeffs_y=tuple(data["coeffs_y"]))
 
 
 @dataclass(frozen=True)
@@ -37,6 +100,9 @@ class LensGrid:
         Number of lens rows (along ``v``) and columns (along ``u``).
     residual_rms_px : float
         RMS distance between measured centres and the lattice, where fitted.
+    deviation : SmoothDeviation or None
+        Smooth offsets of the lens centres from the rigid lattice (a non-rigid lattice); ``None`` = rigid.
+        ``pitch_px``, ``rotation_deg`` and ``origin_xy_px`` then describe the best rigid lattice.
     """
 
     kind: str
@@ -46,6 +112,12 @@ class LensGrid:
     rows: int
     cols: int
     residual_rms_px: float = 0.0
+    deviation: SmoothDeviation | None = None
+
+    @property
+    def model(self) -> str:
+        """``"rigid"`` or ``"smooth"`` (a rigid lattice plus a `SmoothDeviation`)."""
+        return "rigid" if self.deviation is None else "smooth"
 
     def __post_init__(self):
         if self.kind not in ROW_SPACING:
@@ -74,7 +146,10 @@ class LensGrid:
         return self.pitch_px * ROW_SPACING[self.kind]
 
     def lens_xy(self, row, col) -> np.ndarray:
-        """Centres (x, y) of lenses at integer (or fractional) ``row``, ``col``; shape ``(..., 2)``."""
+        """Centres (x, y) of lenses at integer (or fractional) ``row``, ``col``; shape ``(..., 2)``.
+
+        With a `deviation`, the rigid position p plus D(p).
+        """
         row = np.asarray(row, dtype=np.float64)
         col = np.asarray(col, dtype=np.float64)
         u, v = self.axes
@@ -83,7 +158,10 @@ class LensGrid:
         along_v = row * self.row_spacing_px
         x = self.origin_xy_px[0] + along_u * u[0] + along_v * v[0]
         y = self.origin_xy_px[1] + along_u * u[1] + along_v * v[1]
-        return np.stack([x, y], axis=-1)
+        xy = np.stack([x, y], axis=-1)
+        if self.deviation is not None:
+            xy = xy + self.deviation.offsets_at(xy)
+        return xy
 
     def centers_xy_px(self) -> np.ndarray:
         """All lens centres, shape ``(rows, cols, 2)`` as (x, y)."""
@@ -102,17 +180,21 @@ class LensGrid:
             "cols": self.cols,
             "row_spacing_px": self.row_spacing_px,
             "centers_xy_px": self.centers_xy_px().reshape(-1, 2).tolist(),
+            "model": self.model,
+            "deviation": None if self.deviation is None else self.deviation.to_json_dict(),
         }
 
     @classmethod
-    def from_json_dict(cls, data: dict, source: str = "grid") -> "LensGrid":
+    def from_json_dict(cls, data: dict, source: str = "grid") -> LensGrid:
         try:
             return cls(kind=str(data["grid"]), pitch_px=float(data["pitch_px"]),
                        rotation_deg=float(data["rotation_deg"]),
                        origin_xy_px=tuple(float(v) for v in data["origin_xy_px"]),
                        rows=float(data["rows"]), cols=float(data["cols"]),
-                       residual_rms_px=float(data.get("residual_rms_px", 0.0)))
-        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+                       residual_rms_px=float(data.get("residual_rms_px", 0.0)),
+                       deviation=(None if data.get("deviation") is None
+                                  else SmoothDeviation.from_json_dict(data["deviation"])))
+        except (KeyError, TypeError, ValueError, OverflowError, AttributeError) as exc:
             raise LfprocError(f"{source}: not a grid file written by 'lfproc calibrate' ({exc!r}); "
                               f"run lfproc calibrate again") from None
         except LfprocError as exc:

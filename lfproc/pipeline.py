@@ -76,11 +76,17 @@ def read_grid(path: str) -> tuple[LensGrid, str | None]:
 
 
 def calibrate_white(white, camera: Camera) -> LensGrid:
-    """Fit the lens grid to a white :class:`~lfproc.io.Capture`."""
-    from .calibrate import estimate_grid
+    """Fit the lens grid to a white :class:`~lfproc.io.Capture`; what ``lfproc calibrate`` would warn about
+    (an untrustworthy fit, scene texture, an exit pupil the camera file contradicts) is warned here too."""
+    from .calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
 
-    return estimate_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
+    estimate = find_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
                          source=white.source)
+    pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
+    for line in filter(None, (*estimate.warnings,
+                              exit_pupil_warning(white.source, pupil, camera.exit_pupil_distance_mm))):
+        warnings.warn(line.replace(": warning: ", ": ", 1), stacklevel=2)
+    return estimate.grid
 
 
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,

@@ -158,3 +158,31 @@ def test_samples_follow_any_lattice_the_grid_describes():
     kept = decoder.output_grid
     rigid = LensGrid.lens_xy(kept, *np.meshgrid(range(kept.rows), range(kept.cols), indexing="ij"))
     assert np.abs(centres - rigid).max() > 0.5        # the samples did follow the deviation
+
+
+def test_views_of_a_drifting_lattice_follow_the_local_pitch():
+    """A lattice whose pitch grows by 4 % across the sensor (a degree-2 deviation in x): the view samples of
+    each lens sit at its centre plus (k − c) local steps, the local step being the distance between the
+    lens's neighbours / 2 / m̂ (checked with a plain finite difference of the true centre function)."""
+    from lfproc.decode import sample_positions
+    from lfproc.grid import LensGrid, SmoothDeviation
+
+    m_hat, rows, cols = 7, 12, 40
+    # D_x(x̂) = 0.5·γ·hx·(x̂² − 1/3) → dD_x/dx = γ·x̂: the pitch changes by ±γ from the centre to the sides
+    hx, gamma = 200.0, 0.02
+    coeffs_x = np.zeros((3, 3))
+    coeffs_x[2, 0] = gamma * hx / 3.0          # P2(x̂) = (3x̂² − 1)/2
+    deviation = SmoothDeviation(2, (200.0, 60.0), (hx, 60.0), tuple(coeffs_x.ravel()), tuple(np.zeros(9)))
+    grid = LensGrid("rectangular", 10.0, 0.0, (5.0, 5.0), rows, cols, deviation=deviation)
+    x, y = sample_positions(grid, m_hat)
+    c = (m_hat - 1) // 2
+    for r, q in [(3, 1), (6, 20), (9, 38)]:
+        left, right = grid.lens_xy(r, q - 1), grid.lens_xy(r, q + 1)
+        local_step = (right - left)[0] / 2 / m_hat
+        centre = grid.lens_xy(r, q)
+        for k in (0, c, m_hat - 1):
+            assert x[c, k, r, q] == pytest.approx(centre[0] + (k - c) * local_step, abs=0.02)
+            assert y[k, c, r, q] == pytest.approx(centre[1] + (k - c) * local_step, abs=0.02)
+    # the pitch really drifts: the local steps at the two sides differ by about 2·γ
+    steps = [(grid.lens_xy(5, q + 1) - grid.lens_xy(5, q - 1))[0] / 2 for q in (1, 38)]
+    assert steps[1] / steps[0] > 1.03

@@ -121,3 +121,115 @@ def true_centres_inside(grid: LensGrid, shape, margin_px: float) -> np.ndarray:
     keep = ((xy[:, 0] >= margin_px) & (xy[:, 0] <= cols - 1 - margin_px)
             & (xy[:, 1] >= margin_px) & (xy[:, 1] <= rows - 1 - margin_px))
     return xy[keep]
+
+
+# ----------------------------------------------------------------------------- non-rigid lattices and spots
+def drifting_centres(shape, pitch_from: float, pitch_to: float, rotation_deg: float = 0.0, offset=(0.0, 0.0),
+                     jitter_px: float = 0.0, seed: int = 0):
+    """True centres of a rectangular lattice whose pitch drifts linearly from ``pitch_from`` to ``pitch_to``.
+
+    In the lattice frame (a, b) (the sensor frame rotated by ``rotation_deg`` about the image centre,
+    moved by ``offset``) lens i of a row sits at ``X(i) = p0·i + k·i²/2`` with the local pitch
+    p0 + k·i running from ``pitch_from`` at one edge to ``pitch_to`` at the other (PlenoptiCam's white
+    image *d*); rows alike. ``jitter_px`` adds independent random offsets to every centre (a lattice that
+    no smooth model describes). Returns ``(centres (J, I, 2) in sensor (x, y), X(i) coefficients)``.
+    """
+    rows, cols = shape
+    half = 0.5 * max(rows, cols) * 1.5
+    p0 = 0.5 * (pitch_from + pitch_to)
+    k = (pitch_to - pitch_from) / (2.0 * half / p0)  # pitch change per lens
+    n = int(half / min(pitch_from, pitch_to)) + 3
+    i = np.arange(-n, n + 1, dtype=np.float64)
+    along = p0 * i + 0.5 * k * i * i
+    a, b = np.meshgrid(along, along)  # (J, I): a along rows (x), b along columns (y)
+    rng = np.random.default_rng(seed)
+    a = a + rng.normal(0.0, jitter_px / math.sqrt(2.0), a.shape) if jitter_px else a
+    b = b + rng.normal(0.0, jitter_px / math.sqrt(2.0), b.shape) if jitter_px else b
+    t = math.radians(rotation_deg)
+    cx, cy = (cols - 1) / 2.0 + offset[0], (rows - 1) / 2.0 + offset[1]
+    x = cx + a * math.cos(t) - b * math.sin(t)
+    y = cy + a * math.sin(t) + b * math.cos(t)
+    return np.stack([x, y], -1), (p0, k, n, cx, cy, t)
+
+
+def drifting_white(shape, pitch_from: float, pitch_to: float, *, rotation_deg: float = 0.0, offset=(0.0, 0.0),
+                   disk_fraction: float = 0.45, jitter_px: float = 0.0, noise_sigma: float = 0.01,
+                   supersample: int = 4, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """A uint16 white image of disks (radius ``disk_fraction`` × local pitch) on a drifting lattice.
+
+    Returns the image and the true centres (N, 2) (see :func:`drifting_centres`); each sample point is
+    lit when it lies within the radius of the nearest of the 3 × 3 lenses around its approximate index.
+    """
+    centres, (p0, k, n, cx, cy, t) = drifting_centres(shape, pitch_from, pitch_to, rotation_deg, offset,
+                                                      jitter_px, seed)
+    rows, cols = shape
+    yy, xx = np.meshgrid(np.arange(rows, dtype=np.float64), np.arange(cols, dtype=np.float64), indexing="ij")
+    steps = (np.arange(supersample) + 0.5) / supersample - 0.5
+    lit = np.zeros(shape)
+
+    def approx_index(along):  # inverse of p0·i + k·i²/2
+        if abs(k) < 1e-12:
+            return np.rint(along / p0)
+        return np.rint((-p0 + np.sqrt(np.maximum(p0 * p0 + 2.0 * k * along, 0.0))) / k)
+
+    for sy in steps:
+        for sx in steps:
+            x, y = xx + sx, yy + sy
+            a = (x - cx) * math.cos(t) + (y - cy) * math.sin(t)
+            b = -(x - cx) * math.sin(t) + (y - cy) * math.cos(t)
+            i0, j0 = approx_index(a).astype(int) + n, approx_index(b).astype(int) + n
+            best = np.full(shape, np.inf)
+            radius = np.zeros(shape)
+            for dj in (-1, 0, 1):
+                for di in (-1, 0, 1):
+                    jj = np.clip(j0 + dj, 0, centres.shape[0] - 1)
+                    ii = np.clip(i0 + di, 0, centres.shape[1] - 1)
+                    c = centres[jj, ii]
+                    dist = np.hypot(x - c[..., 0], y - c[..., 1])
+                    local = disk_fraction * (p0 + k * (ii - n))
+                    closer = dist < best
+                    best = np.where(closer, dist, best)
+                    radius = np.where(closer, local, radius)
+            lit += best <= radius
+    lit /= supersample * supersample
+    rng = np.random.default_rng(seed + 1)
+    image = 50000.0 * lit + rng.normal(0.0, noise_sigma * 50000.0, shape)
+    return np.clip(np.rint(image), 0, 65535).astype(np.uint16), centres.reshape(-1, 2)
+
+
+def spot_white(shape, grid: LensGrid, spot_sigma_px: float, *, noise_sigma: float = 0.02, square: bool = False,
+               seed: int = 0) -> np.ndarray:
+    """Blurred spots instead of disks (PlenoptiCam's synthetic *a*, *b*, *c*): a Gaussian of ``spot_sigma_px``
+    at every lens, or with ``square`` a square of side 0.6 pitch blurred by it; plus Gaussian noise."""
+    from scipy import ndimage
+    rows, cols = shape
+    image = np.zeros(shape)
+    yy, xx = np.meshgrid(np.arange(rows, dtype=np.float64), np.arange(cols, dtype=np.float64), indexing="ij")
+    u, v = grid.axes
+    for c in grid.centers_xy_px().reshape(-1, 2):
+        if not (-3 * grid.pitch_px < c[0] < cols + 3 * grid.pitch_px and -3 * grid.pitch_px < c[1] < rows + 3 * grid.pitch_px):
+            continue
+        r = int(3 * spot_sigma_px + grid.pitch_px)
+        y0, y1 = max(0, int(c[1]) - r), min(rows, int(c[1]) + r + 1)
+        x0, x1 = max(0, int(c[0]) - r), min(cols, int(c[0]) + r + 1)
+        if y0 >= y1 or x0 >= x1:
+            continue
+        dx, dy = xx[y0:y1, x0:x1] - c[0], yy[y0:y1, x0:x1] - c[1]
+        if square:
+            du, dv = dx * u[0] + dy * u[1], dx * v[0] + dy * v[1]
+            half = 0.3 * grid.pitch_px
+            # a square's area integral per pixel, approximated by 8 x 8 point samples
+            s = (np.arange(8) + 0.5) / 8 - 0.5
+            inside = np.zeros(du.shape)
+            for oy in s:
+                for ox in s:
+                    pu, pv = du + ox * u[0] + oy * u[1], dv + ox * v[0] + oy * v[1]
+                    inside += (np.abs(pu) <= half) & (np.abs(pv) <= half)
+            image[y0:y1, x0:x1] += inside / 64.0
+        else:
+            image[y0:y1, x0:x1] += np.exp(-(dx * dx + dy * dy) / (2 * spot_sigma_px ** 2))
+    if square:
+        image = ndimage.gaussian_filter(image, spot_sigma_px)
+    image /= image.max()
+    image += np.random.default_rng(seed).normal(0.0, noise_sigma, shape)
+    return np.clip(np.rint(image * 200 + 20), 0, 255).astype(np.uint8)

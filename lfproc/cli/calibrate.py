@@ -20,8 +20,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..atomic import write_json_atomic
-    from ..calibrate import find_grid
+    import math
+    import sys
+
+    from ..atomic import write_text_atomic
+    from ..calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
     from ..camera import Camera
     from ..io import read_capture
 
@@ -34,15 +37,43 @@ def run(args) -> int:
     estimate = find_grid(capture.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=cfa,
                          source=args.white)
     grid = estimate.grid
+    pupil = implied_exit_pupil(grid.pitch_px, estimate.pitch_sigma_px, camera)
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
-                  camera=os.path.abspath(args.camera))
-    write_json_atomic(args.output, record)
+                  camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,
+                  micro_image_scale=pupil.scale, micro_image_scale_sigma=pupil.scale_sigma,
+                  # null: the fit cannot tell the scale from 1 (telecentric); the range's null end is infinity
+                  implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm,
+                  implied_exit_pupil_range_mm=[None if math.isinf(v) else v for v in pupil.range_mm])
+    write_text_atomic(args.output, grid_json_text(record))
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
+    warnings = list(estimate.warnings)
+    warnings.append(exit_pupil_warning(args.white, pupil, camera.exit_pupil_distance_mm))
+    for line in filter(None, warnings):
+        print(f"lfproc calibrate: {line}", file=sys.stderr)
     print(f"{args.output}: {grid.kind} grid of {grid.rows} x {grid.cols} lenses, pitch {grid.pitch_px:.4f} px, "
           f"rotation {grid.rotation_deg:.4f} deg, residual RMS {grid.residual_rms_px:.4f} px "
-          f"({int(estimate.inlier.sum())} lenses fitted)")
+          f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
+          f"micro image scale {pupil.scale:.6f}, exit pupil {pupil.describe()}")
     return 0
+
+
+def grid_json_text(record: dict) -> str:
+    """Strict JSON of a grid record, one top-level key per line.
+
+    Each value is encoded by the json module's C encoder (no indentation inside values): the
+    ``centers_xy_px`` list of a 41 Mpx sensor holds some 230,000 pairs, which an indented dump takes
+    seconds to write.
+    """
+    import json
+
+    from ..atomic import json_safe
+
+    items = []
+    for key, value in record.items():
+        safe = value if key == "centers_xy_px" else json_safe(value)  # centres: finite floats already
+        items.append(f"  {json.dumps(str(key))}: {json.dumps(safe, allow_nan=False)}")
+    return "{\n" + ",\n".join(items) + "\n}\n"
 
 
 def plot_grid_fit(white, cfa: str, estimate, path: str, zoom_lenses: int = 6) -> None:

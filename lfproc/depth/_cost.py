@@ -8,8 +8,9 @@ across the views is only noise. Out of focus they sample different points and th
 the whole cost volume is one call of the fused multi-slice kernel, one pass over the views.
 
 Views outside the main lens aperture carry no light, and the decoder delivers views it cannot sample
-without bias as 0 everywhere (:func:`delivered_views`); these get weight 0: the refocused channels are ``w·Y`` and ``w·Y²``, and the mean weight of the views
-that count at each lens (a function of the geometry only, :func:`mean_view_weight`) normalises them.
+without bias as 0 everywhere (``LightField.view_mask``, else :func:`delivered_views`); these are left out:
+the sweep refocuses ``Y`` and ``Y²`` as a light field with that view mask, whose refocusing averages over
+the views that carry light only (:func:`lfproc.refocus`).
 With many views a sub-lattice of every ``step``-th view around the central one is used: the same
 baseline at a fraction of the cost, its refocus parameter ``step·a``. The outer ring of views is left
 out by default (its samples straddle the border of the micro image: crosstalk after decoding).
@@ -113,29 +114,6 @@ def sweep_views(sweep: SweepLuminance, bin_lenses: int = 1) -> np.ndarray:
     return out
 
 
-def mean_view_weight(a_scaled, weight: np.ndarray, ny: int, nx: int) -> np.ndarray:
-    """``(K, Ny, Nx)``: the mean of ``weight[ky, kx]`` over the views that count at each lens in slice ``a``.
-
-    A view counts where its sample position ``j + a·(c − k)`` lies in ``[0, N − 1]`` on both axes (the
-    contract's rule, separable), so the weighted sum is ``inside_y(k_y, j_y)ᵀ · W · inside_x(k_x, j_x)``
-    and the count the product of the per-axis counts: two small matrix products per slice.
-    """
-    m = weight.shape[0]
-    c = (m - 1) // 2
-    shifts = np.asarray(a_scaled, dtype=np.float64)[:, None] * (c - np.arange(m))[None, :]
-    nearest = np.round(shifts)
-    shifts = np.where(np.abs(shifts - nearest) < 1e-9, nearest, shifts)   # refocus's snapping
-
-    def inside(n):
-        pos = np.arange(n)[None, None, :] + shifts[:, :, None]
-        return ((pos >= 0) & (pos <= n - 1)).astype(np.float64)          # (K, m, n)
-
-    iy, ix = inside(ny), inside(nx)
-    total = np.einsum("kan,ab,kbm->knm", iy, weight.astype(np.float64), ix, optimize=True)
-    count = iy.sum(axis=1)[:, :, None] * ix.sum(axis=1)[:, None, :]
-    return (total / count).astype(np.float32)
-
-
 def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear",
                 bin_lenses: int = 1) -> CostVolume:
     """Variance across the views behind every lens for each refocus parameter (one fused refocus call).
@@ -155,17 +133,15 @@ def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear
     -------
     CostVolume
     """
+    from ..lightfield import LightField
     from ..refocus import refocus
 
     a = np.asarray(a_values, dtype=np.float64)
     shift = a * sweep.view_step / bin_lenses
-    stack = refocus(sweep_views(sweep, bin_lenses), shift, interpolation=interpolation)
+    mask = None if sweep.weight is None else sweep.weight > 0
+    stack = refocus(LightField.from_views(sweep_views(sweep, bin_lenses), view_mask=mask), shift,
+                    interpolation=interpolation)
     mean, mean_sq = stack[..., 0], stack[..., 1]
-    if sweep.weight is not None:
-        weight = mean_view_weight(shift, sweep.weight, *mean.shape[1:])
-        np.maximum(weight, np.float32(1e-6), out=weight)
-        mean /= weight
-        mean_sq /= weight
     cost = mean_sq
     cost -= mean * mean
     np.maximum(cost, np.float32(0), out=cost)

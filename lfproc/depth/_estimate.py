@@ -180,7 +180,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     view_step = auto_view_step(reach, ny * nx) if view_step is None else int(view_step)
     if not 1 <= view_step <= reach:
         raise LfprocError(f"view_step must be an integer from 1 to {reach}, got {view_step}")
-    weight = delivered_views(views)
+    mask = getattr(lf, "view_mask", None)
+    weight = delivered_views(views) if mask is None else np.array(mask, dtype=bool)
     if camera.f_number is not None:
         weight &= geometry.views_inside_aperture(camera)
     if not weight[c, c]:

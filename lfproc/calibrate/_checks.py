@@ -1,0 +1,174 @@
+"""Plausibility checks of a calibration, each reduced to one number and, past a limit, a one-line warning.
+
+* **Scene texture** (a capture given as the white image, or a white image of a textured surface): in a
+  white image every micro image repeats its neighbour, so the flattened image S satisfies
+  S(x + a/2) ≈ S(x − a/2) for a lattice vector a. The texture ratio
+  ``Σ (S(x + a/2) − S(x − a/2))² / Σ [(S(x + a/2) − S̄)² + (S(x − a/2) − S̄)²]`` is 0 for a perfect
+  lattice and 1 for micro images unrelated to their neighbours. Measured: clean and noisy white images
+  0.000–0.003, a lattice drifting by ±4 % 0.013 (each tile is compared at its own lattice vector), a
+  simulated capture of a textured plane 0.10. Above `TEXTURE_LIMIT` the image is reported.
+* **Residual**: the lattice fit's inlier RMS beyond `TRUST_RMS_PX` (or 1 % of the pitch, whichever is
+  larger), or more than a quarter of the indexed centres rejected, means the micro image centres are
+  not where a lattice puts them (a textured or overexposed white image, strong mechanical vignetting).
+* **Exit pupil** (given a camera): micro image centres form the lens lattice scaled by
+  ``(d_A + f_s)/d_A`` about the optical axis, so the fitted pitch over the camera file's lens pitch
+  implies the exit pupil distance ``d_A = f_s / (scale − 1)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: texture ratio above which the white image is reported as showing scene texture
+TEXTURE_LIMIT = 0.04
+#: inlier RMS (px) above which the grid is reported as not trustworthy (or 1 % of the pitch if larger)
+TRUST_RMS_PX = 0.1
+#: relative tolerance of the camera file's nominal pitches (MLA and pixel) when checking the exit pupil
+NOMINAL_PITCH_TOLERANCE = 1e-4
+
+
+def texture_ratio(measured, model, kind: str, tile_pitches: float = 16.0, max_samples: int = 40_000) -> float:
+    """The texture ratio (module docstring) over the windows ``measured`` (`_measure.Measured`).
+
+    Each window's core is cut into tiles of about ``tile_pitches`` lenses, each compared with itself
+    shifted by its own local lattice vector (from ``model``), so a drifting lattice stays periodic.
+    """
+    num = den = 0.0
+    pitch = model.rigid.pitch
+    for m in measured:
+        cy0, cy1, cx0, cx1 = m.window.core
+        ny = max(1, int(round((cy1 - cy0) / (tile_pitches * pitch))))
+        nx = max(1, int(round((cx1 - cx0) / (tile_pitches * pitch))))
+        ys, xs = np.linspace(cy0, cy1, ny + 1).astype(int), np.linspace(cx0, cx1, nx + 1).astype(int)
+        per_tile = max(1, max_samples // (ny * nx))
+        for ty in range(ny):
+            for tx in range(nx):
+                n, d = _tile_terms(m, model, (ys[ty], ys[ty + 1], xs[tx], xs[tx + 1]), per_tile)
+                num, den = num + n, den + d
+    return num / den if den > 0 else 0.0
+
+
+def _tile_terms(m, model, tile, max_samples: int) -> tuple[float, float]:
+    """Numerator and denominator of the texture ratio over one tile of a window."""
+    from scipy import ndimage
+    flat, win = m.flat, m.window
+    ty0, ty1, tx0, tx1 = tile
+    centre = np.array([0.5 * (tx0 + tx1), 0.5 * (ty0 + ty1)])
+    st = model.st(centre)
+    a = model.xy(st + np.array([1.0, 0.0])) - model.xy(st)
+    reach = int(math.ceil(0.5 * float(np.hypot(*a)))) + 2
+    ys = np.arange(max(ty0, win.y0 + reach), min(ty1, win.y1 - reach)) - win.y0
+    xs = np.arange(max(tx0, win.x0 + reach), min(tx1, win.x1 - reach)) - win.x0
+    if len(ys) == 0 or len(xs) == 0:
+        return 0.0, 0.0
+    stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
+    yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
+    plus = ndimage.map_coordinates(flat, [yy + 0.5 * a[1], xx + 0.5 * a[0]], order=1, mode="nearest")
+    minus = ndimage.map_coordinates(flat, [yy - 0.5 * a[1], xx - 0.5 * a[0]], order=1, mode="nearest")
+    mean = 0.5 * (plus.mean() + minus.mean())
+    return float(np.sum((plus - minus) ** 2)), float(np.sum((plus - mean) ** 2 + (minus - mean) ** 2))
+
+
+def texture_warning(source: str, ratio: float) -> str | None:
+    if ratio <= TEXTURE_LIMIT:
+        return None
+    return (f"{source}: warning: the micro images differ from their neighbours (texture ratio {ratio:.2f}, "
+            f"a white image gives < {TEXTURE_LIMIT}): this looks like a capture of a scene, not a white image; "
+            f"give a white image (a uniform bright surface, e.g. a diffuser) as WHITE")
+
+
+def trust_warning(source: str, residual_px: float, pitch_px: float, inliers: int, indexed: int) -> str | None:
+    limit = max(TRUST_RMS_PX, 0.01 * pitch_px)
+    if residual_px <= limit and inliers >= 0.75 * indexed:
+        return None
+    return (f"{source}: warning: the lattice fit leaves {residual_px:.3f} px RMS residual over {inliers} of "
+            f"{indexed} micro images (a trustworthy fit leaves < {limit:.2f} px and keeps 3/4): the grid may be "
+            f"off; use a well exposed white image of a uniform surface taken with the capture's zoom and focus")
+
+
+@dataclass(frozen=True)
+class ExitPupilEstimate:
+    """What the fitted pitch says about the exit pupil (module docstring).
+
+    Attributes
+    ----------
+    scale : float
+        Fitted micro image pitch over the camera file's lens pitch, ``(d_A + f_s)/d_A``.
+    scale_sigma : float
+        Its standard error from the fit.
+    distance_mm : float
+        Implied exit pupil distance d_A; ``inf`` when the scale is within `allowance` of 1 (the fit
+        cannot tell it from a telecentric lens).
+    range_mm : tuple of float
+        d_A for the scale ± `allowance` (the upper end ``inf`` when that reaches 1).
+    expected_scale : float
+        The scale the camera file's ``exit_pupil_distance_mm`` predicts (1.0 when telecentric).
+    """
+
+    scale: float
+    scale_sigma: float
+    distance_mm: float
+    range_mm: tuple
+    expected_scale: float
+
+    @property
+    def allowance(self) -> float:
+        """3 standard errors of the fit plus the nominal pitches' tolerance (`NOMINAL_PITCH_TOLERANCE`)."""
+        return 3.0 * self.scale_sigma + NOMINAL_PITCH_TOLERANCE * self.expected_scale
+
+    @property
+    def contradicts_camera(self) -> bool:
+        """Whether the scale differs from the camera file's by more than the `allowance`."""
+        return abs(self.scale - self.expected_scale) > self.allowance
+
+    def describe(self) -> str:
+        """``"46.0 mm (40.2-53.8)"`` or ``"telecentric within the fit (>= 2400 mm)"``, for messages."""
+        low, high = self.range_mm
+        if math.isinf(self.distance_mm):
+            return "telecentric within the fit" + ("" if math.isinf(low) else f" (>= {low:.0f} mm)")
+        return f"{self.distance_mm:.1f} mm ({low:.1f}-{high:.1f})"
+
+
+def micro_image_scale(camera) -> float:
+    """``(d_A + f_s)/d_A`` of a camera (1.0 when telecentric); from `lfproc.geometry` where it exists."""
+    try:
+        from ..geometry import micro_image_scale as scale
+    except ImportError:
+        d_a = float(getattr(camera, "exit_pupil_distance_mm", math.inf))
+        return 1.0 if math.isinf(d_a) else (d_a + camera.mla_focal_length_mm) / d_a
+    return float(scale(camera))
+
+
+def exit_pupil_from_scale(scale: float, camera) -> float:
+    """d_A = f_s / (scale − 1), ``inf`` for scale ≤ 1; from `lfproc.geometry` where it exists."""
+    try:
+        from ..geometry import exit_pupil_from_scale as from_scale
+    except ImportError:
+        return camera.mla_focal_length_mm / (scale - 1.0) if scale > 1.0 else math.inf
+    return float(from_scale(scale, camera))
+
+
+def implied_exit_pupil(pitch_px: float, pitch_sigma_px: float, camera) -> ExitPupilEstimate:
+    """The exit pupil distance the fitted pitch implies, for ``camera`` (`lfproc.Camera`)."""
+    lens_pitch_px = camera.pitch_px
+    scale = pitch_px / lens_pitch_px
+    expected = micro_image_scale(camera)
+    sigma = pitch_sigma_px / lens_pitch_px
+    allowance = 3.0 * sigma + NOMINAL_PITCH_TOLERANCE * expected
+    distance = exit_pupil_from_scale(scale, camera) if scale - allowance > 1.0 else math.inf
+    span = (exit_pupil_from_scale(scale + allowance, camera), exit_pupil_from_scale(scale - allowance, camera))
+    return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=distance, range_mm=span,
+                             expected_scale=expected)
+
+
+def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance_mm: float) -> str | None:
+    if not estimate.contradicts_camera:
+        return None
+    given = "infinite (telecentric)" if math.isinf(camera_distance_mm) else f"{camera_distance_mm:.1f} mm"
+    return (f"{source}: warning: the micro image pitch implies an exit pupil distance of {estimate.describe()} (scale "
+            f"{estimate.scale:.6f} +- {estimate.scale_sigma:.6f}) but the camera file says {given} "
+            f"(scale {estimate.expected_scale:.6f}); set main_lens.exit_pupil_distance_mm, or check mla.pitch_mm "
+            f"and sensor.pixel_pitch_mm")
