@@ -263,3 +263,27 @@ def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file
                                       read_image(tmp_path / "r" / f"{name}.tif"))
         assert json.loads((tmp_path / "b" / f"{name}.json").read_text()) == \
             json.loads((tmp_path / "r" / f"{name}.json").read_text())
+
+
+def test_float_tiffs_open_in_tifffile_and_opencv(sample, tmp_path):
+    """Issue 17: the float32 outputs need no codec plug-in (OpenImageIO's default float predictor did)."""
+    import cv2
+    import tifffile
+    from lfproc.io import read_image
+
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "1", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    path = tmp_path / "capture_a+1.000.tif"
+    ours = read_image(path)
+    np.testing.assert_array_equal(tifffile.imread(path), ours)
+    np.testing.assert_array_equal(cv2.imread(str(path), cv2.IMREAD_UNCHANGED)[..., ::-1], ours)
+
+
+def test_readme_command_table_lists_every_command():
+    from conftest import ROOT
+    from lfproc.cli import COMMANDS
+
+    text = (ROOT / "README.md").read_text()
+    table = text[text.index("## Commands"):text.index("`INPUT` is a capture")]
+    listed = re.findall(r"^\| `lfproc (\w+)", table, re.M)
+    assert listed == list(COMMANDS)

@@ -16,8 +16,8 @@ from importlib import import_module
 from ..errors import LfprocError
 
 #: subcommand modules in the order ``lfproc --help`` lists them
-COMMANDS = ("geometry", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer", "batch", "demo",
-            "info", "camera")
+COMMANDS = ("geometry", "info", "camera", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer",
+            "batch", "demo")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -2,7 +2,8 @@
 
 Geometry of the sample camera → grid calibration from the white image → decoding into a light field
 → a refocus stack covering the sample's depth range (plus a labelled animation) → the viewpoint mosaic
-(plus an 8-bit preview) and a view animation → the browser viewer (``lfproc-demo/viewer/index.html``).
+(plus an 8-bit preview) and a view animation → the depth map (``lfproc-demo/depth/``, with its preview
+in metres) → the browser viewer (``lfproc-demo/viewer/index.html``).
 The summary checks the refocused slices against the sample's known plane distances.
 """
 
@@ -19,8 +20,9 @@ SAMPLE_FILES = ("capture.png", "white.png", "camera.toml", "ground_truth.json")
 
 
 def default_sample_dir() -> Path:
-    """``samples/sample`` of the source checkout this package runs from (editable install)."""
-    return Path(__file__).resolve().parents[2] / "samples" / "sample"
+    """The bundled sample, shipped inside the package (``lfproc/samples/sample``; ``samples/`` in a source
+    checkout links there), so the demo runs from a wheel as from a checkout."""
+    return Path(__file__).resolve().parents[1] / "samples" / "sample"
 
 
 def register(sub) -> None:
@@ -28,7 +30,7 @@ def register(sub) -> None:
                        description="Calibrate, decode, refocus across the depth range and extract the views of the "
                                    "bundled sample capture; writes into ./lfproc-demo/ and prints what it wrote.")
     p.add_argument("-o", "--outdir", default="lfproc-demo", help="output folder (default ./lfproc-demo)")
-    p.add_argument("--sample", default=None, help="sample folder (default: samples/sample of the checkout)")
+    p.add_argument("--sample", default=None, help="sample folder (default: the sample bundled with lfproc)")
     p.set_defaults(func=run)
 
 
@@ -40,14 +42,15 @@ def run(args) -> int:
     from ..outputs import write_mosaic_preview, write_slice_gif, write_slices, write_view_gif, write_view_mosaic
     from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
     from ..refocus import refocus
+    from ..depth import depth, summary_line, write_depth_outputs
     from ..viewer import build_page, calibration_summary
     from ..viewpoints import viewpoints
 
     sample = Path(args.sample) if args.sample else default_sample_dir()
     missing = [name for name in SAMPLE_FILES if not (sample / name).is_file()]
     if missing:
-        raise LfprocError(f"{sample}: the bundled sample is missing {', '.join(missing)}; run the demo from a source "
-                          f"checkout (pip install -e .) or regenerate it with python scripts/make_samples.py")
+        raise LfprocError(f"{sample}: the sample is missing {', '.join(missing)}; reinstall lfproc, or regenerate it "
+                          f"with python scripts/make_samples.py in a source checkout")
     require_output_folder(args.outdir)   # a read-only folder fails here, in one line, before any work
     out = Path(args.outdir)
     t0 = time.perf_counter()
@@ -95,11 +98,17 @@ def run(args) -> int:
     mosaic_path = write_view_mosaic(str(out), "sample", source, camera, inside, "tiff", keep)
     preview = write_mosaic_preview(str(out), "sample", inside, keep)
     view_gif = write_view_gif(str(out), "sample", inside, keep, camera)
-    step(f"views: {int(keep.sum())} of {m * m} inside the aperture; mosaic {mosaic_path} (preview {preview}), "
+    carried = m * m if lf.view_mask is None else int(lf.view_mask.sum())
+    step(f"views: {int(keep.sum())} of {m * m} inside the aperture, {carried} decoded with light; mosaic {mosaic_path} (preview {preview}), "
          f"animation {view_gif}")
+    depth_map = depth(lf)   # the whole default search (from infinity nearer): the planes sit near near..far's ends
+    written = write_depth_outputs(str(out / "depth"), "sample", lf, depth_map, source=source)
+    step(f"depth: {summary_line(depth_map)} -> {written['depth']} (preview {written['preview']})")
     page = build_page(lf, str(out / "viewer"), source=source, stem="sample", a_values=a_values,
-                      calibration=calibration_summary(grid, str((sample / "white.png").resolve())))
+                      calibration=calibration_summary(grid, str((sample / "white.png").resolve())),
+                      depth_map=depth_map)
     step(f"viewer: {Path(page).resolve()}")
     step("  open it in a browser: click to refocus and read distances, drag to move the viewpoint")
-    step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations, 1 viewer in {out}/")
+    step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations, 1 depth map, 1 viewer "
+         f"in {out}/")
     return 0

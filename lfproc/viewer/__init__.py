@@ -2,19 +2,19 @@
 distances in metres (``lfproc viewer``).
 
 :func:`build_page` writes one capture's page (its slices planned for the scene, the views inside the
-aperture, a depth map from focus and the geometry of everything, see ``_build``); :func:`write_index`
+aperture, a depth map (:func:`lfproc.depth`) and the geometry of everything, see ``_build``); :func:`write_index`
 links several; :func:`serve` serves a folder on 127.0.0.1. Pages are self-contained: inline CSS,
 JavaScript and data, 8-bit sRGB images beside them, no network access, openable from ``file://``.
 
-Modules: ``_focus`` (depth from focus over a sweep of slices), ``_plan`` (which slices, and the
+Modules: ``_estimate`` (the per-lens depth the page uses), ``_plan`` (which slices, and the
 sharpest one per lens), ``_images`` (8-bit images), ``_page`` (the HTML), ``_build`` (a page folder),
 ``_serve`` (the local server); ``assets/`` holds the page template, its script and style.
 """
 
 from ._build import PageOptions, build_page, calibration_summary, camera_summary, page_entry, write_index
-from ._focus import FocusDepth, depth_from_focus
+from ._estimate import FocusDepth, estimate_depth
 from ._plan import scene_slices, sharpest_slice
 from ._serve import HOST, make_server, serve
 
 __all__ = ["PageOptions", "build_page", "calibration_summary", "camera_summary", "page_entry", "write_index",
-           "FocusDepth", "depth_from_focus", "scene_slices", "sharpest_slice", "HOST", "make_server", "serve"]
+           "FocusDepth", "estimate_depth", "scene_slices", "sharpest_slice", "HOST", "make_server", "serve"]

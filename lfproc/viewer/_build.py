@@ -37,7 +37,7 @@ class PageOptions:
 
 
 def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibration: dict | None = None,
-               index_href: str | None = None, options: PageOptions = PageOptions()) -> str:
+               index_href: str | None = None, options: PageOptions = PageOptions(), depth_map=None) -> str:
     """Write a viewer page for ``lf`` into ``outdir``; returns the path of its ``index.html``.
 
     Parameters
@@ -54,11 +54,13 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         Grid summary for the page (:func:`calibration_summary`).
     index_href : str, optional
         Link back to an index of several captures.
+    depth_map : lfproc.depth.DepthMap, optional
+        A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth`) otherwise.
     """
     from ..refocus import refocus
 
     camera = lf.camera
-    focus = estimate_depth(lf, a_values)
+    focus = estimate_depth(lf, a_values, depth_map)
     a_values = scene_slices(camera, focus) if a_values is None else np.asarray(a_values, dtype=np.float64)
     stack = refocus(lf, a_values)
     tone = ToneMap.for_images(stack)
