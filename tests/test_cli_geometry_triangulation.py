@@ -108,7 +108,6 @@ def test_provenance_survives_a_round_trip_and_nested_keys():
 
 
 def test_plot_is_log_scaled_with_the_title_inside(tmp_path):
-    pytest.importorskip("matplotlib")
     from lfproc.plots import slice_figure
     cam = Camera.from_toml(SAMPLES / "cameras" / "paper-f100-b10.toml")
     fig = slice_figure(cam, g.slice_geometry(cam, [x / 2 for x in range(-1, 11)]))

@@ -302,12 +302,6 @@ def test_cli_bad_inputs_fail_cleanly_and_write_nothing(scene, tmp_path):
     assert proc.returncode == 2 and "cannot write there" in proc.stderr and "Traceback" not in proc.stderr
 
 
-# The simulator's tilted planes and per-lens ground truth (SimulatedCapture.depth_mm) are the simulate
-# helper's agreed interface (HELPERS.md); until that lands on this branch there is no tilted scene to render.
-_TILT = "tilt_deg" in getattr(Plane, "__dataclass_fields__", {})
-
-
-@pytest.mark.skipif(not _TILT, reason="needs Plane(tilt_deg=...) and SimulatedCapture.depth_mm from the simulator")
 def test_tilted_plane_from_ideal_views_meets_the_accuracy_targets():
     cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
                  image_distance_mm=50.0, f_number=4.0, cfa="RGGB", name="tilt")

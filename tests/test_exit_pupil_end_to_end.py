@@ -15,10 +15,11 @@ from scipy import ndimage
 
 from lfproc import Camera, geometry
 from lfproc import simulate
-from lfproc.io import read_capture, write_image
+from lfproc.io import write_image
 from lfproc.pipeline import load_lightfield, prepare_decoding
 from lfproc.refocus import refocus
 from lfproc.scene import Noise, Plane, Scene
+from plainref import measured_shift
 
 EXIT_PUPIL_MM = 45.0
 CAMERA = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
@@ -106,20 +107,6 @@ def test_sharpest_slice_over_each_plane_has_a_dof_holding_its_distance_and_telec
               f"(misses by {miss:.1f} mm = {100 * miss / truth:.1f} %)")
         # the telecentric model, given the same measured slice, is off by several times the finite model's error
         assert miss > 5 * error and miss > 0.03 * truth
-
-
-def measured_shift(first, second, search=4.0, step=0.02):
-    """x shift s (lenses) with second(x) ≈ first(x − s): least squares over linear shifts, parabola refined."""
-    border = int(np.ceil(search)) + 2
-    cols = np.arange(first.shape[1], dtype=np.float64)
-    shifts = np.arange(-search, search + step / 2, step)
-    costs = []
-    for s in shifts:
-        moved = np.array([np.interp(cols - s, cols, row) for row in first])
-        costs.append(((moved - second)[border:-border, border:-border] ** 2).mean())
-    k = int(np.argmin(costs))
-    c0, c1, c2 = costs[k - 1], costs[k], costs[k + 1]
-    return float(shifts[k] + step * 0.5 * (c0 - c2) / (c0 - 2 * c1 + c2))
 
 
 def test_views_parallax_matches_the_triangulation(decoded):

@@ -10,7 +10,7 @@ import lfproc
 from lfproc import Camera, LfprocError
 from lfproc import geometry as g
 
-simulate = pytest.importorskip("lfproc.simulate")
+from lfproc import simulate  # noqa: E402
 from lfproc.scene import Noise, Plane, Scene  # noqa: E402
 
 # Lytro-like, telecentric: 13 px micro images (c = 6), f/2 matched to the micro lenses, focused at 600 mm

@@ -1,31 +1,16 @@
 """Triangulation against a rendered plane of known distance: the views' parallax gives the distance back."""
 
-import numpy as np
 import pytest
 
 from lfproc import Camera
 from lfproc import geometry as g
 
-simulate = pytest.importorskip("lfproc.simulate")
+from lfproc import simulate  # noqa: E402
 from lfproc.scene import Noise, Plane, Scene  # noqa: E402
+from plainref import measured_shift  # noqa: E402
 
 CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
                 image_distance_mm=30.0, f_number=2.0, micro_image_px=13).with_focus_distance(600.0)
-
-
-def measured_shift(first, second, search=4.0, step=0.02):
-    """The x shift s (lenses) with second(x) = first(x - s), by least squares over linear shifts, refined
-    by a parabola through the best three; rows and a border are cropped so every shift stays inside."""
-    border = int(np.ceil(search)) + 2
-    cols = np.arange(first.shape[1], dtype=np.float64)
-    shifts = np.arange(-search, search + step / 2, step)
-    costs = []
-    for s in shifts:
-        moved = np.array([np.interp(cols - s, cols, row) for row in first])
-        costs.append(((moved - second)[border:-border, border:-border] ** 2).mean())
-    k = int(np.argmin(costs))
-    c0, c1, c2 = costs[k - 1], costs[k], costs[k + 1]
-    return float(shifts[k] + step * 0.5 * (c0 - c2) / (c0 - 2 * c1 + c2))
 
 
 @pytest.mark.parametrize("distance_mm", [520.0, 760.0])

@@ -16,6 +16,7 @@ from lfproc.scene import (Checkerboard, ImageTexture, Noise, Plane, Scene, Sinus
                           parse_scene_dict)
 
 from conftest import ROOT, assert_clean_error, run_cli
+from plainref import shifted_views
 
 F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main lens and micro lens
 
@@ -29,24 +30,6 @@ def camera(m=9, pixel_mm=None, grid="rectangular", f_number=4.0, focus_mm=math.i
 
 
 # ---------------------------------------------------------------------------- plain-numpy references
-def shifted_views(views, a):
-    """Every view shifted by the contract's a·(c − k) lenses, bilinear in plain numpy: (m², Ny, Nx)."""
-    m, _, ny, nx = views.shape[:4]
-    c = (m - 1) // 2
-    jy, jx = np.meshgrid(np.arange(ny, dtype=float), np.arange(nx, dtype=float), indexing="ij")
-    out = []
-    for ky in range(m):
-        for kx in range(m):
-            sy, sx = jy + a * (c - ky), jx + a * (c - kx)
-            y0 = np.clip(np.floor(sy).astype(int), 0, ny - 2)
-            x0 = np.clip(np.floor(sx).astype(int), 0, nx - 2)
-            wy, wx = sy - y0, sx - x0
-            v = views[ky, kx, :, :, 0].astype(np.float64)
-            out.append(v[y0, x0] * (1 - wy) * (1 - wx) + v[y0, x0 + 1] * (1 - wy) * wx
-                       + v[y0 + 1, x0] * wy * (1 - wx) + v[y0 + 1, x0 + 1] * wy * wx)
-    return np.array(out)
-
-
 def parabola_peak(x, y):
     k = int(np.clip(np.argmax(y), 1, len(y) - 2))
     y0, y1, y2 = y[k - 1], y[k], y[k + 1]

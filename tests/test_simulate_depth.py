@@ -10,6 +10,7 @@ from lfproc import geometry, simulate
 from lfproc.camera import Camera
 from lfproc.errors import LfprocError
 from lfproc.scene import Noise, Plane, Scene, Sinusoid, Uniform, parse_scene_dict
+from plainref import shifted_views
 
 F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main lens and micro lens
 
@@ -139,24 +140,6 @@ def test_textures_on_a_tilted_plane_use_the_planes_own_coordinates():
 
 
 # ---------------------------------------------------------------------------- refocusing a tilted plane
-def shifted_views(views, a):
-    """Every view shifted by the contract's a·(c − k) lenses, bilinear in plain numpy: (m², Ny, Nx)."""
-    m, _, ny, nx = views.shape[:4]
-    c = (m - 1) // 2
-    jy, jx = np.meshgrid(np.arange(ny, dtype=float), np.arange(nx, dtype=float), indexing="ij")
-    out = []
-    for ky in range(m):
-        for kx in range(m):
-            sy, sx = jy + a * (c - ky), jx + a * (c - kx)
-            y0 = np.clip(np.floor(sy).astype(int), 0, ny - 2)
-            x0 = np.clip(np.floor(sx).astype(int), 0, nx - 2)
-            wy, wx = sy - y0, sx - x0
-            v = views[ky, kx, :, :, 0].astype(np.float64)
-            out.append(v[y0, x0] * (1 - wy) * (1 - wx) + v[y0, x0 + 1] * (1 - wy) * wx
-                       + v[y0 + 1, x0] * wy * (1 - wx) + v[y0 + 1, x0 + 1] * wy * wx)
-    return np.array(out)
-
-
 def test_the_sharpest_refocus_parameter_follows_the_tilt_across_the_plane():
     """Cross-view agreement of the shifted ideal views, per block of lenses, peaks at the a that the geometry
     gives for the plane's depth at that block (refocus_parameter of distance_at), and a changes across it."""
