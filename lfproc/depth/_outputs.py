@@ -12,7 +12,6 @@ the searched range …). Everything is written atomically; a failure leaves no p
 
 from __future__ import annotations
 
-import json
 import os
 
 import numpy as np
@@ -109,30 +108,10 @@ def summary_line(depth_map) -> str:
 
 
 def _write_float(path: str, image: np.ndarray, metadata: dict) -> str:
-    """A float32 single-channel TIFF that may hold NaN and inf (``lfproc.io.write_image`` refuses them,
-    rightly for pictures), with ``metadata`` embedded as JSON in ImageDescription, plus its sidecar."""
-    import OpenImageIO as oiio
+    """A float32 single-channel TIFF that may hold NaN (unknown) and inf, with ``metadata`` embedded and its
+    sidecar."""
+    from ..io import write_image, write_sidecar
 
-    from ..atomic import atomic_path, json_safe
-    from ..errors import LfprocError
-    from ..io import write_sidecar
-
-    pixels = np.ascontiguousarray(np.asarray(image, dtype=np.float32)[:, :, None])
-    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 1, "float")
-    spec.attribute("Software", "lfproc")
-    spec.attribute("DateTime", "")
-    spec.attribute("Compression", "none")   # as lfproc.io writes float TIFFs: any TIFF reader opens them
-    spec.attribute("ImageDescription", json.dumps(json_safe(metadata), allow_nan=False))
-    for key in ("unit", "source", "method"):
-        if metadata.get(key) is not None:
-            spec.attribute(f"lfproc:{key}", str(metadata[key]))
-    with atomic_path(path) as tmp:
-        out = oiio.ImageOutput.create(tmp)
-        if out is None or not out.open(tmp, spec):
-            raise LfprocError(f"{path}: cannot write ({oiio.geterror()}); check that the folder is writable")
-        ok = out.write_image(pixels)
-        ok = out.close() and ok
-        if not ok:
-            raise LfprocError(f"{path}: writing failed; check the free disk space and permissions")
+    write_image(path, np.asarray(image, dtype=np.float32), metadata, "tiff", allow_nonfinite=True)
     write_sidecar(path, metadata)
     return path

@@ -47,7 +47,7 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
 
 
 def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | None = None,
-                format: str | None = None) -> None:
+                format: str | None = None, *, allow_nonfinite: bool = False) -> None:
     """Write an image atomically, with ``metadata`` embedded in the file.
 
     Parameters
@@ -68,6 +68,9 @@ def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | 
         not linear, lossy). ``"exr"``: 32-bit float OpenEXR. ``"uint16"``: a uint16 array written
         exactly as 16-bit PNG or TIFF, for simulated sensor captures. Default: from the extension,
         ``"uint16"`` for uint16 arrays.
+    allow_nonfinite : bool
+        Keep NaN and ±inf in a float TIFF or EXR (a data product such as a depth map, NaN = unknown);
+        pictures refuse them (the default).
 
     Raises
     ------
@@ -79,7 +82,7 @@ def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | 
 
     path = os.fspath(path)
     fmt = _output_format(path, image, format)
-    pixels, pixel_type, colour_space = _encode_pixels(image, fmt, path)
+    pixels, pixel_type, colour_space = _encode_pixels(image, fmt, path, allow_nonfinite)
     height, width, channels = pixels.shape
     spec = oiio.ImageSpec(width, height, channels, pixel_type)
     spec.attribute("oiio:ColorSpace", colour_space)
@@ -129,7 +132,7 @@ def _output_format(path: str, image, fmt: str | None) -> str:
     return fmt
 
 
-def _encode_pixels(image, fmt: str, path: str) -> tuple[np.ndarray, str, str]:
+def _encode_pixels(image, fmt: str, path: str, allow_nonfinite: bool = False) -> tuple[np.ndarray, str, str]:
     """(H, W, C) pixels ready for OpenImageIO, their type name and colour space."""
     image = np.asarray(image)
     if image.ndim == 2:
@@ -144,7 +147,9 @@ def _encode_pixels(image, fmt: str, path: str) -> tuple[np.ndarray, str, str]:
         return np.ascontiguousarray(image), "uint16", _RAW_SPACE
     if not (np.issubdtype(image.dtype, np.floating) or np.issubdtype(image.dtype, np.integer)):
         raise LfprocError(f"{path}: image dtype {image.dtype} is not numeric; pass a float32 image")
-    if not np.all(np.isfinite(image)):
+    if allow_nonfinite and fmt not in ("tiff", "exr"):
+        raise LfprocError(f"{path}: only float TIFF and EXR files hold NaN or infinity; write .tif or .exr")
+    if not allow_nonfinite and not np.all(np.isfinite(image)):
         raise LfprocError(f"{path}: the image contains NaN or infinite values; fix the computation before writing")
     if fmt == "png16":
         return np.round(np.clip(image, 0.0, 1.0) * 65535.0).astype(np.uint16), "uint16", _LINEAR_SPACE
