@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-SAMPLES = ROOT / "samples"
+SAMPLES = ROOT / "lfproc" / "samples"   # the package data (samples/ at the top links here)
 
 
 def run_cli(*args, cwd=None, timeout=600):
