@@ -20,7 +20,7 @@ def register(sub) -> None:
                                    "with its legend; the camera and calibration. Opens from the file system, no "
                                    "network access. Several captures: one page each in OUTDIR/STEM/ plus an index. "
                                    "Without --a/--depth-range/--at the slices are planned for the depths the scene "
-                                   "shows (depth from focus).")
+                                   "shows (its depth map, as lfproc depth computes it).")
     p.add_argument("raw", nargs="+", metavar="INPUT",
                    help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)

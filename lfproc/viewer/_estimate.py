@@ -37,7 +37,7 @@ class FocusDepth:
     distance_mm: np.ndarray
     confidence: np.ndarray
     sweep_a: np.ndarray
-    method: str = "depth from focus"
+    method: str = "lfproc.depth"
     min_confidence: float = 0.3
 
 
