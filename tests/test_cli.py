@@ -287,3 +287,13 @@ def test_readme_command_table_lists_every_command():
     table = text[text.index("## Commands"):text.index("`INPUT` is a capture")]
     listed = re.findall(r"^\| `lfproc (\w+)", table, re.M)
     assert listed == list(COMMANDS)
+
+
+def test_a_truncated_png_is_one_line_without_the_libraries_own_messages(sample, tmp_path):
+    """libpng reports a truncated file on stderr itself; lfproc's one line must be all the user sees."""
+    cut = tmp_path / "cut.png"
+    cut.write_bytes((sample / "capture.png").read_bytes()[:3000])
+    assert_clean_error(run_cli("refocus", cut, *decode_args(sample), "--a", "1", "-o", tmp_path / "o"),
+                       str(cut), "truncated or corrupt")
+    assert_clean_error(run_cli("calibrate", cut, "--camera", sample / "camera.toml", "-o", tmp_path / "g.json"),
+                       str(cut))

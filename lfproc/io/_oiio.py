@@ -5,7 +5,9 @@ OpenImageIO is imported inside the functions that use it, so importing this modu
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 
 import numpy as np
 
@@ -52,9 +54,10 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
             raise LfprocError(f"{path}: the image has zero size; pass a real capture")
         if spec.depth > 1:
             raise LfprocError(f"{path}: volume images are not supported; pass a 2-D image")
-        pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN)
+        with _native_stderr_captured() as native:   # libpng & co. print their own errors to fd 2
+            pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN)
         failed = pixels is None or inp.has_error
-        message = one_line(inp.geterror()) if failed else ""
+        message = one_line(inp.geterror() or native.text()) if failed else ""
     finally:
         inp.close()
     if failed:
@@ -63,6 +66,37 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
     if pixels.ndim == 2:
         pixels = pixels[:, :, None]
     return pixels, spec
+
+
+class _CapturedText:
+    """What was written to fd 2 inside :func:`_native_stderr_captured` (available after it ends)."""
+
+    def __init__(self):
+        self.value = ""
+
+    def text(self) -> str:
+        return self.value
+
+
+@contextlib.contextmanager
+def _native_stderr_captured():
+    """Route what C libraries write to file descriptor 2 into a temporary file for the duration, so that a
+    corrupt file gives lfproc's one-line error and not the library's lines as well (the text is kept for
+    that error message)."""
+    import tempfile
+
+    sys.stderr.flush()
+    captured = _CapturedText()
+    with tempfile.TemporaryFile() as sink:
+        saved = os.dup(2)
+        try:
+            os.dup2(sink.fileno(), 2)
+            yield captured
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            captured.value = sink.read().decode("utf-8", "replace")
 
 
 def read_oiio_capture(path: str, camera=None) -> Capture:
