@@ -62,14 +62,9 @@ def lattice_distance(x, y, grid):
     return best
 
 
-def make_capture(folder: Path):
-    """White image, capture, camera and exact grid file of the Illum-like sensor."""
-    from lfproc import simulate
-    from lfproc.atomic import write_json_atomic
-    from lfproc.io import write_image
-
-    camera = illum_camera()
-    grid = simulate.default_grid(camera, SENSOR, rotation_deg=-0.03, offset_px=(0.31, -0.17))
+def illum_frames(grid, black: float = 64.0) -> tuple[np.ndarray, np.ndarray]:
+    """White image and capture (10-bit values in uint16) of the Illum-sized sensor: anti-aliased micro image
+    disks on ``grid``'s exact lattice, the capture times a smooth random texture (also scripts/bench_decode.py)."""
     rng = np.random.default_rng(1)
     coarse = rng.random((SENSOR[0] // 64 + 2, SENSOR[1] // 64 + 2))
     white = np.empty(SENSOR, np.uint16)
@@ -80,8 +75,24 @@ def make_capture(folder: Path):
         y, x = np.meshgrid(rows, np.arange(SENSOR[1], dtype=np.float64), indexing="ij")
         lit = np.clip(radius - lattice_distance(x, y, grid) + 0.5, 0.0, 1.0)
         texture = 0.2 + 0.7 * coarse[(y / 64).astype(int), (x / 64).astype(int)]
-        white[r0:r0 + len(rows)] = np.rint(64 + 900 * lit)
-        capture[r0:r0 + len(rows)] = np.rint(64 + 900 * lit * texture)
+        white[r0:r0 + len(rows)] = np.rint(black + 900 * lit)
+        capture[r0:r0 + len(rows)] = np.rint(black + 900 * lit * texture)
+    return white, capture
+
+
+def illum_grid(camera):
+    from lfproc import simulate
+    return simulate.default_grid(camera, SENSOR, rotation_deg=-0.03, offset_px=(0.31, -0.17))
+
+
+def make_capture(folder: Path):
+    """White image, capture, camera and exact grid file of the Illum-like sensor."""
+    from lfproc.atomic import write_json_atomic
+    from lfproc.io import write_image
+
+    camera = illum_camera()
+    grid = illum_grid(camera)
+    white, capture = illum_frames(grid)
     write_image(folder / "white.png", white)
     write_image(folder / "capture.png", capture)
     (folder / "camera.toml").write_text(camera.to_toml())

@@ -121,34 +121,16 @@ def colour_rows() -> list[dict]:
 
 # ----------------------------------------------------------------------------- 3. Illum-sized decode
 def make_illum(folder: Path) -> dict:
-    """White image and capture (10-bit in uint16) of anti-aliased disks on the exact lattice, as .npy."""
-    from lfproc import Camera, simulate
+    """White image and capture (10-bit in uint16, black 0) of anti-aliased disks on the exact lattice, as .npy
+    (the generator of scripts/bench_commands.py)."""
+    import dataclasses
 
-    camera = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=50.0,
-                    image_distance_mm=50.0, f_number=2.0, grid="hexagonal", cfa="GRBG", black_level=0.0,
-                    white_level=1023.0, micro_image_px=15)
-    grid = simulate.default_grid(camera, SENSOR, rotation_deg=-0.03, offset_px=(0.31, -0.17))
-    u, v = grid.axes
-    rng = np.random.default_rng(1)
-    coarse = rng.random((SENSOR[0] // 64 + 2, SENSOR[1] // 64 + 2))
-    white = np.empty(SENSOR, np.uint16)
-    capture = np.empty(SENSOR, np.uint16)
-    radius = 0.47 * grid.pitch_px
-    for r0 in range(0, SENSOR[0], 256):
-        y, x = np.meshgrid(np.arange(r0, min(r0 + 256, SENSOR[0]), dtype=np.float64),
-                           np.arange(SENSOR[1], dtype=np.float64), indexing="ij")
-        row = np.floor(((x - grid.origin_xy_px[0]) * v[0] + (y - grid.origin_xy_px[1]) * v[1]) / grid.row_spacing_px)
-        best = np.full(x.shape, np.inf)
-        for rs in (0.0, 1.0):
-            start = grid.lens_xy(row + rs, np.zeros_like(row))
-            col = np.floor(((x - start[..., 0]) * u[0] + (y - start[..., 1]) * u[1]) / grid.pitch_px)
-            for cs in (0.0, 1.0):
-                centre = grid.lens_xy(row + rs, col + cs)
-                best = np.minimum(best, np.hypot(x - centre[..., 0], y - centre[..., 1]))
-        lit = np.clip(radius - best + 0.5, 0.0, 1.0)
-        texture = 0.2 + 0.7 * coarse[(y / 64).astype(int), (x / 64).astype(int)]
-        white[r0:r0 + lit.shape[0]] = np.rint(900 * lit)
-        capture[r0:r0 + lit.shape[0]] = np.rint(900 * lit * texture)
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from bench_commands import illum_camera, illum_frames, illum_grid
+
+    camera = dataclasses.replace(illum_camera(), black_level=0.0, name="")
+    grid = illum_grid(camera)
+    white, capture = illum_frames(grid, black=0.0)
     np.save(folder / "white.npy", white)
     np.save(folder / "capture.npy", capture)
     (folder / "grid.json").write_text(json.dumps(grid.to_json_dict() | {"centers_xy_px": []}))

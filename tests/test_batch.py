@@ -117,7 +117,7 @@ def reference(data):
 
 @pytest.fixture(scope="module")
 def cluster():
-    distributed = pytest.importorskip("distributed")  # a test dependency (pyproject [test]); always there
+    import distributed  # a test dependency (pyproject [test]): never skipped
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc, \
             distributed.Client(lc) as client:
         yield lc, client
