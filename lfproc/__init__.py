@@ -12,6 +12,7 @@ from .camera import Camera
 from .errors import LfprocError
 from .grid import LensGrid
 from .lightfield import LightField
+from .sample_data import sample_path
 from .viewpoints import viewpoints  # light (numpy only); bound here so the submodule cannot shadow it
 
 __version__ = "0.1.0"
@@ -27,7 +28,7 @@ _LAZY = {
     "depth": ("lfproc.depth", "depth"),
 }
 
-__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", *_LAZY]
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", "sample_path", *_LAZY]
 
 
 def __getattr__(name):

@@ -126,6 +126,25 @@ class LightField:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "LightField":
+        """Read a light field written by :meth:`save` (``lfproc decode``'s ``.lfp.npz``).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The ``.lfp.npz`` file.
+
+        Returns
+        -------
+        LightField
+            Its views ``(m̂, m̂, Ny, Nx, C)`` float32, the camera and lens grid it was decoded with (``None``
+            where the file has none) and the view mask (``None`` when every view carries light).
+
+        Raises
+        ------
+        LfprocError
+            A missing or unreadable file, or one that is not a light field (arrays of the wrong shape or
+            type; pickled objects are never loaded).
+        """
         path = os.fspath(path)
         members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask",))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])

@@ -112,8 +112,10 @@ def test_decoded_light_fields_are_inputs_of_refocus_views_and_batch(sample, tmp_
                                   read_image(tmp_path / "direct" / "capture_a+1.000.tif"))
     proc = run_cli("views", lf_path, "-o", tmp_path / "v")
     assert proc.returncode == 0, proc.stderr
+    from lfproc import LightField
+    lit = LightField.load(lf_path).view_mask        # the views that carry light: the only ones written
     m = Camera.from_toml(sample / "camera.toml").m_hat
-    assert len(list((tmp_path / "v").glob("cap_view_*.tif"))) == m * m
+    assert len(list((tmp_path / "v").glob("cap_view_*.tif"))) == (m * m if lit is None else int(lit.sum()))
     proc = run_cli("batch", lf_path, "--a", "0,1", "--workers", "1", "-o", tmp_path / "b")
     assert proc.returncode == 0, proc.stderr
     assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_a+0.000.tif", "cap_a+1.000.tif"]
@@ -132,7 +134,11 @@ def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_
     views = sorted(tmp_path.glob("capture_view_*.tif"))
     vy, vx = read_image(views[0]).shape[:2]
     assert (ny, nx) == (2 * vy - 1, 2 * vx - 1)                       # --upsample 2
-    assert len(views) == int(geometry.views_inside_aperture(camera).sum())   # --inside-aperture
+    inside = geometry.views_inside_aperture(camera)                  # --inside-aperture: lit views inside only
+    written = {tuple(int(k) for k in p.stem.split("_")[-2:]) for p in views}
+    c = camera.m_hat // 2
+    assert (c, c) in written and all(inside[ky, kx] for ky, kx in written)
+    assert all(read_image(p).max() > 0 for p in views)
     assert (tmp_path / "capture_views_mosaic.tif").is_file()           # --mosaic
     old = run_cli("batch", sample / "capture.png", *decode_args(sample), "--refocus", "1", "--workers", "1",
                   "-o", tmp_path / "old")

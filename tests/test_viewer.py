@@ -98,23 +98,33 @@ def test_views_inside_aperture_mosaic_blacks_out_the_others(scene, tmp_path):
     assert run_cli("views", *base, "-o", tmp_path / "all").returncode == 0
     proc = run_cli("views", *base, "--inside-aperture", "-o", tmp_path / "inside")
     assert proc.returncode == 0, proc.stderr
-    keep = geometry.views_inside_aperture(cam)
-    assert not keep.all()
-    inside = read_image(tmp_path / "inside" / "capture_views_mosaic.tif")
-    full = read_image(tmp_path / "all" / "capture_views_mosaic.tif")
     m = cam.m_hat
-    ny, nx = inside.shape[0] // m, inside.shape[1] // m
-    for ky in range(m):
-        for kx in range(m):
-            block = (slice(ky * ny, (ky + 1) * ny), slice(kx * nx, (kx + 1) * nx))
-            if keep[ky, kx]:
-                view = read_image(tmp_path / "inside" / f"capture_view_{ky:02d}_{kx:02d}.tif")
-                np.testing.assert_array_equal(inside[block], view.reshape(inside[block].shape))
-                np.testing.assert_array_equal(inside[block], full[block])
-            else:
-                assert not inside[block].any(), (ky, kx)
-    side = json.loads((tmp_path / "inside" / "capture_views_mosaic.json").read_text())
-    assert len(side["views"]) == keep.sum()
+    lit = np.array([[(tmp_path / "all" / f"capture_view_{ky:02d}_{kx:02d}.tif").is_file() for kx in range(m)]
+                    for ky in range(m)])               # views without light are not written at all
+    keep = geometry.views_inside_aperture(cam) & lit
+    assert not keep.all()
+    view_shape = read_image(next((tmp_path / "all").glob("capture_view_*.tif"))).shape[:2]
+
+    def blocks(folder):
+        """The mosaic's blocks by view index (ky, kx), from the offset its sidecar gives (lit views only)."""
+        tiled = read_image(folder / "capture_views_mosaic.tif")
+        side = json.loads((folder / "capture_views_mosaic.json").read_text())
+        (ky0, kx0), (ny, nx) = side["first_view"], view_shape
+        return side, {(ky0 + by, kx0 + bx): tiled[by * ny:(by + 1) * ny, bx * nx:(bx + 1) * nx]
+                      for by in range(tiled.shape[0] // ny) for bx in range(tiled.shape[1] // nx)}
+
+    side_in, inside = blocks(tmp_path / "inside")
+    _, full = blocks(tmp_path / "all")
+    for (ky, kx), block in inside.items():
+        if keep[ky, kx]:
+            view = read_image(tmp_path / "inside" / f"capture_view_{ky:02d}_{kx:02d}.tif")
+            np.testing.assert_array_equal(block, view.reshape(block.shape))
+            np.testing.assert_array_equal(block, full[ky, kx])
+        else:
+            assert not block.any(), (ky, kx)
+            assert not (tmp_path / "inside" / f"capture_view_{ky:02d}_{kx:02d}.tif").exists()
+    assert {tuple(k) for k in np.argwhere(keep)} <= set(inside)
+    assert len(side_in["views"]) == keep.sum()
 
 
 def test_mosaic_writer_blacks_out_views_the_mask_leaves_out(tmp_path):
@@ -128,9 +138,11 @@ def test_mosaic_writer_blacks_out_views_the_mask_leaves_out(tmp_path):
     write_view_mosaic(str(tmp_path), "all", "src", cam, views, "tiff")
     write_view_mosaic(str(tmp_path), "inside", "src", cam, views, "tiff", keep)
     full = read_image(tmp_path / "all_views_mosaic.tif")[..., 0].reshape(m, 4, m, 6)
-    inside = read_image(tmp_path / "inside_views_mosaic.tif")[..., 0].reshape(m, 4, m, 6)
     assert np.all(full == 0.5)
-    np.testing.assert_array_equal(inside.max(axis=(1, 3)), np.where(keep, 0.5, 0.0))
+    rows, cols = np.flatnonzero(keep.any(1)), np.flatnonzero(keep.any(0))   # cropped to the views shown
+    inside = read_image(tmp_path / "inside_views_mosaic.tif")[..., 0].reshape(len(rows), 4, len(cols), 6)
+    shown = keep[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1]
+    np.testing.assert_array_equal(inside.max(axis=(1, 3)), np.where(shown, 0.5, 0.0))
 
 
 def test_mosaic_preview_is_enlarged_8bit_with_black_views_outside(scene, tmp_path):

@@ -24,7 +24,8 @@ def register(sub) -> None:
                                    "A manifest (OUTDIR/lfproc-manifest.json) records each capture; a rerun skips "
                                    "completed captures whose inputs and parameters are unchanged. A capture that "
                                    "fails is recorded with its error and the rest complete; the exit status is 2 "
-                                   "if any failed, 130 if interrupted (rerun to resume). See docs/batch.md.")
+                                   "if any failed, 130 if interrupted (rerun to resume).",
+                       epilog=BATCH_GUIDE, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("inputs", nargs="+", metavar="INPUT",
                    help="capture files (or .lfp.npz light fields), folders or glob patterns")
     add_decode_options(p)
@@ -40,6 +41,21 @@ def register(sub) -> None:
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on a dask.distributed cluster instead, e.g. tcp://host:8786 (shared file system)")
     p.set_defaults(func=run)
+
+
+BATCH_GUIDE = """\
+examples:
+  lfproc batch shots/ --camera cam.toml --white white.png --a 0:3:0.5 -o out/        all cores of this machine
+  lfproc batch 'shots/*/raw_*.dng' --camera cam.toml --calib grid.json --views -o out/
+  lfproc batch shots/ ... --scheduler tcp://host:8786 -o /shared/out/                  a Dask cluster
+inputs: files, folders (not recursive) and quoted glob patterns; .lfp.npz light fields need no camera,
+  grid or white image; Lytro captures need no --camera and take --white-dir.
+outputs: exactly those of lfproc refocus / lfproc views, per capture STEM_a+1.500.tif, STEM_view_KY_KX.tif,
+  each with its NAME.json sidecar; OUTDIR/lfproc-manifest.json records every capture.
+resuming: a rerun skips captures whose outputs are complete and whose inputs and options are unchanged;
+  it redoes the rest. Ctrl-C stops cleanly (exit 130); rerun the same command to finish.
+exit status: 0 all done or skipped, 2 a capture failed or bad input (one line each), 130 interrupted.
+(This text is the guide a wheel install carries; a source checkout has more in docs/batch.md.)"""
 
 
 def _abs(path):

@@ -180,3 +180,10 @@ def join_negative_values(argv: list[str]) -> list[str]:
 
 def _looks_negative(text: str) -> bool:
     return len(text) > 1 and text[0] == "-" and (text[1].isdigit() or text[1] == "." or text[1:4] == "inf")
+
+
+def add_preview_option(p, what: str) -> None:
+    """``--preview [png|jpeg]``: display-ready pictures beside the data products (refocus, views)."""
+    p.add_argument("--preview", nargs="?", const="png", default=None, choices=("png", "jpeg"),
+                   help=f"also a display-ready picture of {what} (NAME_preview.png, or .jpg with 'jpeg'): "
+                        f"tone-mapped sRGB with one exposure for all, enlarged to at least 512 px and labelled")

@@ -51,10 +51,12 @@ def run(args) -> int:
     if args.plot:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
+    plotted = f"plot of each slice's distance and DOF -> {args.plot}\n" if args.plot else ""
     if args.json:
         print(dumps_strict(json_report(camera, slices, views, gaps, check, tri)))
+        sys.stderr.write(plotted)   # stdout holds exactly one JSON object
         return 0
-    sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera, tri))
+    sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera, tri) + plotted)
     return 0
 
 

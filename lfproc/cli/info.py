@@ -11,8 +11,11 @@ def register(sub) -> None:
                        description="Describe a file without decoding it: format, whether it holds a raw light "
                                    "field, size, bit depth, CFA, levels; for Lytro files the camera model and "
                                    "serial, lens data and every section of the container with its SHA-1 check.")
-    p.add_argument("file", metavar="FILE", help="a capture, white image or picture: Lytro .lfr/.lfp or .raw with its "
-                                                "metadata, camera raw, TIFF, PNG, EXR, …")
+    p.add_argument("file", metavar="FILE", nargs="?",
+                   help="a capture, white image or picture: Lytro .lfr/.lfp or .raw with its metadata, camera raw, "
+                        "TIFF, PNG, EXR, …, or an image lfproc wrote (its embedded tags are shown)")
+    p.add_argument("--samples", action="store_true",
+                   help="print where the bundled samples are (inside the installed package) and what each is")
     p.add_argument("--json", action="store_true", help="print one JSON object (strict JSON: infinity is null)")
     p.set_defaults(func=run)
 
@@ -21,6 +24,11 @@ def run(args) -> int:
     from ..io import describe_file
     from .common import dumps_strict
 
+    if args.samples:
+        return _print_samples(args.json)
+    if args.file is None:
+        from ..errors import LfprocError
+        raise LfprocError("lfproc info needs a FILE (or --samples to list the bundled samples)")
     info = describe_file(args.file)
     if args.json:
         sys.stdout.write(dumps_strict(info, indent=1) + "\n")
@@ -29,11 +37,31 @@ def run(args) -> int:
     return 0
 
 
+def _print_samples(as_json: bool) -> int:
+    from ..sample_data import SAMPLES, SAMPLES_DIR
+    from .common import dumps_strict
+
+    paths = {name: str(SAMPLES_DIR / name) for name in SAMPLES}
+    if as_json:
+        sys.stdout.write(dumps_strict({"samples_dir": str(SAMPLES_DIR), "samples": paths}, indent=1) + "\n")
+        return 0
+    lines = [f"bundled samples in {SAMPLES_DIR}:"]
+    lines += [f"  {paths[name]}\n      {what}" for name, what in SAMPLES.items()]
+    lines.append(f"try: lfproc refocus {paths['sample/capture.png']} --camera {paths['sample/camera.toml']} "
+                 f"--white {paths['sample/white.png']} --a 0:2:0.5 -o refocused/")
+    sys.stdout.write("\n".join(lines) + "\n")
+    return 0
+
+
 def format_info(info: dict) -> str:
     """The description as aligned ``key: value`` lines, sections as a table."""
     lines = []
     for key, value in info.items():
         if key in ("sections", "path"):
+            continue
+        if key == "tags" and isinstance(value, dict):
+            lines.append("tags (embedded by lfproc):")
+            lines.extend(f"  {k:20s} {_fmt(v)}" for k, v in value.items())
             continue
         if isinstance(value, dict):
             value = ", ".join(f"{k} {_fmt(v)}" for k, v in value.items() if v is not None)

@@ -7,8 +7,8 @@ import os
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
-from .common import FORMAT_HELP, INTERPOLATION_HELP, add_slice_options, check_slice_options, describe_slices, \
-    slice_parameters
+from .common import FORMAT_HELP, INTERPOLATION_HELP, add_preview_option, add_slice_options, check_slice_options, \
+    describe_slices, slice_parameters
 
 
 def register(sub) -> None:
@@ -23,6 +23,7 @@ def register(sub) -> None:
     add_slice_options(p).required = True
     add_output_folder_option(p)
     add_render_options(p)
+    add_preview_option(p, "each slice, labelled with its distance and DOF")
     p.set_defaults(func=run)
 
 
@@ -32,7 +33,7 @@ def add_render_options(p) -> None:
     p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
-                   help="render slices on an S times finer grid than the lenses (default 1)")
+                   help="render slices on an S times finer grid than the lenses (default 1: one pixel per lens)")
 
 
 def check_render_options(args) -> None:
@@ -41,7 +42,7 @@ def check_render_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..outputs import write_slices
+    from ..outputs import write_slice_previews, write_slices
     from ..pipeline import unique_stems
     from ..refocus import refocus
 
@@ -77,6 +78,8 @@ def run(args) -> int:
         describe_once(key, lf.camera, values)
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
                                args.format)
+        if args.preview:
+            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview)
         progress.update(len(values))
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 

@@ -9,13 +9,15 @@ OUTPUT_NAMES = ("capture.png", "white.png", "camera.toml", "ground_truth.npz", "
 
 def register(sub) -> None:
     p = sub.add_parser("simulate", help="render a synthetic SPC raw capture, white image and ground truth",
-                       description="Render the scene file SCENE.toml (docs/scene-format.md) through the paraxial "
+                       description="Render the scene file SCENE.toml through the paraxial "
                                    "SPC model and write DIR/capture.png and DIR/white.png (16-bit), "
                                    "DIR/camera.toml, DIR/ground_truth.npz (ideal_views, ideal_weight, "
                                    "plane_label, depth_mm) and DIR/ground_truth.json (the micro image centre "
                                    "grid, planes with their refocus parameter a, render options; with a finite "
                                    "exit pupil also the lens grid).")
-    p.add_argument("scene", metavar="SCENE.toml", help="scene file")
+    p.add_argument("scene", metavar="SCENE.toml",
+                   help="scene file: a commented example ships with lfproc as sample/scene.toml (lfproc info "
+                        "--samples prints its path); the README's 'Render your own scene' describes the format")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--seed", type=int, default=None, help="override [render] seed")
     p.set_defaults(func=run)

@@ -6,7 +6,7 @@ import os
 
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
-from .common import FORMAT_HELP
+from .common import FORMAT_HELP, add_preview_option
 
 
 def register(sub) -> None:
@@ -24,11 +24,13 @@ def register(sub) -> None:
 
 def add_view_options(p) -> None:
     """The per-capture options of views besides --format (also offered by batch)."""
-    p.add_argument("--mosaic", action="store_true", help="also one image tiling all views")
+    p.add_argument("--mosaic", action="store_true",
+                   help="also one image tiling the views that carry light, and its labelled preview PNG")
     p.add_argument("--gif", action="store_true", help="also an animation walking the views along a circle")
     p.add_argument("--inside-aperture", action="store_true",
                    help="only the views inside the main lens aperture (needs main_lens.f_number); the mosaic "
                         "shows the others black")
+    add_preview_option(p, "each view")
 
 
 def check_view_options(args, camera) -> None:
@@ -41,7 +43,7 @@ def check_view_options(args, camera) -> None:
 
 def run(args) -> int:
     from .. import geometry
-    from ..outputs import write_view_set
+    from ..outputs import shown_views, write_view_set
     from ..pipeline import unique_stems
 
     require_output_folder(args.outdir)
@@ -55,8 +57,10 @@ def run(args) -> int:
         lf = inputs.load(path)
         check_view_options(args, lf.camera)
         written = write_view_set(args.outdir, stems[path], os.path.abspath(path), lf, args.format,
-                                 mosaic=args.mosaic, gif=args.gif, inside_aperture=args.inside_aperture)
+                                 mosaic=args.mosaic, gif=args.gif, inside_aperture=args.inside_aperture,
+                                 preview=args.preview)
         progress.update(per_capture)
-        print(f"{path}: {len(written)} file(s) -> {args.outdir}/{stems[path]}_*")
+        shown = shown_views(lf, args.inside_aperture)
+        print(f"{path}: {shown.summary()}; {len(written)} file(s) -> {args.outdir}/{stems[path]}_*")
 
     return for_each_capture("views", args.raw, work, total_steps=len(args.raw) * per_capture)

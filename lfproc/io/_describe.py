@@ -1,7 +1,8 @@
 """What a file is and holds (``lfproc info``): Lytro containers and raw pairs, camera raws, images.
 
 The dict has the contract's keys (``ARCHITECTURE.md``, "lfproc info"): ``format``
-(``"lytro-container"``, ``"lytro-raw"``, ``"camera-raw"``, ``"image"``), ``raw_light_field``,
+(``"lytro-container"``, ``"lytro-raw"``, ``"camera-raw"``, ``"image"``, ``"lfproc-output"`` for an
+image lfproc wrote, with its ``product`` and embedded ``tags``), ``raw_light_field``,
 ``width``, ``height``, and for Lytro files ``camera_model`` and ``sections``; plus what else each
 kind of file tells (serial, bit depth, CFA, levels, lens and micro lens data).
 """
@@ -192,6 +193,36 @@ def _describe_image(path: str) -> dict:
                 "raw_light_field": True, "width": spec.width, "height": spec.height,
                 "channels": spec.nchannels, "channel_names": list(spec.channelnames),
                 "pixel_type": str(spec.format), "bits_per_pixel": spec.format.size() * 8}
+        tags = _lfproc_tags(spec)
     finally:
         inp.close()
+    if tags is not None:
+        info.update(format="lfproc-output", product=lfproc_product(tags), raw_light_field=False, tags=tags)
     return info
+
+
+def _lfproc_tags(spec) -> dict | None:
+    """The metadata lfproc embedded in an image it wrote (``Software`` "lfproc", JSON in
+    ``ImageDescription``), or None for any other image."""
+    import json
+
+    if spec.get_string_attribute("Software") != "lfproc":
+        return None
+    try:
+        tags = json.loads(spec.get_string_attribute("ImageDescription") or "{}")
+    except ValueError:
+        return None
+    return tags if isinstance(tags, dict) else None
+
+
+def lfproc_product(tags: dict) -> str:
+    """What an lfproc output is, from its embedded tags: a refocused slice, a view, a mosaic, a depth map…"""
+    if "a" in tags:
+        return "refocused slice"
+    if "view" in tags:
+        return "view"
+    if "views_per_side" in tags:
+        return "view mosaic"
+    if "unit" in tags:
+        return "depth map"
+    return str(tags.get("product", "lfproc output"))

@@ -15,9 +15,10 @@ import numpy as np
 from .. import geometry
 from ..atomic import atomic_path
 from ..errors import LfprocError
-from ..viewpoints import circular_walk, mosaic
+from ..viewpoints import circular_walk
 from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
-from ._products import masked_views
+from ._names import slice_names, view_name
+from ._products import mosaic_of_shown
 from ._tone import ToneMap
 
 SLICE_FRAME_MS, VIEW_FRAME_MS = 400, 80
@@ -54,19 +55,71 @@ def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float) -> str
     return path
 
 
+PREVIEW_FORMATS = {"png": ".png", "jpeg": ".jpg"}
+_JPEG_PREVIEW_QUALITY = 92
+
+
 def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
-    """Write an 8-bit image as PNG (Pillow), atomically."""
+    """Write an 8-bit image as PNG, or as JPEG where ``path`` ends in ``.jpg``/``.jpeg`` (Pillow), atomically."""
     from PIL import Image
 
     path = os.fspath(path)
+    jpeg = path.lower().endswith((".jpg", ".jpeg"))
     pixels = image[:, :, 0] if image.ndim == 3 and image.shape[2] == 1 else image
     try:
-        with atomic_path(path, suffix=".png") as tmp:
-            Image.fromarray(np.ascontiguousarray(pixels)).save(tmp, format="PNG")
+        with atomic_path(path, suffix=".jpg" if jpeg else ".png") as tmp:
+            picture = Image.fromarray(np.ascontiguousarray(pixels))
+            if jpeg:
+                picture.save(tmp, format="JPEG", quality=_JPEG_PREVIEW_QUALITY)
+            else:
+                picture.save(tmp, format="PNG")
     except OSError as exc:
-        raise LfprocError(f"{path}: cannot write PNG ({exc.strerror or exc}); check the folder and "
-                          f"permissions") from None
+        raise LfprocError(f"{path}: cannot write {'JPEG' if jpeg else 'PNG'} ({exc.strerror or exc}); check the "
+                          f"folder and permissions") from None
     return path
+
+
+def slice_labels(camera, a_values) -> list[str]:
+    """Each slice's label: its distance and depth of field in metres (:func:`slice_label`)."""
+    geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64))
+    return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
+                                                       np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
+
+
+def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_values, fmt: str = "png", *,
+                         min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> list[str]:
+    """Display-ready pictures of refocused slices: ``OUTDIR/NAME_preview.png`` (or ``.jpg``) beside each slice.
+
+    One exposure for the whole stack (:class:`ToneMap`), so slices compare; enlarged to at least
+    ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres.
+    """
+    frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method,
+                            labels=slice_labels(camera, a_values))
+    return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame)
+            for name, frame in zip(slice_names(stem, a_values), frames)]
+
+
+def view_label(camera, ky: int, kx: int) -> str:
+    """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17)."""
+    positions = geometry.view_positions_mm(camera)
+    return f"view [{ky}, {kx}] | {np.hypot(positions[ky], positions[kx]):.2f} mm from the centre"
+
+
+def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None, camera,
+                        fmt: str = "png", *, min_long_side: int = MIN_LONG_SIDE_PX,
+                        method: str = "nearest") -> list[str]:
+    """Display-ready pictures of the views ``keep`` marks: ``OUTDIR/STEM_view_KY_KX_preview.png``, one exposure."""
+    m = views.shape[0]
+    chosen = [(ky, kx) for ky in range(m) for kx in range(m) if keep is None or keep[ky, kx]]
+    if not chosen:
+        return []
+    tone = ToneMap.for_images(np.stack([views[k] for k in chosen]))
+    paths = []
+    for ky, kx in chosen:
+        frame = display_frames(views[ky, kx][None], tone, min_long_side, method, [view_label(camera, ky, kx)])[0]
+        paths.append(write_png_preview(os.path.join(outdir, f"{view_name(stem, ky, kx)}_preview{PREVIEW_FORMATS[fmt]}"),
+                                       frame))
+    return paths
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_values=None, *,
@@ -77,11 +130,7 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
     in metres (:func:`lfproc.geometry.slice_geometry`).
     """
     images = np.asarray(images)
-    labels = None
-    if camera is not None and a_values is not None:
-        geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64))
-        labels = [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
-                                                              np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
+    labels = slice_labels(camera, a_values) if camera is not None and a_values is not None else None
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
     if len(frames) > 2:
         frames = frames + frames[-2:0:-1]
@@ -97,26 +146,26 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
     """
     walk = circular_walk(views.shape[0], mask=mask)
     frames = np.stack([views[k] for k in walk])
-    labels = None
-    if camera is not None:
-        positions = geometry.view_positions_mm(camera)
-        labels = [f"view [{ky}, {kx}] | {np.hypot(positions[ky], positions[kx]):.2f} mm from the centre"
-                  for ky, kx in walk]
+    labels = [view_label(camera, ky, kx) for ky, kx in walk] if camera is not None else None
     tone = ToneMap.for_images(frames)
     shown = display_frames(frames, tone, min_long_side, method, labels)
     return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS)
 
 
 def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None = None, *,
-                         min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                         camera=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
     """The view mosaic as an 8-bit PNG for looking at: ``OUTDIR/STEM_views_mosaic_preview.png``.
 
-    Views are separated by 1-pixel black lines; views that ``keep`` does not mark are black.
+    Like the mosaic data product it shows the views ``keep`` marks, cropped to their rows and columns
+    (others black); views are separated by 1-pixel black lines. The picture is labelled with how many
+    views it shows and, with ``camera``, the baseline of adjacent views (Eq. 34).
     """
-    shown = masked_views(views, keep)
-    tone = ToneMap.for_images(shown if keep is None else views[np.asarray(keep, bool)])
-    tiled = mosaic(shown, gap=1)
-    frame = display_frames(tiled[None], tone, min_long_side, method)[0]
+    m = views.shape[0]
+    tone = ToneMap.for_images(views if keep is None else views[np.asarray(keep, bool)])
+    tiled, _ = mosaic_of_shown(views, keep, gap=1)
+    shown = m * m if keep is None else int(np.count_nonzero(keep))
+    label = f"{shown} of {m}x{m} views" + ("" if shown == m * m else " (black: no light or outside the aperture)")
+    if camera is not None:
+        label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
+    frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
     return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame)
-
-

@@ -20,16 +20,38 @@ def slice_metadata(source: str, camera, a_values) -> list[dict]:
     return [dict(source=source, **rec) for rec in geometry.slice_geometry(camera, np.asarray(a_values)).records()]
 
 
+def display_exposure(images, fmt: str):
+    """For ``fmt == "jpeg"`` (8-bit, for viewing only): the set's :class:`ToneMap` and its metadata, else
+    ``(None, {})``. A JPEG of linear values straight through the sRGB curve looks pale and flat; with one
+    exposure for the whole set (black and white points from its percentiles) slices and views compare
+    and use the display's range. TIFF/PNG16/EXR stay linear data."""
+    if fmt != "jpeg":
+        return None, {}
+    from ._tone import ToneMap
+
+    tone = ToneMap.for_images(images)
+    return tone, {"tone_map": tone.describe(), "tone_black": tone.black, "tone_white": tone.white}
+
+
+def _exposed(image: np.ndarray, tone) -> np.ndarray:
+    """``image`` scaled so that ``tone``'s black is 0 and its white 1 (the writer then encodes sRGB)."""
+    if tone is None:
+        return image
+    return (np.asarray(image, np.float32) - np.float32(tone.black)) / np.float32(tone.white - tone.black)
+
+
 def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: np.ndarray,
                  fmt: str = "tiff") -> list[str]:
-    """Write each refocused slice with its sidecar; returns the image paths."""
+    """Write each refocused slice with its sidecar; returns the image paths (JPEGs: :func:`display_exposure`)."""
     from ..io import write_image, write_sidecar
 
     paths = []
     names = slice_names(stem, a_values)
+    tone, tone_meta = display_exposure(images, fmt)
     for name, meta, image in zip(names, slice_metadata(source, camera, a_values), images):
         path = os.path.join(outdir, name + FORMATS[fmt])
-        write_image(path, image, meta, fmt)
+        meta.update(tone_meta)
+        write_image(path, _exposed(image, tone), meta, fmt)
         write_sidecar(path, meta)
         paths.append(path)
     return paths
@@ -48,12 +70,13 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
     from ..io import write_image, write_sidecar
 
     jobs = []
+    tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
     for row in viewpoint_geometry(camera):
         for vg in row:
             ky, kx = vg.view
             if keep is None or keep[ky, kx]:
                 path = os.path.join(outdir, view_name(stem, ky, kx) + FORMATS[fmt])
-                jobs.append((path, views[ky, kx], dict(source=source, **vg.metadata())))
+                jobs.append((path, _exposed(views[ky, kx], tone), dict(source=source, **vg.metadata(), **tone_meta)))
 
     def write(job):
         path, image, meta = job
@@ -72,22 +95,44 @@ def masked_views(views: np.ndarray, keep: np.ndarray | None) -> np.ndarray:
     return np.where(np.asarray(keep, bool)[:, :, None, None, None], views, np.float32(0))
 
 
+def shown_block(keep: np.ndarray | None, m_hat: int) -> tuple[slice, slice]:
+    """The rows and columns of views a mosaic shows: those holding at least one view ``keep`` marks."""
+    if keep is None or not np.any(keep):
+        return slice(0, m_hat), slice(0, m_hat)
+    rows, cols = np.flatnonzero(np.any(keep, axis=1)), np.flatnonzero(np.any(keep, axis=0))
+    return slice(int(rows[0]), int(rows[-1]) + 1), slice(int(cols[0]), int(cols[-1]) + 1)
+
+
+def mosaic_of_shown(views: np.ndarray, keep: np.ndarray | None, gap: int = 0) -> tuple[np.ndarray, tuple]:
+    """The mosaic of the views ``keep`` marks, cropped to their rows and columns (others black), and the
+    index ``(ky0, kx0)`` of the view in its top-left block."""
+    rows, cols = shown_block(keep, views.shape[0])
+    shown = masked_views(views, keep)[rows, cols]
+    return mosaic(shown, gap=gap), (rows.start, cols.start)
+
+
 def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.ndarray, fmt: str = "tiff",
                       keep: np.ndarray | None = None) -> str:
-    """All views tiled into one image (view (ky, kx) at block (ky, kx)), with a sidecar of every view.
+    """The views ``keep`` marks (all without it) tiled into one image, with a sidecar of every view shown.
 
-    ``keep`` (m̂ × m̂ booleans, e.g. :func:`lfproc.geometry.views_inside_aperture`): the blocks of views
-    it does not mark are black (0), and the sidecar lists which views are shown.
+    ``keep`` (m̂ × m̂ booleans: the views that carry light, e.g. ``LightField.view_mask``, possibly
+    combined with :func:`lfproc.geometry.views_inside_aperture`): the mosaic is cropped to the rows and
+    columns of views it marks, so block (by, bx) holds view [ky0 + by, kx0 + bx] with ``first_view`` =
+    [ky0, kx0] in the metadata; blocks of unmarked views inside that range are black (0), and the
+    sidecar lists exactly the views shown.
     """
     from ..io import write_image, write_sidecar
 
-    meta = {"source": source, "layout": "block (ky, kx) holds view [ky, kx]", "views_per_side": int(views.shape[0]),
-            "baseline_mm": geometry.baseline_mm(camera, 1)}
-    if keep is not None:
-        meta["blacked_out"] = "views outside the main lens aperture are 0"
-    path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")
-    write_image(path, mosaic(masked_views(views, keep)), meta, fmt)
+    tiled, (ky0, kx0) = mosaic_of_shown(views, keep)
+    tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
     listed = [vg.metadata() for row in viewpoint_geometry(camera) for vg in row
               if keep is None or keep[vg.view[0], vg.view[1]]]
+    meta = {"source": source, "layout": "block (by, bx) holds view [ky0 + by, kx0 + bx]",
+            "first_view": [ky0, kx0], "views_per_side": int(views.shape[0]), "views_shown": len(listed),
+            "baseline_mm": geometry.baseline_mm(camera, 1), **tone_meta}
+    if keep is not None and not np.all(keep):
+        meta["blacked_out"] = "views without light (or outside the aperture) are 0 and not listed"
+    path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")
+    write_image(path, _exposed(tiled, tone), meta, fmt)
     write_sidecar(path, dict(meta, views=listed))
     return path
