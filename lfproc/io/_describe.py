@@ -62,6 +62,8 @@ def _describe_lytro(path: str) -> dict:
                 raise
             info.update(raw_light_field=False, content=picture_kind(container.toc), width=None, height=None,
                         camera_model=None)
+            from ._describe_picture import describe_picture
+            info.update(describe_picture(container))
             return info
     else:
         lytro = open_lytro(path, pixels=False, check_size=False)
@@ -125,10 +127,13 @@ def _collect_references(node, where: str, roles: dict) -> None:
     """Map each ``sha1-…`` reference in the table of contents to what refers to it."""
     if isinstance(node, dict):
         for key, value in node.items():
-            if isinstance(value, str) and value.lower().startswith("sha1-") and key.endswith("Ref"):
+            if isinstance(value, str) and value.lower().startswith("blob:"):
+                value = value[5:]
+            if isinstance(value, str) and value.lower().startswith("sha1-") and key.endswith(("Ref", "Url")):
                 role = _ROLE_NAMES.get(key, key[:-3])
-                if key == "imageRef":
-                    role = "raw sensor image (packed)" if "frameArray" in where else f"image ({where or 'picture'})"
+                if key in ("imageRef", "imageUrl"):
+                    raw = "frameArray" in where or where.startswith("frames")
+                    role = "raw sensor image (packed)" if raw else f"image ({where or 'picture'})"
                 roles.setdefault(value.lower(), role)
             else:
                 _collect_references(value, f"{where}.{key}" if where else key, roles)
