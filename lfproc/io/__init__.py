@@ -34,12 +34,12 @@ from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._oiio import read_image
 from ._read import RAW_EXTENSIONS, read_capture
 from ._sidecar import sidecar_path, write_sidecar
-from ._write import FORMATS, read_metadata, srgb_encode, write_image
+from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_image
 
 __all__ = [
     "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
     "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
     "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",
     "sidecar_path",
-    "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
+    "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
 ]

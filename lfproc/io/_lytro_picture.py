@@ -391,3 +391,25 @@ def open_picture(path: str) -> LytroPicture:
     if picture.missing:
         picture.image_bytes(picture.missing[0])    # raises, naming the section
     return picture
+
+
+def camera_metadata(path: str):
+    """The `LytroMetadata` describing the camera of any Lytro file: a capture, a white image or a picture.
+
+    Raises
+    ------
+    LfprocError
+        A picture whose metadata does not describe the camera, or what `read_lytro_metadata` raises.
+    """
+    from ._lytro_container import has_container_extension, is_container, read_container
+    from ._lytro_read import read_lytro_metadata
+
+    if has_container_extension(path) or is_container(path):
+        container = read_container(path, verify=True)
+        if is_picture(container):
+            meta, why = picture_metadata(read_picture(container))
+            if meta is None:
+                raise LfprocError(f"{path}: a processed Lytro picture whose metadata does not describe the camera "
+                                  f"({why}); use the raw .lfr/.lfp the camera wrote, or write the camera file by hand")
+            return meta
+    return read_lytro_metadata(path)
