@@ -190,9 +190,8 @@ def picture_refusal(path: str, toc: dict) -> str:
     """The one line for a processed picture given where a raw light field is needed."""
     from ._lytro_picture import describe_contents
 
-    return (f"{path}: holds no raw light field: it is a processed Lytro picture ({describe_contents(toc)}), not the "
-            f"raw light field; use 'lfproc export' for its images and depth map, or the raw .lfp/.lfr the camera "
-            f"wrote")
+    return (f"{path}: holds no raw light field but a processed Lytro picture ({describe_contents(toc)}); use "
+            f"'lfproc export' for its images and depth map, or the raw .lfp/.lfr the camera wrote")
 
 
 def raw_frame(container: LytroContainer) -> RawFrame:

@@ -413,3 +413,50 @@ def camera_metadata(path: str):
                                   f"({why}); use the raw .lfr/.lfp the camera wrote, or write the camera file by hand")
             return meta
     return read_lytro_metadata(path)
+
+
+def is_picture_file(path: str) -> bool:
+    """Cheap test for a processed picture: the table of contents describes picture content and the raw frame
+    it names is not among the sections (section headers are read, not their data; nothing is hashed)."""
+    import json
+    import struct
+
+    from ._lytro_container import FILE_HEADER_BYTES, FILE_MAGIC, SECTION_HEADER_BYTES, SECTION_MAGICS
+
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(FILE_HEADER_BYTES)[:8] != FILE_MAGIC:
+                return False
+            toc, references = None, set()
+            while True:
+                header = fh.read(SECTION_HEADER_BYTES)
+                if len(header) < SECTION_HEADER_BYTES or header[:8] not in SECTION_MAGICS:
+                    break
+                (length,) = struct.unpack(">I", header[12:16])
+                references.add(header[16:].rstrip(b"\0").decode("ascii", "replace").lower())
+                if toc is None and SECTION_MAGICS[header[:8]] == "LFM":
+                    toc = json.loads(fh.read(length).decode("utf-8").rstrip("\0"))
+                    fh.seek(-fh.tell() % 16, 1)
+                else:
+                    fh.seek(length + (-(fh.tell() + length) % 16), 1)
+    except (OSError, ValueError, UnicodeDecodeError):
+        return False
+    if not isinstance(toc, dict) or not has_picture_content(toc):
+        return False
+    raw = [reference(entry.get("frame"), "imageRef", "imageUrl") for entry in frames(toc) + _list(toc.get("frames"))]
+    return not any(r is not None and r.lower() in references for r in raw)
+
+
+def refuse_pictures(paths) -> None:
+    """Raise the one-line refusal for the first processed picture among ``paths`` (cheap: headers only)."""
+    from ._lytro_container import has_container_extension, picture_refusal
+
+    for path in paths:
+        if has_container_extension(path) and is_picture_file(path):
+            raise LfprocError(picture_refusal(path, _toc_of(path)))
+
+
+def _toc_of(path: str) -> dict:
+    from ._lytro_container import read_container
+
+    return read_container(path, verify=False).toc
