@@ -169,7 +169,7 @@ def test_stack_lambdas_span_the_refocus_range_of_the_model():
 def test_export_stack_depth_and_views(tmp_path, capsys, pictures):
     from lfproc.io import read_image, read_metadata, srgb_decode
     from lfproc.io._lytro_lambda import lambda_map
-    from lfproc.io._lytro_picture import open_picture, picture_metadata
+    from lfproc.io import open_picture, picture_metadata
 
     out = tmp_path / "out"
     status, _, err = cli(capsys, "export", pictures["stk"], pictures["dm"], pictures["illum"], "-o", out, "--tiff")
@@ -232,7 +232,7 @@ def test_export_without_camera_metadata_gives_lambda_only(tmp_path, capsys):
 
 
 def test_illum_depth_map_stored_as_an_image(tmp_path):
-    from lfproc.io._lytro_picture import depth_lambda, open_picture
+    from lfproc.io import depth_lambda, open_picture
 
     depth = np.linspace(-15, 12.5, 256, dtype=np.float32).reshape(16, 16)
     pic = lytropics.write(tmp_path / "png.LFP", lytropics.illum_picture(depth=depth, depth_as_png=True))
@@ -334,7 +334,7 @@ def test_viewer_shows_the_sharpest_stack_image_where_clicked(tmp_path, capsys, p
                 assert (band == k).all(), (k, choice)
             assert "Laplacian" in data["method"]
         else:                         # the depth map (a ramp from −15 to 12.5 in lambda) picks the nearest lambda
-            from lfproc.io._lytro_picture import depth_lambda, open_picture
+            from lfproc.io import depth_lambda, open_picture
             lam = depth_lambda(open_picture(str(pictures["illum"])))
             nearest = np.argmin(np.abs(lam[..., None] - np.array(ILLUM_LAMBDAS)), axis=-1)
             np.testing.assert_array_equal(choice, nearest)

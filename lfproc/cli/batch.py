@@ -220,7 +220,7 @@ def _without_pictures(inputs, sources):
     skipped with a warning (a Lytro library holds raw files and pictures side by side)."""
     import warnings
 
-    from ..io._lytro_picture import is_picture_file, refuse_pictures
+    from ..io import is_picture_file, refuse_pictures
 
     refuse_pictures([path for path in inputs if os.path.isfile(path)])
     pictures = [path for path in sources if path not in inputs and is_picture_file(path)]

@@ -27,7 +27,7 @@ def run(args) -> int:
     from ..errors import LfprocError
     from ..io import is_lytro_file, lytro_camera
     from ..io._checks import existing_file
-    from ..io._lytro_picture import camera_metadata
+    from ..io import camera_metadata
 
     path = existing_file(args.file)
     if not is_lytro_file(path):

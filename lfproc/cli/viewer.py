@@ -93,7 +93,7 @@ def run(args) -> int:
 
 def _pictures(args) -> bool:
     """Processed Lytro pictures get a focus stack page (``viewer/_picture.py``); True when they were the inputs."""
-    from ..io._lytro_picture import is_picture_file
+    from ..io import is_picture_file
 
     pictures = [path for path in args.raw if os.path.isfile(path) and is_picture_file(path)]
     if not pictures:

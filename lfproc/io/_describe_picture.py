@@ -10,7 +10,9 @@ Added to the contract keys of ``_describe`` (``format`` "lytro-container", ``raw
 from __future__ import annotations
 
 from ..errors import LfprocError
-from ._lytro_picture import image_size, picture_metadata, read_picture
+from ._lytro_picture import read_picture
+from ._lytro_picture_open import picture_metadata
+from ._lytro_picture_pixels import image_size
 
 
 def describe_picture(container) -> dict:

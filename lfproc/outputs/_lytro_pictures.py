@@ -38,7 +38,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         decoded before the first file is written.
     """
     from ..io._lytro_lambda import lambda_map
-    from ..io._lytro_picture import confidence, depth_lambda, open_picture, picture_metadata
+    from ..io import confidence_map, depth_lambda, open_picture, picture_metadata
 
     picture = open_picture(path)
     source = os.path.abspath(path)
@@ -78,7 +78,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
             jobs.append((os.path.join(outdir, f"{stem}_parallax_{k:02d}.tif"),
                          _image_writer(srgb_decode(rgb.astype(np.float32) / 255.0), metadata)))
     if picture.depth is not None:
-        jobs += _depth_jobs(picture, depth_lambda(picture), confidence(picture), mapping, common, outdir, stem)
+        jobs += _depth_jobs(picture, depth_lambda(picture), confidence_map(picture), mapping, common, outdir, stem)
     os.makedirs(outdir, exist_ok=True)
     written = []
     for target, write in jobs:

@@ -33,7 +33,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
         A damaged picture, or one without a focus stack.
     """
     from ..io._lytro_lambda import lambda_map
-    from ..io._lytro_picture import depth_lambda, open_picture, picture_metadata
+    from ..io import depth_lambda, open_picture, picture_metadata
 
     picture = open_picture(path)
     if not picture.stack:
