@@ -340,3 +340,17 @@ def test_viewer_shows_the_sharpest_stack_image_where_clicked(tmp_path, capsys, p
             np.testing.assert_array_equal(choice, nearest)
             assert choice[0, 0] == 0 and choice[-1, -1] == count - 1
             assert data["images"][0]["distance_from"] == "lambda" and data["images"][0]["distance_mm"] > 0
+
+
+def test_a_picture_of_an_unknown_kind_is_not_called_truncated(tmp_path, capsys):
+    from lfproc.errors import LfprocError
+    from lfproc.io import read_lytro
+
+    toc = {"picture": {"frameArray": [{"frame": {"imageRef": lytropics.RAW_REF}}],
+                       "accelerationArray": [{"type": "com.lytro.acceleration.somethingNew", "vendorContent": {}}]}}
+    path = lytropics.write(tmp_path / "new.lfp", lytropics.assemble(toc, [b"abc"]))
+    info = info_of(capsys, path)
+    assert info["raw_light_field"] is False and "truncated" not in json.dumps(info)
+    with pytest.raises(LfprocError, match="kind lfproc does not read") as caught:
+        read_lytro(path)
+    assert "truncated" not in str(caught.value)

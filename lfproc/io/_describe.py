@@ -63,7 +63,10 @@ def _describe_lytro(path: str) -> dict:
             info.update(raw_light_field=False, content=picture_kind(container.toc), width=None, height=None,
                         camera_model=None)
             from ._describe_picture import describe_picture
-            info.update(describe_picture(container))
+            try:
+                info.update(describe_picture(container))
+            except LfprocError as exc:     # a picture of a kind lfproc does not read: described as far as it can
+                info["picture_note"] = str(exc)
             return info
     else:
         lytro = open_lytro(path, pixels=False, check_size=False)

@@ -188,8 +188,11 @@ def picture_kind(toc: dict) -> str:
 
 def picture_refusal(path: str, toc: dict) -> str:
     """The one line for a processed picture given where a raw light field is needed."""
-    from ._lytro_picture import describe_contents
+    from ._lytro_picture import describe_contents, has_picture_content
 
+    if not has_picture_content(toc):
+        return (f"{path}: holds no raw light field but a processed Lytro picture of a kind lfproc does not read; "
+                f"use the raw .lfp/.lfr the camera wrote")
     return (f"{path}: holds no raw light field but a processed Lytro picture ({describe_contents(toc)}); use "
             f"'lfproc export' for its images and depth map, or the raw .lfp/.lfr the camera wrote")
 
@@ -219,9 +222,9 @@ def raw_frame(container: LytroContainer) -> RawFrame:
         private = container.json_chunk(frame.get("privateMetadataRef"), "private metadata")
         return RawFrame(source=path, packed=packed, metadata=metadata, private=private,
                         modulation_frame=modulation_flag(entry))
-    from ._lytro_picture import has_picture_content
+    from ._lytro_picture import accelerations
 
-    if has_picture_content(container.toc):
+    if accelerations(container.toc):   # a processed picture (of a kind lfproc reads or not): not damage
         raise LfprocError(picture_refusal(path, container.toc))
     if missing:
         raise LfprocError(f"{path}: the raw image section {missing[0]} is missing (truncated or incomplete "
