@@ -42,7 +42,8 @@ def pictures(tmp_path):
              for k in range(3)]
     depth = np.linspace(-9, 7, 12, dtype=np.float32).reshape(3, 4)
     depth[0, 0] = np.nan
-    return {"stk": lytropics.write(tmp_path / "IMG_0001-stk.lfp", lytropics.first_gen_stack(F01_LAMBDAS, parallax=views)),
+    stack = lytropics.first_gen_stack(F01_LAMBDAS, parallax=views)
+    return {"stk": lytropics.write(tmp_path / "IMG_0001-stk.lfp", stack),
             "dm": lytropics.write(tmp_path / "IMG_0001-dm.lfp", lytropics.first_gen_depth(depth)),
             "illum": lytropics.write(tmp_path / "IMG_0002.LFP", lytropics.illum_picture(ILLUM_LAMBDAS)),
             "views": views, "depth": depth}

@@ -57,5 +57,5 @@ def _lambda_note(meta) -> str:
         focus = slice_distance_mm(lambda_map(meta).camera, 0.0)
     except LfprocError:
         return ""
-    return (f"# lambda reading (docs/lytro.md): infinityLambda {meta.infinity_lambda:g} puts the focus at {focus:.1f} mm "
-            f"from the sensor; to use it: lfproc camera FILE --focus-distance {focus:.1f}\n")
+    return (f"# lambda reading (docs/lytro.md): infinityLambda {meta.infinity_lambda:g} puts the focus at "
+            f"{focus:.1f} mm from the sensor; to use it: lfproc camera FILE --focus-distance {focus:.1f}\n")

@@ -51,8 +51,9 @@ def describe_picture(container) -> dict:
         info["depth_map"] = record
         if info.get("width") is None:
             info["width"], info["height"] = depth.width, depth.height
-        parts.append(f"{depth.kind} ({depth.width} x {depth.height}, lambda {depth.min_lambda} to "
-                     f"{depth.max_lambda})")
+        span = f", lambda {depth.min_lambda:g} to {depth.max_lambda:g}" if None not in (depth.min_lambda,
+                                                                                      depth.max_lambda) else ""
+        parts.append(f"{depth.kind} ({depth.width} x {depth.height}{span})")
     if picture.parallax:
         views = [{"width": w, "height": h, "x": x, "y": y} for w, h, x, y in picture.parallax.views]
         info["perspective_views"] = {"count": len(views), "representation": picture.parallax.representation,

@@ -72,7 +72,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         views = list(picture.parallax.views)
         for k, rgb in enumerate(decode_views(picture)):
             view = views[k] if k < len(views) else None
-            metadata = dict(common, kind="perspective view (edofParallax, all in focus)", index=k,
+            metadata = dict(common, kind="perspective view (edofParallax, all in focus)", index=k, **{"lambda": None},
                             coord=None if view is None else [view[2], view[3]],
                             encoding="H.264 decoded, linear float32")
             jobs.append((os.path.join(outdir, f"{stem}_parallax_{k:02d}.tif"),
@@ -100,7 +100,7 @@ def _camera_record(mapping) -> dict:
 def _depth_jobs(picture, lam, conf, mapping, common, outdir, stem) -> list:
     entry = picture.depth
     base = dict(common, kind=entry.kind, min_lambda=entry.min_lambda, max_lambda=entry.max_lambda,
-                width=int(lam.shape[1]), height=int(lam.shape[0]))
+                width=int(lam.shape[1]), height=int(lam.shape[0]), **{"lambda": None})   # per pixel
     jobs = [(os.path.join(outdir, f"{stem}_depth_lambda.tif"),
              _image_writer(lam[:, :, None], dict(base, unit="lambda"), allow_nonfinite=True))]
     if conf is not None:

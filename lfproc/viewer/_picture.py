@@ -37,8 +37,9 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
 
     picture = open_picture(path)
     if not picture.stack:
-        raise LfprocError(f"{path}: holds no raw light field but a processed Lytro picture ({', '.join(picture.contents)})"
-                          f" with no focus stack to view; use 'lfproc export' for its images and depth map, or the "
+        held = ", ".join(picture.contents)
+        raise LfprocError(f"{path}: holds no raw light field but a processed Lytro picture ({held}) with no focus "
+                          f"stack to view; use 'lfproc export' for its images and depth map, or the "
                           f"raw .lfp/.lfr the camera wrote")
     meta, why = picture_metadata(picture)
     mapping = None
