@@ -152,7 +152,8 @@ def processed_picture_bytes() -> bytes:
     depth = json.dumps({"depthLut": [1, 2, 3]}).encode()
     refs = [sha1_ref(s) for s in slices]
     toc = {"picture": {"accelerationArray": [{"type": "com.lytro.acceleration.refocusStack",
-                                              "vendorContent": {"imageArray": [{"imageRef": r} for r in refs],
+                                              "vendorContent": {"imageArray": [{"imageRef": r, "lambda": k - 1.0}
+                                                                                 for k, r in enumerate(refs)],
                                                                 "depthLut": {"imageRef": sha1_ref(depth)}}}],
                        "frameArray": [], "viewArray": []}}
     out = bytearray(FILE_MAGIC + struct.pack(">II", 1, 0))

@@ -98,6 +98,9 @@ def test_info_shows_the_tags_of_lfproc_outputs(sample_lf, tmp_path):
     assert info["tags"] == sidecar
     text = run_cli("info", tmp_path / "sample_a+1.000.tif").stdout
     assert "distance_mm" in text and "refocused slice" in text
+    # a capture lfproc simulated is still a capture, whatever writer made it
+    capture = json.loads(run_cli("info", SAMPLE / "capture.png", "--json").stdout)
+    assert capture["format"] == "image" and capture["raw_light_field"] is True
 
 
 def test_samples_are_found_from_any_install():

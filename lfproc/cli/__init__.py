@@ -17,7 +17,7 @@ from ..errors import LfprocError
 
 #: subcommand modules in the order ``lfproc --help`` lists them
 COMMANDS = ("geometry", "info", "camera", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer",
-            "batch", "demo")
+            "batch", "export", "demo")
 
 
 class _Parser(argparse.ArgumentParser):

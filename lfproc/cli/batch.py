@@ -71,7 +71,7 @@ def run(args) -> int:
 
     check_render_options(args)
     check_slice_options(args)
-    sources = batch.expand_inputs(args.inputs)
+    sources = _without_pictures(args.inputs, batch.expand_inputs(args.inputs))
     to_decode = [s for s in sources if not is_lightfield_file(s)]
     if to_decode and not (args.calib or args.white or args.white_dir):
         raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
@@ -229,3 +229,21 @@ def format_summary(summary: dict, manifest_path: str) -> str:
         lines.append(f"failed: {error if error.startswith(item['source']) else item['source'] + ': ' + error}")
     lines.append(f"manifest: {manifest_path}")
     return "\n".join(lines)
+
+
+def _without_pictures(inputs, sources):
+    """Processed Lytro pictures named on the command line are refused (one line); those found in a folder are
+    skipped with a warning (a Lytro library holds raw files and pictures side by side)."""
+    import warnings
+
+    from ..io import is_picture_file, refuse_pictures
+
+    refuse_pictures([path for path in inputs if os.path.isfile(path)])
+    pictures = [path for path in sources if path not in inputs and is_picture_file(path)]
+    kept = [path for path in sources if path not in pictures]
+    if not kept:
+        raise LfprocError(f"{', '.join(inputs)}: only processed Lytro pictures here, no raw light field; use "
+                          f"lfproc export for them")
+    for path in pictures:
+        warnings.warn(f"{path}: skipped, a processed Lytro picture (no raw light field); use lfproc export for it")
+    return kept

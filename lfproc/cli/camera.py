@@ -13,7 +13,8 @@ def register(sub) -> None:
                                    "length and f-number at the capture's zoom, exit pupil distance, levels, CFA. "
                                    "What the metadata lacks (the focus distance, principal planes) comes from "
                                    "--focus-distance or a default; the [provenance] table says which.")
-    p.add_argument("file", metavar="FILE", help="Lytro capture or white image")
+    p.add_argument("file", metavar="FILE", help="Lytro capture, white image or processed picture (Illum .LFP, first "
+                                                "generation -stk.lfp with its frame metadata)")
     p.add_argument("-o", "--output", required=True, metavar="CAMERA.toml", help="camera file to write")
     p.add_argument("--focus-distance", type=float, metavar="MM",
                    help="distance from the sensor the main lens was focused at, in mm (inf allowed); "
@@ -24,16 +25,18 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..atomic import write_text_atomic
     from ..errors import LfprocError
-    from ..io import is_lytro_file, lytro_camera, read_lytro_metadata
+    from ..io import is_lytro_file, lytro_camera
     from ..io._checks import existing_file
+    from ..io import camera_metadata
 
     path = existing_file(args.file)
     if not is_lytro_file(path):
         raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata); only Lytro "
                           f"metadata describes the camera: write other camera files by hand (README)")
-    built = lytro_camera(read_lytro_metadata(path), args.focus_distance)
+    meta = camera_metadata(path)
+    built = lytro_camera(meta, args.focus_distance)
     try:
-        write_text_atomic(args.output, built.to_toml())
+        write_text_atomic(args.output, _lambda_note(meta) + built.to_toml())
     except OSError as exc:
         raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
     cam = built.camera
@@ -42,3 +45,17 @@ def run(args) -> int:
           f"{cam.mla_focal_length_mm:.4f} mm, f_U {cam.main_focal_length_mm:.3f} mm, b_U "
           f"{cam.image_distance_mm:.3f} mm; defaults (see [provenance]): {', '.join(defaults)}", file=sys.stdout)
     return 0
+
+
+def _lambda_note(meta) -> str:
+    """A comment with the focus distance the lambda reading gives (docs/lytro.md), when the metadata allows it."""
+    from ..errors import LfprocError
+    from ..geometry import slice_distance_mm
+    from ..io._lytro_lambda import lambda_map
+
+    try:
+        focus = slice_distance_mm(lambda_map(meta).camera, 0.0)
+    except LfprocError:
+        return ""
+    return (f"# lambda reading (docs/lytro.md): infinityLambda {meta.infinity_lambda:g} puts the focus at "
+            f"{focus:.1f} mm from the sensor; to use it: lfproc camera FILE --focus-distance {focus:.1f}\n")

@@ -63,9 +63,13 @@ def format_info(info: dict) -> str:
             lines.append("tags (embedded by lfproc):")
             lines.extend(f"  {k:20s} {_fmt(v)}" for k, v in value.items())
             continue
+        rows = []
         if isinstance(value, dict):
-            value = ", ".join(f"{k} {_fmt(v)}" for k, v in value.items() if v is not None)
+            rows = [item for v in value.values() if isinstance(v, list) for item in v if isinstance(item, dict)]
+            value = ", ".join(f"{k} {_fmt(v)}" for k, v in value.items() if v is not None and not
+                              (isinstance(v, list) and v and isinstance(v[0], dict)))
         lines.append(f"{key:22s} {_fmt(value)}")
+        lines += ["  " + ", ".join(f"{k} {_fmt(v)}" for k, v in row.items() if v is not None) for row in rows]
     sections = info.get("sections") or []
     if sections:
         lines.append(f"sections ({len(sections)}):")

@@ -22,7 +22,8 @@ def register(sub) -> None:
                                    "Without --a/--depth-range/--at the slices are planned for the depths the scene "
                                    "shows (its depth map, as lfproc depth computes it).")
     p.add_argument("raw", nargs="+", metavar="INPUT",
-                   help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
+                   help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz); "
+                        "processed Lytro pictures get a page of their focus stack")
     add_decode_options(p)
     add_slice_options(p)
     add_output_folder_option(p)
@@ -40,6 +41,8 @@ def run(args) -> int:
     from ..pipeline import unique_stems
     from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, serve, write_index
 
+    if _pictures(args):
+        return 0
     check_slice_options(args)
     if args.display_size < 16:
         raise LfprocError(f"--display-size must be at least 16 px, got {args.display_size}")
@@ -86,3 +89,27 @@ def run(args) -> int:
     if args.serve:
         serve(os.path.abspath(args.outdir), args.port)
     return status
+
+
+def _pictures(args) -> bool:
+    """Processed Lytro pictures get a focus stack page (``viewer/_picture.py``); True when they were the inputs."""
+    from ..io import is_picture_file
+
+    pictures = [path for path in args.raw if os.path.isfile(path) and is_picture_file(path)]
+    if not pictures:
+        return False
+    if len(pictures) != len(args.raw):
+        raise LfprocError(f"{pictures[0]}: a processed Lytro picture among captures; view pictures and captures in "
+                          f"separate runs")
+    from ..pipeline import unique_stems
+    from ..viewer._picture import build_picture_pages
+    from ..viewer import make_server, serve
+
+    require_output_folder(args.outdir)
+    if args.serve:
+        make_server(".", args.port).server_close()
+    index = build_picture_pages(args.raw, args.outdir, unique_stems(args.raw))
+    print(f"viewer: {os.path.abspath(index)}")
+    if args.serve:
+        serve(os.path.abspath(args.outdir), args.port)
+    return True

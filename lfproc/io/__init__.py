@@ -9,7 +9,10 @@ Reading
     image as stored, for general use. `read_lytro_metadata` parses a Lytro file's metadata
     (`LytroMetadata`); `describe_file` says what any file is and holds (``lfproc info``);
     `lytro_camera` builds a `Camera` from Lytro metadata; `pick_white_image` picks a white image
-    from a calibration folder.
+    from a calibration folder. Processed pictures (focus stacks, depth maps, perspective views; no raw
+    frame): `open_picture` (a `LytroPicture`), `depth_lambda`, `confidence_map`, `picture_metadata`,
+    `camera_metadata` (any Lytro file), `is_picture_file` and `refuse_pictures` (cheap, headers only);
+    `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`).
 
 Writing
     `write_image` writes float32 linear images as float TIFF (the default for outputs), 16-bit
@@ -27,19 +30,26 @@ from ._describe import describe_file
 from ._gif import write_gif
 from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
 from ._lytro_camera import LytroCamera, lytro_camera
+from ._lytro_lambda import LambdaMap, lambda_map
 from ._lytro_metadata import LytroMetadata
+from ._lytro_picture import LytroPicture
+from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_metadata,
+                                  refuse_pictures)
+from ._lytro_picture_pixels import confidence_map, depth_lambda
 from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._oiio import read_image
 from ._read import RAW_EXTENSIONS, read_capture
 from ._sidecar import sidecar_path, write_sidecar
-from ._write import FORMATS, read_metadata, srgb_encode, write_image
+from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_image
 
 __all__ = [
+    "LambdaMap", "LytroPicture", "camera_metadata", "confidence_map", "depth_lambda", "is_picture_file",
+    "lambda_map", "open_picture", "picture_metadata", "refuse_pictures",
     "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
     "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
     "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",
     "sidecar_path",
-    "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
+    "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
 ]

@@ -63,6 +63,11 @@ def _describe_lytro(path: str) -> dict:
                 raise
             info.update(raw_light_field=False, content=picture_kind(container.toc), width=None, height=None,
                         camera_model=None)
+            from ._describe_picture import describe_picture
+            try:
+                info.update(describe_picture(container))
+            except LfprocError as exc:     # a picture of a kind lfproc does not read: described as far as it can
+                info["picture_note"] = str(exc)
             return info
     else:
         lytro = open_lytro(path, pixels=False, check_size=False)
@@ -126,10 +131,13 @@ def _collect_references(node, where: str, roles: dict) -> None:
     """Map each ``sha1-…`` reference in the table of contents to what refers to it."""
     if isinstance(node, dict):
         for key, value in node.items():
-            if isinstance(value, str) and value.lower().startswith("sha1-") and key.endswith("Ref"):
+            if isinstance(value, str) and value.lower().startswith("blob:"):
+                value = value[5:]
+            if isinstance(value, str) and value.lower().startswith("sha1-") and key.endswith(("Ref", "Url")):
                 role = _ROLE_NAMES.get(key, key[:-3])
-                if key == "imageRef":
-                    role = "raw sensor image (packed)" if "frameArray" in where else f"image ({where or 'picture'})"
+                if key in ("imageRef", "imageUrl"):
+                    raw = "frameArray" in where or where.startswith("frames")
+                    role = "raw sensor image (packed)" if raw else f"image ({where or 'picture'})"
                 roles.setdefault(value.lower(), role)
             else:
                 _collect_references(value, f"{where}.{key}" if where else key, roles)
@@ -196,8 +204,11 @@ def _describe_image(path: str) -> dict:
         tags = _lfproc_tags(spec)
     finally:
         inp.close()
-    if tags is not None:
-        info.update(format="lfproc-output", product=lfproc_product(tags), raw_light_field=False, tags=tags)
+    product = None if tags is None else lfproc_product(tags)
+    if product is not None:   # a data product (slice, view, mosaic, depth map): no raw light field any more
+        info.update(format="lfproc-output", product=product, raw_light_field=False)
+    if tags:
+        info["tags"] = tags
     return info
 
 
@@ -215,8 +226,9 @@ def _lfproc_tags(spec) -> dict | None:
     return tags if isinstance(tags, dict) else None
 
 
-def lfproc_product(tags: dict) -> str:
-    """What an lfproc output is, from its embedded tags: a refocused slice, a view, a mosaic, a depth map…"""
+def lfproc_product(tags: dict) -> str | None:
+    """What an lfproc data product is, from its embedded tags (a refocused slice, a view, a view mosaic, a
+    depth map); None for anything else lfproc wrote (a simulated capture or white image is still a capture)."""
     if "a" in tags:
         return "refocused slice"
     if "view" in tags:
@@ -225,4 +237,4 @@ def lfproc_product(tags: dict) -> str:
         return "view mosaic"
     if "unit" in tags:
         return "depth map"
-    return str(tags.get("product", "lfproc output"))
+    return None

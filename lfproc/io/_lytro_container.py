@@ -176,13 +176,25 @@ def frames(toc: dict) -> list:
 
 def picture_kind(toc: dict) -> str:
     """A short description of what a container without a raw frame holds (for messages and info)."""
+    from ._lytro_picture import describe_contents, has_picture_content
+
+    if has_picture_content(toc):
+        return f"a processed Lytro picture: {describe_contents(toc)}"
     picture = toc.get("picture") if isinstance(toc.get("picture"), dict) else {}
-    held = [key for key in ("accelerationArray", "viewArray") if picture.get(key)]
-    if "accelerationArray" in held:
-        return "a processed Lytro picture (refocus stack or depth map)"
-    if held:
-        return "a processed Lytro picture (views)"
+    if picture.get("accelerationArray") or picture.get("viewArray"):
+        return "a processed Lytro picture"
     return "a Lytro file without a raw frame"
+
+
+def picture_refusal(path: str, toc: dict) -> str:
+    """The one line for a processed picture given where a raw light field is needed."""
+    from ._lytro_picture import describe_contents, has_picture_content
+
+    if not has_picture_content(toc):
+        return (f"{path}: holds no raw light field but a processed Lytro picture of a kind lfproc does not read; "
+                f"use the raw .lfp/.lfr the camera wrote")
+    return (f"{path}: holds no raw light field but a processed Lytro picture ({describe_contents(toc)}); use "
+            f"'lfproc export' for its images and depth map, or the raw .lfp/.lfr the camera wrote")
 
 
 def raw_frame(container: LytroContainer) -> RawFrame:
@@ -210,6 +222,10 @@ def raw_frame(container: LytroContainer) -> RawFrame:
         private = container.json_chunk(frame.get("privateMetadataRef"), "private metadata")
         return RawFrame(source=path, packed=packed, metadata=metadata, private=private,
                         modulation_frame=modulation_flag(entry))
+    from ._lytro_picture import accelerations
+
+    if accelerations(container.toc):   # a processed picture (of a kind lfproc reads or not): not damage
+        raise LfprocError(picture_refusal(path, container.toc))
     if missing:
         raise LfprocError(f"{path}: the raw image section {missing[0]} is missing (truncated or incomplete "
                           f"container); {_FIX}")

@@ -46,6 +46,12 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
     return encoded.astype(np.float32)
 
 
+def srgb_decode(encoded: np.ndarray) -> np.ndarray:
+    """The inverse sRGB transfer function (IEC 61966-2-1): encoded values in [0, 1] to linear, float32."""
+    x = np.clip(np.asarray(encoded, dtype=np.float64), 0.0, 1.0)
+    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4)).astype(np.float32)
+
+
 def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | None = None,
                 format: str | None = None, *, allow_nonfinite: bool = False) -> None:
     """Write an image atomically, with ``metadata`` embedded in the file.

@@ -1,0 +1,192 @@
+"""``lfproc export``: a processed Lytro picture's focus stack, perspective views and depth map as lfproc outputs.
+
+Files written into OUTDIR for a picture with stem STEM (contract: ``ARCHITECTURE.md``, "Dark frames,
+apertures, pictures"), each with its sidecar ``NAME.json`` and the same metadata embedded:
+
+* ``STEM_stack_KK.jpg`` — focus stack image K, the stored JPEG's bytes (one comment segment with the
+  metadata inserted after its start marker; the compressed data is untouched); with ``tiff``
+  also ``STEM_stack_KK.tif``, the JPEG decoded and linearised (sRGB transfer function inverted), float32;
+  the sidecar holds ``source``, ``lambda`` and, where the camera is known, ``a``, ``distance_mm``,
+  ``near_mm``, ``far_mm``, ``dof_mm`` with ``"distance_from": "lambda"``;
+* ``STEM_parallax_KK.tif`` — perspective view K of an edofParallax block, linear float32, with its
+  aperture coordinate ``coord`` [x, y];
+* ``STEM_depth_lambda.tif`` — the depth map in lambda (``unit`` "lambda"), float32;
+  ``STEM_depth_confidence.tif`` where the picture has a confidence map;
+* where the camera is known: ``STEM_depth.tif`` in mm from the sensor (``unit`` "mm", NaN where
+  unknown, ``inf`` at and beyond infinity) and ``STEM_depth_preview.png``, coloured with a legend in
+  metres.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import struct
+
+import numpy as np
+
+from ..errors import LfprocError
+
+
+def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> list[str]:
+    """Write every image of the picture at ``path`` into ``outdir``; returns the image paths written.
+
+    Raises
+    ------
+    LfprocError
+        Not a picture, damaged, an undecodable depth map or H.264 block. Everything is read and
+        decoded before the first file is written.
+    """
+    from ..io._lytro_lambda import lambda_map
+    from ..io import confidence_map, depth_lambda, open_picture, picture_metadata
+
+    picture = open_picture(path)
+    source = os.path.abspath(path)
+    meta, why = picture_metadata(picture)
+    mapping, note = None, why
+    if meta is not None:
+        try:
+            mapping = lambda_map(meta)
+        except LfprocError as exc:
+            note = str(exc).split(": ", 1)[-1]
+    common = {"source": source, "camera_model": meta.model if meta else None}
+    if mapping is None:
+        common["camera_note"] = f"no distances: {note}"
+    else:
+        common["camera"] = _camera_record(mapping)
+    jobs = []        # (writer, path) run after everything is decoded
+    records = mapping.slices([s.lambda_ for s in picture.stack]) if mapping and picture.stack else \
+        [{"lambda": s.lambda_} for s in picture.stack]
+    for image, record in zip(picture.stack, records):
+        name = os.path.join(outdir, f"{stem}_stack_{image.index:02d}")
+        data = picture.image_bytes(image.reference)
+        metadata = dict(common, kind="focus stack image", index=image.index, **record)
+        metadata["encoding"] = "JPEG as stored (sRGB)" + ("; .tif: decoded, linear float32" if tiff else "")
+        jobs.append((name + ".jpg", _jpeg_writer(data, metadata)))
+        if tiff:
+            jobs.append((name + ".tif", _image_writer(_linear_from_jpeg(data, path), metadata)))
+    if picture.parallax is not None:
+        from ..io import srgb_decode
+        from ..io._lytro_h264 import decode_views
+
+        views = list(picture.parallax.views)
+        for k, rgb in enumerate(decode_views(picture)):
+            view = views[k] if k < len(views) else None
+            metadata = dict(common, kind="perspective view (edofParallax, all in focus)", index=k, **{"lambda": None},
+                            coord=None if view is None else [view[2], view[3]],
+                            encoding="H.264 decoded, linear float32")
+            jobs.append((os.path.join(outdir, f"{stem}_parallax_{k:02d}.tif"),
+                         _image_writer(srgb_decode(rgb.astype(np.float32) / 255.0), metadata)))
+    if picture.depth is not None:
+        jobs += _depth_jobs(picture, depth_lambda(picture), confidence_map(picture), mapping, common, outdir, stem)
+    os.makedirs(outdir, exist_ok=True)
+    written = []
+    for target, write in jobs:
+        write(target)
+        written.append(target)
+    return written
+
+
+def _camera_record(mapping) -> dict:
+    from ..geometry import slice_distance_mm
+
+    cam = mapping.camera
+    return {"focal_length_mm": cam.main_focal_length_mm, "f_number": cam.f_number,
+            "image_distance_mm": cam.image_distance_mm, "focus_distance_mm": slice_distance_mm(cam, 0.0),
+            "infinity_lambda": mapping.infinity_lambda, "lambda_unit_mm": mapping.unit_mm,
+            "image_distance_from": "lambda (infinityLambda x fNumber x lensPitch, docs/lytro.md)"}
+
+
+def _depth_jobs(picture, lam, conf, mapping, common, outdir, stem) -> list:
+    entry = picture.depth
+    base = dict(common, kind=entry.kind, min_lambda=entry.min_lambda, max_lambda=entry.max_lambda,
+                width=int(lam.shape[1]), height=int(lam.shape[0]), **{"lambda": None})   # per pixel
+    jobs = [(os.path.join(outdir, f"{stem}_depth_lambda.tif"),
+             _image_writer(lam[:, :, None], dict(base, unit="lambda"), allow_nonfinite=True))]
+    if conf is not None:
+        jobs.append((os.path.join(outdir, f"{stem}_depth_confidence.tif"),
+                     _image_writer(conf[:, :, None], dict(base, unit="confidence (as stored)"), allow_nonfinite=True)))
+    if mapping is not None:
+        distance = mapping.distance_mm(lam).astype(np.float32)
+        depth_meta = dict(base, unit="mm", distance_from="lambda", measured_from="sensor")
+        jobs.append((os.path.join(outdir, f"{stem}_depth.tif"),
+                     _image_writer(distance[:, :, None], depth_meta, allow_nonfinite=True)))
+        jobs.append((os.path.join(outdir, f"{stem}_depth_preview.png"), _preview_writer(distance)))
+    return jobs
+
+
+def _image_writer(pixels, metadata, allow_nonfinite=False):
+    def write(target):
+        from ..io import write_image, write_sidecar
+
+        write_image(target, pixels, metadata, allow_nonfinite=allow_nonfinite)
+        write_sidecar(target, metadata)
+    return write
+
+
+def _jpeg_writer(data: bytes, metadata: dict):
+    def write(target):
+        from ..atomic import atomic_path
+        from ..io import write_sidecar
+
+        tagged = with_metadata(data, metadata)
+        try:
+            with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+                fh.write(tagged)
+        except OSError as exc:
+            raise LfprocError(f"{target}: cannot write ({exc.strerror or exc}); check the folder") from None
+        write_sidecar(target, metadata)
+    return write
+
+
+def _preview_writer(distance):
+    def write(target):
+        from ..depth._preview import write_preview
+
+        write_preview(target, distance)
+    return write
+
+
+def with_metadata(jpeg: bytes, metadata: dict) -> bytes:
+    """The JPEG with lfproc's metadata segments (a COM comment and an Exif APP1 with ``ImageDescription``, as
+    `write_image` writes them, so `read_metadata` reads them back) inserted after its JFIF APP0; the
+    compressed image data is untouched."""
+    import tempfile
+
+    from ..io import write_image
+
+    if jpeg[:2] != b"\xff\xd8":
+        raise LfprocError("a focus stack image is not a JPEG (no SOI marker); re-copy the picture")
+    with tempfile.TemporaryDirectory(prefix="lfproc-jpeg-") as folder:
+        carrier = os.path.join(folder, "metadata.jpg")
+        write_image(carrier, np.zeros((8, 8, 1), np.float32), metadata)
+        with open(carrier, "rb") as fh:
+            ours = fh.read()
+    inserted = b"".join(data for marker, data in _header_segments(ours) if marker in (0xFE, 0xE1))
+    position = 2
+    for marker, data in _header_segments(jpeg):
+        if marker != 0xE0:
+            break
+        position += len(data)
+    return jpeg[:position] + inserted + jpeg[position:]
+
+
+def _header_segments(jpeg: bytes):
+    """(marker, bytes) of the segments between SOI and the first non-APP/COM segment."""
+    position = 2
+    while jpeg[position:position + 1] == b"\xff" and (0xE0 <= jpeg[position + 1] <= 0xEF or jpeg[position + 1] == 0xFE):
+        length = struct.unpack(">H", jpeg[position + 2:position + 4])[0]
+        yield jpeg[position + 1], jpeg[position:position + 2 + length]
+        position += 2 + length
+
+
+def _linear_from_jpeg(data: bytes, where: str) -> np.ndarray:
+    from ..io import srgb_decode
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            rgb = np.asarray(image.convert("RGB"), dtype=np.float32) / 255.0
+    except (UnidentifiedImageError, OSError) as exc:
+        raise LfprocError(f"{where}: a focus stack JPEG cannot be decoded ({exc}); re-copy the picture") from None
+    return srgb_decode(rgb)
