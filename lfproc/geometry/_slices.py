@@ -32,6 +32,19 @@ instead, so its DOF shrinks to zero at a = −1). This module uses the bounding 
 (issue 12, shown with renders in ``docs/exit-pupil.md``); for limits at or in front of the focus
 distance, i.e. every a ≥ 1/(2c), the numbers are the paper's.
 
+Views summed (issue 20). The paper's c is the half-extent of the views Eq. 9 averages: the full
+micro image, c = (m̂ − 1)/2. When only some views are summed (the light field's view mask, the
+views inside the main lens stop, a synthetic aperture) the extreme merged pixels are those of the
+outermost summed views, i = ±r, and every formula above holds with r in place of c:
+a± = (2ar ± 1)/(2r ∓ 1) (``view_extent`` = r, any real 0 or 1 … c). For a 2-D set of views that is
+not the full square, r is the extent of the square set −r … r with the same spread along a lattice
+axis (:func:`~lfproc.geometry.summed_view_extent`, derived in :mod:`._aperture`): a point off the slice
+blurs into a copy of the summed view set, and how fast a slice loses sharpness is set by that copy's
+second moment, not by its outermost view alone (measured on renders in ``docs/aperture.md``). The
+full micro image is the square itself, r = c, so the default gives the paper's numbers bit for bit.
+With a single view (r = 0) the slice is that view, sharp for |a| ≤ 1 around the focus distance
+whatever a is asked; its limits are those of a = ±1.
+
 Each limit is expressed as the central distance of an equivalent parameter
 a_eq = A / (1 + (A − C)·p_m·κ/δ) (equal to A when telecentric), so one monotone function d(a)
 orders slices and limits alike.
@@ -96,9 +109,9 @@ def _view_extent(camera: Camera, view_extent) -> float:
     if view_extent is None:
         return float(c)
     r = float(view_extent)
-    if not (0.0 <= r <= c and r == int(r)):
-        raise LfprocError(f"view_extent {view_extent!r} must be a whole number of view steps from 0 (the central "
-                          f"view alone) to {c} (the full {camera.m_hat}-px micro image)")
+    if not (r == 0.0 or 1.0 <= r <= c):
+        raise LfprocError(f"view_extent {view_extent!r} must be 0 (the central view alone) or from 1 to {c} view "
+                          f"steps (the full {camera.m_hat}-px micro image)")
     return r
 
 
