@@ -12,7 +12,7 @@ from .camera import Camera
 from .errors import LfprocError
 from .grid import LensGrid
 from .lightfield import LightField
-from .viewpoints import viewpoints  # light (numpy only); bound here so the submodule cannot shadow it
+from .viewpoints import viewpoints, with_aperture  # light (numpy only); bound here so the submodule cannot shadow it
 
 __version__ = "0.1.0"
 
@@ -27,7 +27,7 @@ _LAZY = {
     "depth": ("lfproc.depth", "depth"),
 }
 
-__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", *_LAZY]
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", "with_aperture", *_LAZY]
 
 
 def __getattr__(name):
