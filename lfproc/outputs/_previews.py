@@ -70,16 +70,18 @@ def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_values=None, *,
-                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", view_mask=None) -> str:
     """An animation running through a focal stack in the given order and back: ``OUTDIR/STEM_refocus.gif``.
 
     With ``camera`` and ``a_values`` (one per image) each frame is labelled with its distance and DOF
-    in metres (:func:`lfproc.geometry.slice_geometry`).
+    in metres (:func:`lfproc.geometry.slice_geometry`), the DOF of the views ``view_mask`` marks (all when
+    ``None``).
     """
     images = np.asarray(images)
     labels = None
     if camera is not None and a_values is not None:
-        geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64))
+        extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
+        geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
         labels = [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
                                                               np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
