@@ -113,11 +113,13 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
 
 def page_apertures(camera) -> list:
     """The synthetic apertures a page offers: ``None`` (every view with light), then 2, 4 and 8 times the
-    main lens's f-number (two, four and six stops) while at least one view wide (needs ``f_number``)."""
+    main lens's f-number (two, four and six stops) while they hold more than the central view (one view
+    does not refocus; needs ``f_number``)."""
     if camera.f_number is None:
         return [None]
     widest, narrowest = geometry.aperture_limits(camera)
-    return [None] + [widest * k for k in (2.0, 4.0, 8.0) if widest * k <= narrowest]
+    return [None] + [widest * k for k in (2.0, 4.0, 8.0)
+                     if widest * k <= narrowest and geometry.aperture_views(camera, widest * k).sum() > 1]
 
 
 def _aperture_record(camera, view_mask, f_number, a_values, stem: str, folder: str, extension: str) -> dict:
