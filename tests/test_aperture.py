@@ -158,3 +158,44 @@ def test_cli_aperture_tags_and_errors(tmp_path):
     assert tags["distance_mm"] == pytest.approx(full.distance_mm)
     assert tags["near_mm"] < full.near_mm and tags["far_mm"] > full.far_mm   # deeper than the paper's full DOF
     assert f"in focus [{tags['near_mm']:.1f} mm, {tags['far_mm']:.1f} mm]" in proc.stdout
+
+
+def test_fewer_views_with_a_finite_exit_pupil_match_plenoptisign_with_that_many_pixels():
+    """The generalisation is c -> r everywhere in the DOF, the finite exit pupil's equivalent parameter
+    included: PlenoptiSign (an independent implementation of Hahne et al. 2018) with M = 2r + 1 pixels
+    of the same pitch gives the same limits, for every a where both use the paper's border-ray pair."""
+    import dataclasses
+    import math
+
+    import plenoptisign
+
+    rng = np.random.default_rng(20)
+    compared = 0
+    for _ in range(60):
+        m = int(rng.choice([9, 11, 13, 15]))
+        pm, fs, fu = float(rng.uniform(0.01, 0.2)), float(rng.uniform(0.02, 3.0)), float(rng.uniform(10.0, 200.0))
+        cam0 = Camera(pixel_pitch_mm=pm / m * 0.999, mla_pitch_mm=pm, mla_focal_length_mm=fs,
+                      main_focal_length_mm=fu, image_distance_mm=fu,
+                      exit_pupil_distance_mm=float(rng.uniform(20.0, 200.0)), micro_image_px=m)
+        df = float(rng.uniform(5, 50)) * fu
+        probe = plenoptisign.MainClass(dict(fU=fu, HH=0.0, df=df))
+        probe.compute_img_dist()
+        cam = dataclasses.replace(cam0, image_distance_mm=float(probe.bU))
+        r = int(rng.integers(1, cam.center_index))
+        a = float(rng.uniform(1.0 / (2 * r), 4.0))
+        ps = plenoptisign.MainClass(dict(pp=cam.sample_pitch_mm, fs=fs, hh=0.0, pm=pm,
+                                         dA=cam.exit_pupil_distance_mm, fU=fu, HH=0.0, df=df, M=2 * r + 1, a=a,
+                                         G=1, dx=0.0))
+        ps.refo()
+        geo = g.slice_geometry(cam, a, view_extent=r)
+        if math.isinf(ps.d) or math.isinf(ps.d_m) or math.isinf(ps.d_p) or math.isinf(geo.far_mm):
+            # PlenoptiSign's "out of range", or a border-ray pair whose slopes cross over (N < 0 for a few
+            # views with a near exit pupil): this model says the DOF passes infinity there, PlenoptiSign
+            # reports the virtual meeting point (slice_geometry's docstring)
+            continue
+        lo, hi = sorted((float(ps.d_m), float(ps.d_p)))
+        assert geo.near_mm - fs == pytest.approx(lo, rel=1e-6)
+        assert geo.far_mm - fs == pytest.approx(hi, rel=1e-6)
+        assert geo.dof_mm > g.slice_geometry(cam, a).dof_mm   # fewer views: deeper
+        compared += 1
+    assert compared >= 40
