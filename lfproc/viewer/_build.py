@@ -64,7 +64,9 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
 
     camera = lf.camera
     focus = estimate_depth(lf, a_values, depth_map)
-    a_values = scene_slices(camera, focus) if a_values is None else np.asarray(a_values, dtype=np.float64)
+    extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
+    a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
+        np.asarray(a_values, dtype=np.float64)
     stack = refocus(lf, a_values)
     tone = ToneMap.for_images(stack)
     extension = image_extension(lf.lens_shape)
@@ -82,12 +84,12 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     for item in views["items"]:
         ky, kx = item["view"]
         jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
-    intervals = slice_intervals_a(camera, a_values)
+    intervals = slice_intervals_a(camera, a_values, extent)
     a_far, a_near = float(intervals.min()), float(intervals.max())
     jobs.append((os.path.join(outdir, "depth.png"),
                  lambda: depth_colours(focus.a, focus.confidence, a_far, a_near, focus.min_confidence)))
     write_all(jobs)
-    slice_index = sharpest_slice(camera, a_values, focus.a)
+    slice_index = sharpest_slice(camera, a_values, focus.a, extent)
     data = {
         "format": "lfproc-viewer-1",
         "source": source,
