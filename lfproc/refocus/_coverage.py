@@ -127,7 +127,7 @@ def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], sourc
     if not len(bad):
         return
     a, bound = float(a_values[bad[0]]), usable_a_bound(view_mask, lens_shape)
-    lo = -bound if lowest_a is None else max(-bound, float(lowest_a))
+    lo = float(lowest_a) if lowest_a is not None and -bound < lowest_a < bound else -bound
     n = int(np.sum(view_mask)) if np.ndim(view_mask) else int(view_mask) ** 2
     where = ""
     if distance_mm is not None:
