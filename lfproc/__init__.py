@@ -13,7 +13,7 @@ from .errors import LfprocError
 from .grid import LensGrid
 from .lightfield import LightField
 from .sample_data import sample_path
-from .viewpoints import viewpoints  # light (numpy only); bound here so the submodule cannot shadow it
+from .viewpoints import viewpoints, with_aperture  # light (numpy only); bound here so the submodule cannot shadow it
 
 __version__ = "0.1.0"
 
@@ -28,7 +28,7 @@ _LAZY = {
     "depth": ("lfproc.depth", "depth"),
 }
 
-__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", "sample_path", *_LAZY]
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", "with_aperture", "sample_path", *_LAZY]
 
 
 def __getattr__(name):

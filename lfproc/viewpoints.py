@@ -43,6 +43,32 @@ def aperture_mask(lf: LightField) -> np.ndarray:
     return geometry.views_inside_aperture(lf.camera)
 
 
+def with_aperture(lf: LightField, f_number: float | None) -> LightField:
+    """``lf`` with only the views inside a synthetic aperture f/``f_number`` marked (and the others 0).
+
+    The views whose virtual centre lies inside a disc of diameter f_U/F in the entrance pupil
+    (:func:`lfproc.geometry.aperture_views`), within those ``lf.view_mask`` already marks; refocusing
+    the result averages only them, and its slices' DOF follows them
+    (:func:`lfproc.geometry.summed_view_extent`). ``None`` returns ``lf`` unchanged.
+
+    Raises
+    ------
+    LfprocError
+        Without a camera, for an f-number wider than the main lens's or narrower than one view, or
+        when no view that carries light is inside the aperture.
+    """
+    if f_number is None:
+        return lf
+    if lf.camera is None:
+        raise LfprocError("a synthetic aperture needs the light field's camera; decode with --camera")
+    keep = geometry.aperture_views(lf.camera, f_number)
+    if lf.view_mask is not None:
+        keep = keep & lf.view_mask
+    if not keep.any():
+        raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider --aperture")
+    return LightField.from_views(lf.views, lf.camera, lf.grid, keep)
+
+
 @dataclass(frozen=True)
 class ViewpointGeometry:
     """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x]."""

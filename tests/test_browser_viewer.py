@@ -173,3 +173,43 @@ def test_index_of_several_captures_opens_each_page_and_back(browser, page, tmp_p
         lambda d: d.execute_script("return document.getElementById('photo').naturalWidth") > 0)
     browser.find_element("id", "back").click()
     WebDriverWait(browser, 10).until(lambda d: d.current_url == (out / "index.html").as_uri())
+
+
+def test_aperture_control_and_viewpoint_marker(browser, page):
+    """Issue 20: choosing a synthetic aperture shows its slices with their DOF in metres; an arrow key moves
+    the perspective and the aperture diagram's marker the same way (marker at -position_mm: the pictures
+    are turned by 180 degrees through the main lens)."""
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
+
+    photo = _open(browser, page)
+    apertures = page["data"]["apertures"]
+    assert len(apertures) >= 2
+    select = Select(browser.find_element("id", "aperture-select"))
+    assert [o.text for o in select.options] == [ap["label"] for ap in apertures]
+    k = int(browser.find_element("id", "slider").get_attribute("value"))
+    select.select_by_index(1)
+    narrow = apertures[1]["slices"][k]
+    assert photo.get_attribute("src").endswith(narrow["image"]) and "/f" in narrow["image"]
+    readout = browser.find_element("id", "aperture-readout").text
+    assert readout.startswith("depth of field ") and " m" in readout
+    wide = apertures[0]["slices"][k]
+    assert narrow["near_mm"] < wide["near_mm"]   # the narrower aperture is deeper, and the page says so
+    shown_near = re.search(r"sharp from ([0-9.]+) m", browser.find_element("id", "slice-readout").text).group(1)
+    assert float(shown_near) == pytest.approx(narrow["near_mm"] / 1000, rel=5e-3)   # three significant digits
+
+    def marker_x():
+        return float(browser.find_element("css selector", "#aperture circle.view.current").get_attribute("cx"))
+
+    body = browser.find_element("tag name", "body")
+    body.send_keys(Keys.ARROW_RIGHT)          # to the central view, or one step right of it
+    before, view_before = marker_x(), photo.get_attribute("data-shown")
+    body.send_keys(Keys.ARROW_RIGHT)
+    after, view_after = marker_x(), photo.get_attribute("data-shown")
+    assert view_after != view_before
+    ky, kx = map(int, view_after[5:].split(","))
+    kx0 = int(view_before[5:].split(",")[1])
+    assert kx == kx0 + 1
+    # kx + 1: near things move left in the picture (Eq. 9: view k is read at j + a(c - k)), so the camera
+    # moved right, and so does its marker
+    assert after > before

@@ -3,6 +3,7 @@ and checks what it can before the first capture is decoded. Each test runs ``pyt
 subprocess and checks the exit status and what it prints."""
 
 import json
+import math
 import re
 import shutil
 
@@ -218,40 +219,61 @@ def test_one_failing_capture_is_one_line_several_get_a_summary(sample, tmp_path)
     assert len(lines) == 2 and str(bad) in lines[0] and "1 of 2 captures done" in lines[1]
 
 
-def test_an_a_whose_views_miss_the_image_is_refused_with_the_usable_range(sample, tmp_path):
+def test_an_a_whose_refocused_area_is_under_half_is_refused_with_the_usable_range(sample, tmp_path):
+    """Issue 20: a slice means something where its pixels average at least half of the summed views; an a
+    where that area is under half the image is refused, with the usable range in a and distance, far end
+    first (the old check offered "from 133.2 mm (a=+17.3) to 67.6 mm (a=-17.3)")."""
     from lfproc.lightfield import LightField
-    from lfproc.refocus import max_usable_a
+    from lfproc.refocus import usable_a_bound
     camera = Camera.from_toml(sample / "camera.toml")
     proc = run_cli("decode", sample / "capture.png", *decode_args(sample), "-o", tmp_path / "cap.lfp.npz")
     assert proc.returncode == 0, proc.stderr
     lf = LightField.load(tmp_path / "cap.lfp.npz")
-    limit = max_usable_a(lf.m_hat, lf.lens_shape)
+    mask = np.ones((lf.m_hat, lf.m_hat), bool) if lf.view_mask is None else lf.view_mask
+    limit = usable_a_bound(mask, lf.lens_shape)
     c, (ny, nx) = lf.center_index, lf.lens_shape
 
-    def views_reaching_the_image(a):
-        """Brute force (contract: view k is read at j + a·(c − k)): views with a sample inside the array."""
-        count = 0
-        for ky in range(lf.m_hat):
-            for kx in range(lf.m_hat):
-                jy = np.arange(ny) + a * (c - ky)
-                jx = np.arange(nx) + a * (c - kx)
-                count += bool(((jy >= 0) & (jy <= ny - 1)).any() and ((jx >= 0) & (jx <= nx - 1)).any())
-        return count / lf.m_hat ** 2
+    def refocused_area(a):
+        """Brute force (contract: view k is read at j + a·(c − k)): pixels reached by >= half the summed views."""
+        count = np.zeros((ny, nx))
+        for ky, kx in zip(*np.nonzero(mask)):
+            jy = np.arange(ny) + a * (c - ky)
+            jx = np.arange(nx) + a * (c - kx)
+            count += ((jy >= 0) & (jy <= ny - 1))[:, None] & ((jx >= 0) & (jx <= nx - 1))[None, :]
+        return float((count >= 0.5 * mask.sum()).mean())
 
-    assert views_reaching_the_image(limit * 0.999) >= 0.5 > views_reaching_the_image(limit * 1.001)
+    assert refocused_area(limit * 0.999) >= 0.5 > refocused_area(limit * 1.001)
+    assert refocused_area(-limit * 0.999) >= 0.5 > refocused_area(-limit * 1.001)
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "400", "-o", tmp_path / "o")
     assert_clean_error(proc, "a=400", f"{limit:.3g}", "mm")
     assert not (tmp_path / "o").exists()
     near = float(geometry.slice_distance_mm(camera, limit))
-    assert f"{near:.1f} mm" in proc.stderr
-    # usable, but with a wide border band: written, with one plain warning line
-    a_wide = round(0.7 * (min(ny, nx) - 1) / (2 * c) + 0.3 * limit, 3)
-    proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", str(a_wide), "-o", tmp_path / "w")
+    far = float(geometry.slice_distance_mm(camera, -limit))
+    assert far > near or math.isinf(far)
+    text = f"from {'infinity' if math.isinf(far) else f'{far:.1f} mm'} (a={-limit:+.3g}) to {near:.1f} mm (a=+{limit:.3g})"
+    assert text in proc.stderr, proc.stderr
+    # just inside the usable range: written, with one plain warning line about the wide border band
+    proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", f"{0.98 * limit:.3f}", "-o", tmp_path / "in")
     assert proc.returncode == 0, proc.stderr
     warning = [line for line in proc.stderr.splitlines() if "warning" in line]
     assert len(warning) == 1 and "fewer than half the pixels" in warning[0]
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "1", "-o", tmp_path / "ok")
     assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+
+
+def test_slices_nearer_than_the_front_focal_plane_are_refused(sample, tmp_path):
+    """Issue 20: on the sample (50 mm lens focused at infinity) --at 67 wrote a=-17.0114, 17 mm in front
+    of the lens, and --a=-17 the same; nothing there forms a real image. Both are refused before decoding."""
+    camera = Camera.from_toml(sample / "camera.toml")
+    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+    assert 67 < front and geometry.slice_distance_mm(camera, -17.0) < front   # the model puts it there
+    for option in (["--at", "67"], ["--a=-17"]):
+        proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "o")
+        assert_clean_error(proc, "front focal plane", f"{front:.1f} mm")
+        assert not (tmp_path / "o").exists()
+    # a slice beyond infinity is allowed (its DOF reaches infinity, which its tags say)
+    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a=-0.3", "-o", tmp_path / "b")
+    assert proc.returncode == 0, proc.stderr
 
 
 def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file(tmp_path):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from lfproc import Camera, geometry
+from lfproc import Camera, LightField, geometry
 from lfproc import simulate
 from lfproc.io import read_metadata, write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield
@@ -113,7 +113,13 @@ def test_refocus_cli_tags_slices_and_embeds_metadata(capture, tmp_path):
     proc = run_cli("refocus", folder / "capture.png", "--camera", folder / "camera.toml", "--white",
                    folder / "white.png", "--depth-range", "300:2000", "-o", out)
     assert proc.returncode == 0, proc.stderr
-    a_planned = geometry.plan_slices(cam, 300.0, 2000.0)
+    # the slices are planned and tagged with the DOF of the views they sum (issue 20): the decoder's
+    decoded = run_cli("decode", folder / "capture.png", "--camera", folder / "camera.toml", "--white",
+                      folder / "white.png", "-o", tmp_path / "cap.lfp.npz")
+    assert decoded.returncode == 0, decoded.stderr
+    mask = LightField.load(tmp_path / "cap.lfp.npz").view_mask
+    extent = None if mask is None else geometry.summed_view_extent(mask)
+    a_planned = geometry.plan_slices(cam, 300.0, 2000.0, view_extent=extent)
     images = sorted(p for p in os.listdir(out) if p.endswith(".tif"))
     assert len(images) == len(a_planned)
     covered = []
@@ -121,9 +127,12 @@ def test_refocus_cli_tags_slices_and_embeds_metadata(capture, tmp_path):
         side = json.loads((out / name.replace(".tif", ".json")).read_text())
         assert set(side) >= {"source", "a", "distance_mm", "near_mm", "far_mm", "dof_mm"}
         assert side["source"] == str((folder / "capture.png").resolve())
-        expect = geometry.slice_geometry(cam, side["a"])
+        expect = geometry.slice_geometry(cam, side["a"], extent)
         for key in ("distance_mm", "near_mm", "far_mm", "dof_mm"):
             assert side[key] == pytest.approx(getattr(expect, key), rel=1e-12)
+        if mask is not None:
+            assert side["views_summed"] == mask.sum()
+            assert side["aperture_f_number"] == pytest.approx(geometry.equivalent_f_number(cam, extent))
         embedded = read_metadata(out / name)  # read back through OpenImageIO
         for key in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm", "source"):
             assert embedded[key] == side[key]

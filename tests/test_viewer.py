@@ -201,7 +201,10 @@ def test_page_is_self_contained_and_its_data_is_the_geometry(page, scene):
     assert "fetch(" not in html and "XMLHttpRequest" not in html and "<link" not in html  # ... and nothing loaded
     data = json.loads((page / "geometry.json").read_text())
     cam = scene["camera"]
-    expected = geometry.slice_geometry(cam, [s["a"] for s in data["slices"]]).records()
+    summed = np.zeros((cam.m_hat, cam.m_hat), bool)   # the DOF of the views the slices average (issue 20)
+    summed[tuple(np.transpose(data["apertures"][0]["summed_views"]))] = True
+    expected = geometry.slice_geometry(cam, [s["a"] for s in data["slices"]],
+                                       geometry.summed_view_extent(summed)).records()
     for got, want in zip(data["slices"], expected):
         for key in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm"):
             assert got[key] == pytest.approx(want[key], rel=1e-12) or (got[key] is None and want[key] == np.inf)
@@ -236,7 +239,10 @@ def test_several_captures_get_a_page_each_and_an_index(scene, tmp_path):
         page_html = (out / stem / "index.html").read_text()
         assert '"index_href":"../index.html"' in page_html
         data = json.loads((out / stem / "geometry.json").read_text())
-        planned = geometry.plan_slices(scene["camera"], 400.0, 2000.0)
+        cam = scene["camera"]
+        summed = np.zeros((cam.m_hat, cam.m_hat), bool)   # planned with the DOF of the views summed (issue 20)
+        summed[tuple(np.transpose(data["apertures"][0]["summed_views"]))] = True
+        planned = geometry.plan_slices(cam, 400.0, 2000.0, view_extent=geometry.summed_view_extent(summed))
         np.testing.assert_allclose([s["a"] for s in data["slices"]], planned, rtol=1e-12)
 
 
@@ -308,3 +314,76 @@ def test_server_binds_the_loopback_interface_only(tmp_path):
             make_server(str(tmp_path), port)   # taken: a one-line error naming the fix
     finally:
         server.server_close()
+
+
+def test_viewpoint_marker_moves_the_way_the_perspective_does(page, scene):
+    """Issue 20: the aperture diagram draws each view at its virtual camera (position_mm) as the pictures
+    show it. In the page's own view images the near card moves against the far wall when the view index
+    kx grows; a camera that moves right sees near things move left, so the marker must move opposite to
+    the card's shift (it moved with it when drawn at position_mm)."""
+    data = json.loads((page / "geometry.json").read_text())
+    items = {tuple(v["view"]): v for v in data["views"]["items"]}
+    c = data["views"]["center"]
+    label = scene["label"]
+    card, wall = inner_lenses(label, 0), inner_lenses(label, 1)
+
+    def shift_x(image0, image1, region):
+        """Sub-lens shift along x of ``image1`` against ``image0`` over ``region`` (least squares)."""
+        gx = np.gradient(image0, axis=1)
+        return -float((gx * (image1 - image0))[region].sum() / (gx * gx)[region].sum())
+
+    def grey(view):
+        with Image.open(page / items[view]["image"]) as image:
+            return np.asarray(image.convert("L"), dtype=np.float64)
+
+    centre, right = grey((c, c)), grey((c, c + 1))
+    parallax = shift_x(centre, right, card) - shift_x(centre, right, wall)   # the card against the wall
+    assert abs(parallax) > 0.3   # about 0.9 lens per view step (a = 1.3 against 0.4)
+    marker_step = items[(c, c + 1)]["marker_mm"][1] - items[(c, c)]["marker_mm"][1]
+    assert np.sign(marker_step) == -np.sign(parallax)
+    for v in items.values():   # the marker is the virtual camera, turned by 180 degrees with the picture
+        assert v["marker_mm"] == [-v["position_mm"][0] + 0.0, -v["position_mm"][1] + 0.0]
+
+
+def test_page_offers_synthetic_apertures_with_their_dof(page, scene):
+    """Issue 20: the viewer's aperture control: the same slices through fewer views, each with the DOF
+    those views give (deeper as the aperture closes), in metres on the page."""
+    data = json.loads((page / "geometry.json").read_text())
+    cam = scene["camera"]
+    apertures = data["apertures"]
+    assert [ap["f_number"] for ap in apertures] == [None, 8.0, 16.0]   # f/32 would leave the central view alone
+    previous = None
+    for ap in apertures:
+        summed = np.zeros((cam.m_hat, cam.m_hat), bool)
+        summed[tuple(np.transpose(ap["summed_views"]))] = True
+        if ap["f_number"] is not None:
+            assert not (summed & ~geometry.aperture_views(cam, ap["f_number"])).any()
+        assert ap["views_summed"] == summed.sum()
+        extent = geometry.summed_view_extent(summed)
+        assert ap["aperture_f_number"] == pytest.approx(geometry.equivalent_f_number(cam, extent))
+        want = geometry.slice_geometry(cam, [s["a"] for s in ap["slices"]], extent)
+        far = [np.inf if s["far_mm"] is None else s["far_mm"] for s in ap["slices"]]
+        assert np.allclose(far, want.far_mm, rtol=1e-12)
+        for s in ap["slices"]:
+            assert (page / s["image"]).is_file()
+        if previous is not None:   # narrower: never a shallower DOF
+            assert all(n <= p for n, p in zip([s["near_mm"] for s in ap["slices"]], previous))
+        previous = [s["near_mm"] for s in ap["slices"]]
+    js = (ROOT / "lfproc" / "viewer" / "assets" / "viewer.js").read_text()
+    assert "aperture-select" in js and "marker_mm" in js
+
+
+def test_depth_preview_and_viewer_share_one_colour_scale():
+    """Issue 20: the depth preview (lfproc depth) used its own red-to-blue ramp; the viewer viridis."""
+    from lfproc.depth._preview import preview_image
+    from lfproc.outputs import DEPTH_COLOURS, UNKNOWN_COLOUR
+
+    distance = np.full((40, 40), np.nan)
+    distance[:, :20] = np.linspace(500.0, 2000.0, 20)[None, :]   # near to far along x
+    distance[:, 20:30] = 500.0
+    distance[:, 30:39] = 2000.0
+    rgb = preview_image(distance)
+    body = rgb[10:10 + 40 * 12:12, 0:40 * 12:12]   # one pixel per lens (scale 12, 10 px margin on top)
+    assert tuple(body[5, 25]) == tuple(DEPTH_COLOURS[-1])    # nearest: the last (yellow) colour
+    assert tuple(body[5, 35]) == tuple(DEPTH_COLOURS[0])     # farthest: the first (dark purple)
+    assert tuple(body[5, 39]) == UNKNOWN_COLOUR

@@ -41,6 +41,7 @@ class Job:
     mosaic: bool = False        # with views: also the mosaic of all views
     gif: bool = False           # with views: also the animation
     inside_aperture: bool = False  # with views: only those inside the main lens aperture
+    aperture: float | None = None  # synthetic aperture f-number for the slices (None: every view with light)
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""

@@ -72,10 +72,16 @@ def run_job(job: Job) -> JobResult:
             raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
         outputs = []
         if job.refocus_a:
-            from ..refocus import refocus
+            from .. import geometry
+            from ..refocus import check_refocused_area, refocus
+            from ..viewpoints import with_aperture
 
-            stack = refocus(lf, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
-            outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt)
+            summed = with_aperture(lf, job.aperture)
+            check_refocused_area(job.refocus_a, lf.camera.m_hat if summed.view_mask is None else summed.view_mask,
+                                 lf.lens_shape, job.source, lambda a: geometry.slice_distance_mm(lf.camera, a))
+            stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
+            outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
+                                    view_mask=summed.view_mask)
         if job.views:
             outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
                                       gif=job.gif, inside_aperture=job.inside_aperture)

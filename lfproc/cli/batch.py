@@ -11,7 +11,7 @@ import time
 
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, require_output_folder
-from .common import add_slice_options, check_slice_options, describe_slices
+from .common import add_aperture_option, add_slice_options, check_slice_options, describe_slices
 from .refocus import add_render_options, check_render_options
 from .views import add_view_options, check_view_options
 
@@ -40,6 +40,7 @@ def register(sub) -> None:
                         "1 = in this process, with multi-threaded refocusing)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run on a dask.distributed cluster instead, e.g. tcp://host:8786 (shared file system)")
+    add_aperture_option(p)
     p.set_defaults(func=run)
 
 
@@ -67,7 +68,7 @@ def run(args) -> int:
     from ..camera import Camera
     from ..lightfield import LightField, is_lightfield_file
     from ..pipeline import camera_for_captures, unique_stems, white_image_for
-    from .common import slice_parameters
+    from .common import aperture_extent, slice_parameters
 
     check_render_options(args)
     check_slice_options(args)
@@ -81,6 +82,8 @@ def run(args) -> int:
             raise LfprocError(f"{path}: {flag} file not found; check the path")
     if args.a is None and args.depth_range is None and args.at is None and not args.views:
         raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM and/or --views")
+    if args.aperture is not None and args.a is None and args.depth_range is None and args.at is None:
+        raise LfprocError("--aperture shapes the refocused slices: add --a, --depth-range or --at")
     if (args.mosaic or args.gif or args.inside_aperture) and not args.views:
         raise LfprocError("--mosaic, --gif and --inside-aperture shape the views: add --views")
     if args.workers is not None and args.workers < 1:
@@ -103,7 +106,8 @@ def run(args) -> int:
         check_view_options(args, camera)
     if args.a is not None or args.depth_range is not None or args.at is not None:
         a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices))
+                                          max_slices=args.max_slices,
+                                          view_extent=aperture_extent(camera, args.aperture)))
     else:
         a_values = ()
     require_output_folder(args.outdir)
@@ -117,7 +121,7 @@ def run(args) -> int:
     outdir = os.path.abspath(args.outdir)
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
-                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture))
+                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture)
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -134,7 +138,7 @@ def run(args) -> int:
             "camera": _abs(args.camera), "calib": _abs(args.calib), "white": white,
             "refocus_a": list(a_values), "views": bool(args.views), "format": args.format,
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
-            "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture),
+            "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
             "scheduler": args.scheduler})
         return _process(args, jobs, manifest, camera)
@@ -159,8 +163,11 @@ def _process(args, jobs, manifest, camera) -> int:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
         batch.decode_setup(first_to_decode)
     if jobs[0].refocus_a:
+        from ..geometry import aperture_views
+
         describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
-                        integer=args.integer, max_slices=args.max_slices)
+                        integer=args.integer, max_slices=args.max_slices,
+                        view_mask=None if args.aperture is None else aperture_views(camera, args.aperture))
     start = time.perf_counter()
     interrupted = False
     try:

@@ -103,11 +103,14 @@ def check_slice_options(args) -> None:
 
 
 def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
-                     integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES) -> list[float]:
+                     integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES,
+                     view_extent=None) -> list[float]:
     """The refocus parameters one of --a, --depth-range or --at asks for.
 
     Every list is checked here, before any capture is read: no more than ``max_slices`` slices, no
-    duplicate a (two slices would write the same file).
+    duplicate a (two slices would write the same file), no slice nearer than the main lens's front
+    focal plane (:func:`check_slice_meaning`). ``view_extent``: the extent of the views the slices
+    will sum (:func:`lfproc.geometry.summed_view_extent`), for --depth-range planning.
     """
     from .. import geometry
     from ..outputs import slice_names
@@ -117,7 +120,7 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)
         plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
-                                         max_slices=max_slices)
+                                         max_slices=max_slices, view_extent=view_extent)
         values = [float(a) for a in plan.a]
         if not values:
             raise LfprocError(f"--depth-range {depth_range}: no slice can be planned ({plan.uncovered[0][2]})")
@@ -126,7 +129,13 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     elif not math.isfinite(at_mm):
         raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
     else:
+        front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+        if at_mm <= front:
+            raise LfprocError(f"--at {at_mm:g} mm is not beyond the main lens's front focal plane ({front:.1f} mm "
+                              f"from the sensor): nothing there forms a real image to focus on; give a distance "
+                              f"beyond {front:.1f} mm")
         values = [float(geometry.refocus_parameter(camera, at_mm))]
+    check_slice_meaning(camera, values, what if a_list is not None else "--depth-range")
     if len(values) > max_slices:
         raise LfprocError(f"{what if a_list is not None else '--depth-range'} asks for {len(values)} slices, more "
                           f"than --max-slices {max_slices}; use a coarser list, or raise --max-slices")
@@ -134,14 +143,74 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     return values
 
 
+def check_slice_meaning(camera, a_values, what: str = "--a") -> None:
+    """Refuse slices focused nearer than the main lens's front focal plane (the paraxial model's macro
+    regime, between the lens and f_U in front of it): no object there forms a real image. Slices
+    beyond infinity (distance ``inf``) stay allowed; their tags say so."""
+    import numpy as np
+
+    from .. import geometry
+
+    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+    d = np.atleast_1d(geometry.slice_distance_mm(camera, np.asarray(a_values, dtype=np.float64)))
+    bad = np.flatnonzero(np.isfinite(d) & (d <= front))
+    if len(bad):
+        a = float(np.atleast_1d(a_values)[bad[0]])
+        raise LfprocError(f"{what}: a={a:g} would focus {d[bad[0]]:.1f} mm from the sensor, nearer than the main "
+                          f"lens's front focal plane ({front:.1f} mm), where nothing forms a real image; give "
+                          f"a >= {lowest_meaningful_a(camera):+.3g}")
+
+
+def lowest_meaningful_a(camera) -> float:
+    """The lowest a whose slice is beyond the front focal plane or at infinity (the macro regime below it)."""
+    from .. import geometry
+
+    inside = camera.sensor_to_main_lens_mm
+    return float(geometry.refocus_parameter(camera, inside + 1e-9 * max(inside, 1.0)))
+
+
+def check_refocused_area(camera, a_values, lens_shape, view_mask, source: str) -> None:
+    """Refuse slices whose refocused area is under half the image (:func:`lfproc.refocus.check_refocused_area`),
+    with the usable range in a and in distance, far end first."""
+    from .. import geometry
+    from ..refocus import check_refocused_area as check
+
+    mask = camera.m_hat if view_mask is None else view_mask
+    check(a_values, mask, lens_shape, source, lambda a: geometry.slice_distance_mm(camera, a),
+          lowest_meaningful_a(camera))
+
+
+def add_aperture_option(p) -> None:
+    """``--aperture F_NUMBER``: a synthetic aperture (refocus, depth, viewer, batch)."""
+    p.add_argument("--aperture", type=float, metavar="F_NUMBER",
+                   help="synthetic aperture: average only the views inside this f-number (from the main lens's "
+                        "f-number to one view's); the DOF tags follow (sidecar aperture_f_number)")
+
+
+def aperture_extent(camera, f_number) -> float | None:
+    """The DOF extent of the views inside ``--aperture`` (before decoding; ``None`` without one); checks it."""
+    if f_number is None:
+        return None
+    from .. import geometry
+
+    return geometry.summed_view_extent(geometry.aperture_views(camera, f_number))
+
+
 def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm: float = 0.0,
-                    integer: bool = False, max_slices: int = DEFAULT_MAX_SLICES) -> None:
+                    integer: bool = False, max_slices: int = DEFAULT_MAX_SLICES, view_mask=None) -> None:
     """One line per slice (a, distance, [near, far] in mm) and the depths no slice covers, with the
-    reason, on stdout. The planning options are those the slices were planned with."""
+    reason, on stdout. The planning options are those the slices were planned with; the DOF is that
+    of the views ``view_mask`` marks (all when ``None``)."""
+    import numpy as np
+
     from .. import geometry
 
     out = out or sys.stdout
-    geo = geometry.slice_geometry(camera, a_values)
+    extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
+    geo = geometry.slice_geometry(camera, a_values, extent)
+    if extent is not None:
+        print(f"{int(np.count_nonzero(view_mask))} views summed (f/{geometry.equivalent_f_number(camera, extent):.2g} "
+              f"equivalent); the DOF follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
     for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
@@ -149,7 +218,7 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
         return
     near, far = parse_depth_range(depth_range)
     plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
-                                     max_slices=max_slices)
+                                     max_slices=max_slices, view_extent=extent)
     for lo, hi, why in plan.uncovered:
         print(f"  no slice is in focus at {_mm(lo)}..{_mm(hi)}: {why}", file=out)
     if not plan.uncovered:

@@ -80,14 +80,16 @@ def run(args) -> int:
     step(f"decoded {m}x{m} views of {ny}x{nx} lenses x {ch} channels -> {lf_path}")
 
     near, far = distances[0] * 0.97, distances[-1] * 1.03
-    a_values = [float(a) for a in geometry.plan_slices(camera, near, far)]
+    extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
+    a_values = [float(a) for a in geometry.plan_slices(camera, near, far, view_extent=extent)]
     stack = refocus(lf, a_values)
     source = str((sample / "capture.png").resolve())
     refocus_dir = out / "refocus"
-    paths = write_slices(str(refocus_dir), "sample", source, camera, a_values, stack, "tiff")
-    gif = write_slice_gif(str(out), "sample", stack[::-1], camera, a_values[::-1])  # near to far, labelled
+    paths = write_slices(str(refocus_dir), "sample", source, camera, a_values, stack, "tiff", view_mask=lf.view_mask)
+    gif = write_slice_gif(str(out), "sample", stack[::-1], camera, a_values[::-1],   # near to far, labelled
+                          view_mask=lf.view_mask)
     step(f"refocused {len(a_values)} slices covering {near:.0f}..{far:.0f} mm -> {refocus_dir}/ (+ sidecars), {gif}")
-    geo = geometry.slice_geometry(camera, a_values)
+    geo = geometry.slice_geometry(camera, a_values, extent)
     for d in distances:
         hits = [f"a={a:+.3f} [{lo:.0f}, {hi:.0f}] mm" for a, lo, hi in zip(a_values, geo.near_mm, geo.far_mm)
                 if lo <= d <= hi]

@@ -12,7 +12,7 @@ from .capture_loop import (
     prepare_inputs,
     require_output_folder,
 )
-from .common import parse_depth_range
+from .common import add_aperture_option, aperture_extent, parse_depth_range
 
 
 def register(sub) -> None:
@@ -32,6 +32,7 @@ def register(sub) -> None:
                    help="estimates less confident than C (0-1) are written as NaN (default 0.1)")
     p.add_argument("--no-ply", action="store_true", help="do not write the point cloud")
     add_output_folder_option(p)
+    add_aperture_option(p)
     p.set_defaults(func=run)
 
 
@@ -55,15 +56,17 @@ def check_depth_options(args, camera):
 def run(args) -> int:
     from ..depth import summary_line, write_depth_outputs
     from ..pipeline import unique_stems
+    from ..viewpoints import with_aperture
 
     require_output_folder(args.outdir)
     stems = unique_stems(args.raw)
     camera = input_camera(args, args.raw)
     depth_range, min_confidence = check_depth_options(args, camera)
+    aperture_extent(camera, args.aperture)            # an impossible --aperture fails before any work
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
-        lf = inputs.load(path)
+        lf = with_aperture(inputs.load(path), args.aperture)
         check_depth_options(args, lf.camera)
         written = write_depth_outputs(args.outdir, stems[path], lf, source=os.path.abspath(path), camera=lf.camera,
                                       depth_range_mm=depth_range, point_cloud=not args.no_ply,

@@ -7,8 +7,8 @@ import os
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
-from .common import FORMAT_HELP, INTERPOLATION_HELP, add_preview_option, add_slice_options, check_slice_options, \
-    describe_slices, slice_parameters
+from .common import FORMAT_HELP, INTERPOLATION_HELP, add_aperture_option, add_preview_option, add_slice_options, \
+    aperture_extent, check_refocused_area, check_slice_options, describe_slices, slice_parameters
 
 
 def register(sub) -> None:
@@ -23,6 +23,7 @@ def register(sub) -> None:
     add_slice_options(p).required = True
     add_output_folder_option(p)
     add_render_options(p)
+    add_aperture_option(p)
     add_preview_option(p, "each slice, labelled with its distance and DOF")
     p.set_defaults(func=run)
 
@@ -45,6 +46,7 @@ def run(args) -> int:
     from ..outputs import write_slice_previews, write_slices
     from ..pipeline import unique_stems
     from ..refocus import refocus
+    from ..viewpoints import with_aperture
 
     check_render_options(args)
     check_slice_options(args)
@@ -53,57 +55,60 @@ def run(args) -> int:
     camera = input_camera(args, args.raw)
     plans, described = {}, set()
 
-    def slices_for(camera):
-        key = camera.to_toml()
+    def slices_for(camera, view_mask=None):
+        """The slices for this camera and these summed views (their DOF plans --depth-range)."""
+        extent = summed_extent(camera, args.aperture, view_mask)
+        key = (camera.to_toml(), extent)
         if key not in plans:
             plans[key] = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices)
+                                          max_slices=args.max_slices, view_extent=extent)
         return key, plans[key]
 
-    def describe_once(key, camera, values):
+    def describe_once(key, camera, values, view_mask):
         """The slice table, printed when the first capture with this camera has rendered."""
         if key not in described:
             described.add(key)
             describe_slices(camera, values, args.depth_range, max_gap_mm=args.max_gap, integer=args.integer,
-                            max_slices=args.max_slices)
+                            max_slices=args.max_slices, view_mask=view_mask)
 
-    a_values = slices_for(camera)[1]   # every list is checked before any capture is read
+    a_values = slices_for(camera)[1]   # every list (and --aperture) is checked before any capture is read
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
-        lf = inputs.load(path)
-        key, values = slices_for(lf.camera)
-        check_view_coverage(lf.camera, values, lf.lens_shape, path)
+        lf = with_aperture(inputs.load(path), args.aperture)
+        key, values = slices_for(lf.camera, lf.view_mask)
+        check_view_coverage(lf.camera, values, lf.lens_shape, path, lf.view_mask)
         stack = refocus(lf, values, interpolation=args.interpolation, upsample=args.upsample)
-        describe_once(key, lf.camera, values)
+        describe_once(key, lf.camera, values, lf.view_mask)
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
-                               args.format)
+                               args.format, view_mask=lf.view_mask)
         if args.preview:
-            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview)
+            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview,
+                                 view_mask=lf.view_mask)
         progress.update(len(values))
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
 
 
-def check_view_coverage(camera, a_values, lens_shape, source: str) -> None:
-    """Refuse slices that fewer than half the views reach (a garbage a); warn where most pixels miss some."""
+def summed_extent(camera, aperture, view_mask=None):
+    """The DOF extent of the views a slice sums: the light field's (``view_mask``), else ``--aperture``'s."""
+    if view_mask is not None:
+        from ..geometry import summed_view_extent
+
+        return summed_view_extent(view_mask)
+    return aperture_extent(camera, aperture)
+
+
+def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=None) -> None:
+    """Refuse slices whose refocused area is under half the image (a garbage a); warn where most pixels
+    miss some views."""
     import warnings
 
-    from .. import geometry
-    from ..refocus import MIN_OVERLAPPING_VIEWS, full_view_fraction, max_usable_a, overlapping_view_fraction
-    from .common import _mm
+    from ..refocus import full_view_fraction
 
-    m, (ny, nx) = camera.m_hat, lens_shape
-    reached = overlapping_view_fraction(a_values, m, lens_shape)
-    beyond = [a for a, f in zip(a_values, reached) if f < MIN_OVERLAPPING_VIEWS]
-    if beyond:
-        limit = max_usable_a(m, lens_shape)
-        near, far = (float(d) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
-        share = float(overlapping_view_fraction(beyond[0], m, lens_shape))
-        raise LfprocError(f"{source}: at a={beyond[0]:g} only {100 * share:.0f} % of the {m}x{m} views reach this "
-                          f"{ny}x{nx}-lens capture (the others shift off it); refocus within |a| < {limit:.3g}, i.e. "
-                          f"from {_mm(near)} (a=+{limit:.3g}) to {_mm(far)} (a=-{limit:.3g})")
+    check_refocused_area(camera, a_values, lens_shape, view_mask, source)
+    m = camera.m_hat
     share = full_view_fraction(a_values, m, lens_shape)
     thin = [a for a, f in zip(a_values, share) if f < 0.5]
     if thin:

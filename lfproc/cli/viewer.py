@@ -7,8 +7,8 @@ import os
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
-from .common import add_slice_options, check_slice_options, slice_parameters
-from .refocus import check_view_coverage
+from .common import add_aperture_option, add_slice_options, aperture_extent, check_slice_options, slice_parameters
+from .refocus import check_view_coverage, summed_extent
 
 
 def register(sub) -> None:
@@ -34,12 +34,14 @@ def register(sub) -> None:
                    help="smallest long side of the shown pictures in screen pixels (default 512)")
     p.add_argument("--serve", action="store_true", help="then serve OUTDIR on 127.0.0.1 and print the URL")
     p.add_argument("--port", type=int, default=8000, help="port for --serve (default 8000; 0 = any free port)")
+    add_aperture_option(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from ..pipeline import unique_stems
     from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, serve, write_index
+    from ..viewpoints import with_aperture
 
     if _pictures(args):
         return 0
@@ -52,21 +54,23 @@ def run(args) -> int:
     stems = unique_stems(args.raw)
     camera = input_camera(args, args.raw)
     chosen = args.a is not None or args.depth_range is not None or args.at is not None
+    extent = aperture_extent(camera, args.aperture)   # an impossible --aperture fails before any work
     if chosen:  # every list is checked before any capture is read
         slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                         max_slices=args.max_slices)
+                         max_slices=args.max_slices, view_extent=extent)
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
     several = len(args.raw) > 1
     options = PageOptions(min_long_side=args.display_size, upscale=args.upscale)
     pages = {}
 
     def work(path, progress):
-        lf = inputs.load(path)
+        lf = with_aperture(inputs.load(path), args.aperture)
         a_values = None
         if chosen:
             a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                        max_slices=args.max_slices)
-            check_view_coverage(lf.camera, a_values, lf.lens_shape, path)
+                                        max_slices=args.max_slices,
+                                        view_extent=summed_extent(lf.camera, args.aperture, lf.view_mask))
+            check_view_coverage(lf.camera, a_values, lf.lens_shape, path, lf.view_mask)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
         setup = inputs.setup
         grid = lf.grid if lf.grid is not None else getattr(setup, "grid", None)

@@ -72,6 +72,7 @@ class DepthMap:
     view_step: int = 1
     view_reach: int = 0
     timings_s: dict = field(default_factory=dict)
+    aperture_f_number: float | None = None
 
     def metadata(self) -> dict:
         """Fields shared by every output of this depth map."""
@@ -79,7 +80,8 @@ class DepthMap:
                 "a_step": float(self.a_searched[1] - self.a_searched[0]) if len(self.a_searched) > 1 else 0.0,
                 "view_step": int(self.view_step), "views_used_up_to_offset": int(self.view_reach),
                 "min_confidence": MIN_CONFIDENCE,
-                "lens_grid": [int(self.a.shape[0]), int(self.a.shape[1])]}
+                "lens_grid": [int(self.a.shape[0]), int(self.a.shape[1])],
+                **({} if self.aperture_f_number is None else {"aperture_f_number": self.aperture_f_number})}
 
 
 def occupied_range(sweep, a_lo, a_hi, step, center_index) -> tuple[float, float]:
@@ -216,7 +218,11 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["confidence (defocus cue)"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    metric = metric_depth(camera, a_known, minimum.a_low, minimum.a_high)
+    offsets = np.abs(np.arange(weight.shape[0]) - c)
+    summed = weight & (offsets[:, None] <= reach) & (offsets[None, :] <= reach)
+    summed &= (offsets[:, None] % view_step == 0) & (offsets[None, :] % view_step == 0)
+    extent = geometry.summed_view_extent(summed)   # the DOF of the views the sweep sums
+    metric = metric_depth(camera, a_known, minimum.a_low, minimum.a_high, extent)
     timings["metric distance"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -226,4 +232,6 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     f32 = lambda x: np.asarray(x, dtype=np.float32)
     return DepthMap(distance_mm=f32(metric.distance_mm), confidence=f32(conf), near_mm=f32(metric.near_mm),
                     far_mm=f32(metric.far_mm), a=f32(a_known), allfocus=sharp, a_searched=a_values,
-                    view_step=view_step, view_reach=reach, timings_s=timings)
+                    view_step=view_step, view_reach=reach, timings_s=timings,
+                    aperture_f_number=None if mask is None else geometry.equivalent_f_number(
+                        camera, geometry.summed_view_extent(mask)))

@@ -37,15 +37,19 @@ def _distance(camera, a: np.ndarray) -> np.ndarray:
     return np.where(a == np.inf, camera.sensor_to_main_lens_mm + camera.main_focal_length_mm, d)
 
 
-def metric_depth(camera, a: np.ndarray, a_low: np.ndarray, a_high: np.ndarray) -> MetricDepth:
-    """Distances and bounds of the estimates ``a`` (NaN = unknown) with cost basins ``[a_low, a_high]``."""
+def metric_depth(camera, a: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, view_extent=None) -> MetricDepth:
+    """Distances and bounds of the estimates ``a`` (NaN = unknown) with cost basins ``[a_low, a_high]``.
+
+    ``view_extent``: the extent of the views the sweep summed (the DOF's c, see
+    :func:`lfproc.geometry.slice_geometry`); the full micro image when ``None``.
+    """
     from .. import geometry
 
     a = np.asarray(a, dtype=np.float64)
     known = np.isfinite(a)
     a_safe = np.where(known, a, 0.0)
     distance = _distance(camera, a_safe)
-    dof = geometry.slice_geometry(camera, np.maximum(a_safe, geometry.infinity_parameter(camera)))
+    dof = geometry.slice_geometry(camera, np.maximum(a_safe, geometry.infinity_parameter(camera)), view_extent)
     near = np.minimum(np.asarray(dof.near_mm), _distance(camera, np.where(known, a_high, 0.0)))
     far = np.maximum(np.asarray(dof.far_mm), _distance(camera, np.where(known, a_low, 0.0)))
     nan = np.float64(np.nan)

@@ -76,7 +76,8 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     write_image(path, depth_map.allfocus, meta, "tiff")
     write_sidecar(path, meta)
     paths["allfocus"] = path
-    meta = dict(common, unit="m", content="colour-mapped depth (red near, blue far, grey unknown), legend in metres")
+    meta = dict(common, unit="m",
+                content="colour-mapped depth (viridis: yellow near, dark purple far, grey unknown), legend in metres")
     path = os.path.join(outdir, stem + PREVIEW)
     write_preview(path, depth_map.distance_mm)
     write_sidecar(path, meta)

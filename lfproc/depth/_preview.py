@@ -1,8 +1,9 @@
 """A colour-mapped preview of a depth map with a legend in metres (numpy and Pillow only).
 
 Colour follows the inverse distance (proportional to the refocus parameter and to disparity, so equal
-steps of colour are equal steps of parallax): red near, blue far; unknown lenses are grey. The
-legend is a colour bar with its ticks labelled in metres from the sensor.
+steps of colour are equal steps of parallax) on the colour scale the viewer uses too
+(:func:`lfproc.outputs.colour_scale`: viridis, far dark purple, near yellow); unknown lenses are grey.
+The legend is a colour bar with its ticks labelled in metres from the sensor.
 """
 
 from __future__ import annotations
@@ -11,21 +12,16 @@ import math
 
 import numpy as np
 
-#: the colour ramp from far to near (RGB 0–255 anchors, interpolated linearly)
-RAMP = np.array([[40, 30, 120], [30, 90, 200], [20, 170, 210], [60, 200, 120], [200, 220, 50],
-                 [250, 150, 30], [210, 40, 30]], dtype=np.float64)
-UNKNOWN_RGB = (128, 128, 128)
+from ..outputs import UNKNOWN_COLOUR as UNKNOWN_RGB
+from ..outputs import colour_scale
 
 #: the preview's depth map is enlarged (nearest) to about this many pixels on its long side
 TARGET_SIZE_PX = 480
 
 
 def colour_map(t: np.ndarray) -> np.ndarray:
-    """``t`` in [0, 1] (0 far, 1 near) → uint8 RGB ``t.shape + (3,)``."""
-    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0) * (len(RAMP) - 1)
-    i = np.minimum(np.floor(t).astype(np.int64), len(RAMP) - 2)
-    f = (t - i)[..., None]
-    return np.round((1.0 - f) * RAMP[i] + f * RAMP[i + 1]).astype(np.uint8)
+    """``t`` in [0, 1] (0 far, 1 near) → uint8 RGB ``t.shape + (3,)``: the viewer's scale (one scale for both)."""
+    return colour_scale(np.clip(np.nan_to_num(np.asarray(t, dtype=np.float64)), 0.0, 1.0))
 
 
 def display_range_mm(distance_mm: np.ndarray) -> tuple[float, float]:

@@ -7,9 +7,11 @@ paper's image-side telecentric model, extended to a finite exit pupil (Hahne et 
 Private modules: ``_slices`` (distance, DOF and inverse, Eqs. 13–31), ``_planning`` (slice planning,
 uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), ``_triangulation``
 (baseline, tilt and distance of a disparity), ``_exit_pupil`` (micro image drift),
+``_aperture`` (the summed views as an aperture: DOF extent, equivalent f-number, synthetic apertures),
 ``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂).
 """
 
+from ._aperture import aperture_limits, aperture_views, equivalent_f_number, summed_view_extent
 from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._ray_model import RayModel
@@ -20,6 +22,7 @@ from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, vie
                      view_tilts_deg, views_inside_aperture)
 
 __all__ = [
+    "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent",
     "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
     "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
     "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",

@@ -10,7 +10,7 @@ import numpy as np
 from ..camera import Camera
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
-from ._slices import _slope_step, refocus_parameter, slice_geometry
+from ._slices import _slope_step, _view_extent, refocus_parameter, slice_geometry
 
 #: the most slices one request may render (``--a`` lists and ``--depth-range`` alike); pass
 #: ``max_slices`` to go beyond it
@@ -40,9 +40,9 @@ class SlicePlan:
         return not self.uncovered
 
 
-def _slice_for_far_limit(camera: Camera, far_mm: float) -> float:
-    """The ``a`` whose far DOF limit equals ``far_mm``: inverts a₊ of :func:`slice_geometry`."""
-    c = camera.center_index
+def _slice_for_far_limit(camera: Camera, far_mm: float, view_extent=None) -> float:
+    """The ``a`` whose far DOF limit equals ``far_mm``: inverts a₊ of :func:`slice_geometry` (c → r, view_extent)."""
+    c = _view_extent(camera, view_extent)
     a_limit = refocus_parameter(camera, far_mm)
     ratio = camera.mla_pitch_mm * pupil_curvature(camera) / _slope_step(camera)
     if a_limit >= 0:   # limit at or in front of the focus distance: A = (2ac − 1)/(2c + 1)
@@ -54,16 +54,19 @@ def _slice_for_far_limit(camera: Camera, far_mm: float) -> float:
     # the far limit never increases with a, so this ends, overshooting by < 2 steps.
     step = 2.0 ** -52 * (abs(a) + 1.0 / (2.0 * c))
     for _ in range(2000):
-        if slice_geometry(camera, a).far_mm >= far_mm:
+        if slice_geometry(camera, a, view_extent).far_mm >= far_mm:
             break
         a -= step
         step *= 2.0
     return a
 
 
-def _check_request(camera: Camera, near_mm: float, far_mm: float, max_gap_mm: float) -> float:
+def _check_request(camera: Camera, near_mm: float, far_mm: float, max_gap_mm: float, view_extent=None) -> float:
     if camera.center_index == 0:
         raise LfprocError("depth-range planning needs micro images of 3 px or more (micro_image_px >= 3)")
+    if _view_extent(camera, view_extent) == 0:
+        raise LfprocError("depth-range planning needs more than the central view summed (one view does not "
+                          "refocus); give a wider --aperture")
     if not (near_mm > 0 and far_mm >= near_mm) or math.isnan(far_mm):
         raise LfprocError(f"depth range {near_mm}:{far_mm} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")
     if not (max_gap_mm >= 0 and math.isfinite(max_gap_mm)):
@@ -71,20 +74,20 @@ def _check_request(camera: Camera, near_mm: float, far_mm: float, max_gap_mm: fl
     return camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
 
 
-def _greedy(camera, near_mm, far_mm, max_gap_mm, integer, max_slices):
+def _greedy(camera, near_mm, far_mm, max_gap_mm, integer, max_slices, view_extent=None):
     """The greedy plan of :func:`plan_slices`; returns (slices, edge, why it stopped early or None)."""
     slices: list[float] = []
     edge = far_mm                   # everything beyond the edge is covered (or an allowed gap)
     target = far_mm * (1.0 + 1e-9)  # every target a hair beyond, so rounding never leaves a sliver uncovered
     while True:
-        a = _slice_for_far_limit(camera, target)
+        a = _slice_for_far_limit(camera, target, view_extent)
         if integer:  # the largest integer whose far limit still reaches the target (far decreases with a)
             a = float(math.floor(a + 1e-9))
             if slices and a <= slices[-1]:
                 a = slices[-1] + 1.0
-            if float(slice_geometry(camera, a).near_mm) >= edge:
+            if float(slice_geometry(camera, a, view_extent).near_mm) >= edge:
                 a += 1.0  # its interval lies wholly beyond the edge: the next integer makes progress
-        reached = float(slice_geometry(camera, a).near_mm)
+        reached = float(slice_geometry(camera, a, view_extent).near_mm)
         if reached > edge and not integer:  # the DOF here is narrower than the 1e-9 overlap: no progress possible
             return slices, edge, "thin"
         slices.append(a)
@@ -97,7 +100,7 @@ def _greedy(camera, near_mm, far_mm, max_gap_mm, integer, max_slices):
 
 
 def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: float = 0.0, integer: bool = False,
-                max_slices: int = MAX_SLICES) -> np.ndarray:
+                max_slices: int = MAX_SLICES, view_extent=None) -> np.ndarray:
     """The fewest refocus parameters whose [near, far] DOF intervals together cover [near_mm, far_mm].
 
     Greedy from the far end, which is optimal for intervals whose both ends decrease with ``a``:
@@ -129,17 +132,20 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: fl
         Plan integer refocus parameters only.
     max_slices : int
         Guard against ranges that would need absurdly many slices (default :data:`MAX_SLICES`).
+    view_extent : int, optional
+        Half-extent of the views the slices will average (:func:`slice_geometry`); the full micro image
+        when ``None``.
 
     Returns
     -------
     ndarray of float
         Refocus parameters, far slice first (increasing ``a``).
     """
-    closest = _check_request(camera, near_mm, far_mm, max_gap_mm)
+    closest = _check_request(camera, near_mm, far_mm, max_gap_mm, view_extent)
     if near_mm <= closest:
         raise LfprocError(f"depth range starts at {near_mm} mm, but slices of this camera focus only beyond "
                           f"{closest:.3f} mm from the sensor; give a larger NEAR")
-    slices, _, stop = _greedy(camera, near_mm, far_mm, max_gap_mm, integer, max_slices)
+    slices, _, stop = _greedy(camera, near_mm, far_mm, max_gap_mm, integer, max_slices, view_extent)
     if stop == "thin":
         raise LfprocError(f"depth range {near_mm}:{far_mm} mm reaches within a rounding error of the nearest "
                           f"slice ({closest:.3f} mm), where slices are too thin to plan; give a larger NEAR")
@@ -149,7 +155,7 @@ def plan_slices(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: fl
 
 
 def plan_depth_range(camera: Camera, near_mm: float, far_mm: float, *, max_gap_mm: float = 0.0,
-                     integer: bool = False, max_slices: int = MAX_SLICES) -> SlicePlan:
+                     integer: bool = False, max_slices: int = MAX_SLICES, view_extent=None) -> SlicePlan:
     """Plan slices for [near_mm, far_mm] like :func:`plan_slices`, covering what can be covered.
 
     Never refuses a range that is partly coverable: depths nearer than the front focal plane (no
@@ -163,18 +169,19 @@ def plan_depth_range(camera: Camera, near_mm: float, far_mm: float, *, max_gap_m
     LfprocError
         For an invalid range, or one that no slice of this camera can focus on at all.
     """
-    closest = _check_request(camera, near_mm, far_mm, max_gap_mm)
+    closest = _check_request(camera, near_mm, far_mm, max_gap_mm, view_extent)
     if far_mm <= closest:
         raise LfprocError(f"depth range {near_mm}:{far_mm} mm lies wholly at or before the front focal plane "
                           f"({closest:.3f} mm from the sensor), where no slice focuses; give a larger FAR")
     start = max(near_mm, math.nextafter(closest, math.inf) * (1.0 + 1e-12))
-    slices, edge, stop = _greedy(camera, start, far_mm, max_gap_mm, integer, max_slices)
+    slices, edge, stop = _greedy(camera, start, far_mm, max_gap_mm, integer, max_slices, view_extent)
     a = np.array(slices)
     uncovered = []
     if slices:
         reason = ("a gap allowed by the integer slices" if integer else
                   f"a gap allowed by max_gap_mm = {max_gap_mm:g}")
-        uncovered += [(lo, hi, reason) for lo, hi in reversed(uncovered_depths(camera, a, edge, far_mm))]
+        gaps = uncovered_depths(camera, a, edge, far_mm, view_extent)
+        uncovered += [(lo, hi, reason) for lo, hi in reversed(gaps)]
     if stop == "limit":
         uncovered.append((start, edge, f"needs more than {max_slices} slices; raise the slice limit to cover it"))
     elif stop == "thin":
@@ -186,9 +193,10 @@ def plan_depth_range(camera: Camera, near_mm: float, far_mm: float, *, max_gap_m
     return SlicePlan(a, tuple((float(lo), float(hi), why) for lo, hi, why in uncovered if hi > lo))
 
 
-def uncovered_depths(camera: Camera, a_values, near_mm: float, far_mm: float) -> list[tuple[float, float]]:
+def uncovered_depths(camera: Camera, a_values, near_mm: float, far_mm: float,
+                     view_extent=None) -> list[tuple[float, float]]:
     """Depth intervals inside [near_mm, far_mm] that no slice's [near, far] DOF interval covers."""
-    geo = slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)))
+    geo = slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)), view_extent)
     intervals = sorted(zip(np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm)))
     gaps, covered_to = [], near_mm
     for lo, hi in intervals:

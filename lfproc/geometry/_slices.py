@@ -32,6 +32,19 @@ instead, so its DOF shrinks to zero at a = −1). This module uses the bounding 
 (issue 12, shown with renders in ``docs/exit-pupil.md``); for limits at or in front of the focus
 distance, i.e. every a ≥ 1/(2c), the numbers are the paper's.
 
+Views summed (issue 20). The paper's c is the half-extent of the views Eq. 9 averages: the full
+micro image, c = (m̂ − 1)/2. When only some views are summed (the light field's view mask, the
+views inside the main lens stop, a synthetic aperture) the extreme merged pixels are those of the
+outermost summed views, i = ±r, and every formula above holds with r in place of c:
+a± = (2ar ± 1)/(2r ∓ 1) (``view_extent`` = r, any real 0 or 1 … c). For a 2-D set of views that is
+not the full square, r is the extent of the square set −r … r with the same spread along a lattice
+axis (:func:`~lfproc.geometry.summed_view_extent`, derived in :mod:`._aperture`): a point off the slice
+blurs into a copy of the summed view set, and how fast a slice loses sharpness is set by that copy's
+second moment, not by its outermost view alone (measured on renders in ``docs/aperture.md``). The
+full micro image is the square itself, r = c, so the default gives the paper's numbers bit for bit.
+With a single view (r = 0) the slice is that view, sharp for |a| ≤ 1 around the focus distance
+whatever a is asked; its limits are those of a = ±1.
+
 Each limit is expressed as the central distance of an equivalent parameter
 a_eq = A / (1 + (A − C)·p_m·κ/δ) (equal to A when telecentric), so one monotone function d(a)
 orders slices and limits alike.
@@ -90,10 +103,25 @@ def _equivalent_parameter(camera: Camera, shift, spread):
     return shift / (1.0 + (shift - spread) * kappa_ratio)
 
 
-def _dof_pairs(camera: Camera, a):
-    """((A₋, C₋), (A₊, C₊)): the border-ray pairs bounding slice a on its near and far side."""
+def _view_extent(camera: Camera, view_extent) -> float:
+    """r of the module docstring: ``view_extent`` checked against the micro image, or c when ``None``."""
     c = camera.center_index
-    if c == 0:  # m̂ = 1: a single pixel per lens; both borders of the one pixel bound the DOF
+    if view_extent is None:
+        return float(c)
+    r = float(view_extent)
+    if not (r == 0.0 or 1.0 <= r <= c):
+        raise LfprocError(f"view_extent {view_extent!r} must be 0 (the central view alone) or from 1 to {c} view "
+                          f"steps (the full {camera.m_hat}-px micro image)")
+    return r
+
+
+def _dof_pairs(camera: Camera, a, view_extent=None):
+    """((A₋, C₋), (A₊, C₊)): the border-ray pairs bounding slice a on its near and far side.
+
+    ``view_extent`` is r, the half-extent of the summed views in view steps (c when ``None``).
+    """
+    c = _view_extent(camera, view_extent)
+    if camera.center_index == 0:  # m̂ = 1: a single pixel per lens; both borders of the one pixel bound the DOF
         minus_one = np.full_like(a, -1.0)
         return (minus_one, minus_one), (minus_one, minus_one)
     two_ac = 2.0 * a * c
@@ -105,10 +133,10 @@ def _dof_pairs(camera: Camera, a):
     return pairs[0], pairs[1]
 
 
-def _dof_parameters(camera: Camera, a):
+def _dof_parameters(camera: Camera, a, view_extent=None):
     """(a₋, a₊): equivalent central parameters of the near and far DOF limit of slice a."""
     a = np.asarray(a, dtype=np.float64)
-    near, far = _dof_pairs(camera, a)
+    near, far = _dof_pairs(camera, a, view_extent)
     return _equivalent_parameter(camera, *near), _equivalent_parameter(camera, *far)
 
 
@@ -156,7 +184,7 @@ class SliceGeometry:
                 for a, d, n, f, w in zip(*cols)]
 
 
-def slice_geometry(camera: Camera, a) -> SliceGeometry:
+def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
     """Distance and depth of field of refocused slices (Eqs. 13–31).
 
     Parameters
@@ -164,6 +192,10 @@ def slice_geometry(camera: Camera, a) -> SliceGeometry:
     camera : Camera
     a : float or array_like
         Refocus parameters.
+    view_extent : float, optional
+        r, the half-extent in view steps of the views the slices average (the largest offset along a
+        lattice axis, :func:`~lfproc.geometry.summed_view_extent`); ``None`` (default) is the full micro
+        image, c = (m̂ − 1)/2, the paper's DOF. Fewer views summed give a deeper DOF (module docstring).
 
     Returns
     -------
@@ -174,7 +206,7 @@ def slice_geometry(camera: Camera, a) -> SliceGeometry:
     """
     a_arr = np.asarray(a, dtype=np.float64)
     d, d_sign = _pair_distance(camera, a_arr, a_arr)
-    near_pair, far_pair = _dof_pairs(camera, a_arr)
+    near_pair, far_pair = _dof_pairs(camera, a_arr, view_extent)
     limit1, sign1 = _pair_distance(camera, *near_pair)
     limit2, sign2 = _pair_distance(camera, *far_pair)
     near = np.minimum(np.minimum(limit1, limit2), d)

@@ -12,19 +12,21 @@ and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG
 OpenImageIO load only when something is written.
 """
 
-from ._colours import DEPTH_COLOURS, colour_scale
+from ._colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
 from ._display import MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
 from ._names import FORMATS, slice_name, slice_names, view_name
 from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_gif_frames,
                         write_mosaic_preview, write_png_preview, write_slice_gif, write_slice_previews, write_view_gif,
                         write_view_previews)
-from ._products import masked_views, mosaic_of_shown, slice_metadata, write_slices, write_view_mosaic, write_views
+from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
+                        write_view_mosaic, write_views)
 from ._tone import ToneMap
 from ._view_set import ViewSet, shown_views, write_view_set
 
-__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata", "write_slices", "write_views",
-           "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX", "UPSCALE_METHODS", "upscale",
-           "upscale_factor", "add_label", "metres", "slice_label", "display_frames", "write_gif_frames",
-           "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview", "DEPTH_COLOURS",
-           "colour_scale", "write_view_set", "ViewSet", "shown_views", "PREVIEW_FORMATS", "slice_labels", "view_label",
-           "write_slice_previews", "write_view_previews", "mosaic_of_shown"]
+__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata", "summed_views_metadata",
+           "write_slices", "write_views", "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX",
+           "UPSCALE_METHODS", "upscale", "upscale_factor", "add_label", "metres", "slice_label", "display_frames",
+           "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
+           "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
+           "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
+           "mosaic_of_shown"]

@@ -79,22 +79,25 @@ def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
     return path
 
 
-def slice_labels(camera, a_values) -> list[str]:
-    """Each slice's label: its distance and depth of field in metres (:func:`slice_label`)."""
-    geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64))
+def slice_labels(camera, a_values, view_mask=None) -> list[str]:
+    """Each slice's label: its distance and depth of field in metres (:func:`slice_label`), the DOF of the
+    views ``view_mask`` marks (all without it)."""
+    extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
+    geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
     return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
                                                        np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
 
 
 def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_values, fmt: str = "png", *,
-                         min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> list[str]:
+                         view_mask=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> list[str]:
     """Display-ready pictures of refocused slices: ``OUTDIR/NAME_preview.png`` (or ``.jpg``) beside each slice.
 
     One exposure for the whole stack (:class:`ToneMap`), so slices compare; enlarged to at least
-    ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres.
+    ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres (of the views
+    ``view_mask`` marks: those summed).
     """
     frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method,
-                            labels=slice_labels(camera, a_values))
+                            labels=slice_labels(camera, a_values, view_mask))
     return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame)
             for name, frame in zip(slice_names(stem, a_values), frames)]
 
@@ -123,14 +126,15 @@ def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndar
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_values=None, *,
-                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", view_mask=None) -> str:
     """An animation running through a focal stack in the given order and back: ``OUTDIR/STEM_refocus.gif``.
 
     With ``camera`` and ``a_values`` (one per image) each frame is labelled with its distance and DOF
-    in metres (:func:`lfproc.geometry.slice_geometry`).
+    in metres (:func:`lfproc.geometry.slice_geometry`), the DOF of the views ``view_mask`` marks (all when
+    ``None``).
     """
     images = np.asarray(images)
-    labels = slice_labels(camera, a_values) if camera is not None and a_values is not None else None
+    labels = slice_labels(camera, a_values, view_mask) if camera is not None and a_values is not None else None
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
     if len(frames) > 2:
         frames = frames + frames[-2:0:-1]

@@ -15,9 +15,28 @@ from ..viewpoints import mosaic, viewpoint_geometry
 from ._names import FORMATS, slice_names, view_name
 
 
-def slice_metadata(source: str, camera, a_values) -> list[dict]:
-    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm."""
-    return [dict(source=source, **rec) for rec in geometry.slice_geometry(camera, np.asarray(a_values)).records()]
+def summed_views_metadata(camera, view_mask=None) -> tuple[float | None, dict]:
+    """(view_extent, extra tags) of slices averaging the views ``view_mask`` marks (all when ``None``).
+
+    With a mask, the DOF follows the views summed (:func:`lfproc.geometry.summed_view_extent`) and the
+    tags carry ``aperture_f_number`` (their equivalent f-number) and ``views_summed``.
+    """
+    if view_mask is None or np.all(view_mask):
+        return None, {}
+    extent = geometry.summed_view_extent(view_mask)
+    return extent, {"aperture_f_number": geometry.equivalent_f_number(camera, extent),
+                    "views_summed": int(np.count_nonzero(view_mask))}
+
+
+def slice_metadata(source: str, camera, a_values, view_mask=None) -> list[dict]:
+    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm.
+
+    The DOF is that of the views ``view_mask`` marks (the light field's, e.g. after
+    :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``.
+    """
+    extent, extra = summed_views_metadata(camera, view_mask)
+    records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
+    return [dict(source=source, **rec, **extra) for rec in records]
 
 
 def display_exposure(images, fmt: str):
@@ -41,14 +60,15 @@ def _exposed(image: np.ndarray, tone) -> np.ndarray:
 
 
 def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: np.ndarray,
-                 fmt: str = "tiff") -> list[str]:
-    """Write each refocused slice with its sidecar; returns the image paths (JPEGs: :func:`display_exposure`)."""
+                 fmt: str = "tiff", view_mask=None) -> list[str]:
+    """Write each refocused slice with its sidecar (DOF of the views ``view_mask`` marks); returns the paths
+    (JPEGs: :func:`display_exposure`)."""
     from ..io import write_image, write_sidecar
 
     paths = []
     names = slice_names(stem, a_values)
     tone, tone_meta = display_exposure(images, fmt)
-    for name, meta, image in zip(names, slice_metadata(source, camera, a_values), images):
+    for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask), images):
         path = os.path.join(outdir, name + FORMATS[fmt])
         meta.update(tone_meta)
         write_image(path, _exposed(image, tone), meta, fmt)

@@ -57,11 +57,13 @@ row whose y-taps read it.
 import sys
 import types
 
-from ._coverage import MIN_OVERLAPPING_VIEWS, full_view_fraction, max_usable_a, overlapping_view_fraction
+from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, check_refocused_area, full_view_fraction,
+                        max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
 
 __all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
-           "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS"]
+           "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
+           "usable_a_bound", "check_refocused_area"]
 
 
 class _CallableModule(types.ModuleType):

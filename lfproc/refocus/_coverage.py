@@ -46,3 +46,97 @@ def max_usable_a(m_hat: int, lens_shape: tuple[int, int], min_fraction: float = 
         if overlapping_view_fraction(step, m_hat, lens_shape) < min_fraction:
             return step
     return float("inf")
+
+
+#: a slice is refused when fewer than this share of its pixels average at least half the summed views
+MIN_REFOCUSED_AREA = 0.5
+
+
+def _views_inside(a, m_hat: int, n: int) -> np.ndarray:
+    """``(K, m̂, n)`` booleans: whether view k's sample for output index j lies in the array (0 ≤ j + a·(c − k) ≤ n − 1)."""
+    c = (m_hat - 1) // 2
+    a = np.atleast_1d(np.asarray(a, dtype=np.float64))[:, None, None]
+    pos = np.arange(n)[None, None, :] + a * (c - np.arange(m_hat))[None, :, None]
+    return (pos >= 0) & (pos <= n - 1)
+
+
+def refocused_fraction(a, view_mask, lens_shape: tuple[int, int]) -> np.ndarray:
+    """Share of a slice's pixels that average at least half of the summed views, per ``a`` (0 … 1).
+
+    ``view_mask`` ((m̂, m̂) booleans, or an int m̂ for every view) marks the views the slice sums. The
+    views reaching output (jy, jx) number ``inside_y[jy]ᵀ · mask · inside_x[jx]``: one small matrix
+    product per slice.
+    """
+    mask = np.ones((view_mask, view_mask), bool) if np.ndim(view_mask) == 0 else np.asarray(view_mask, bool)
+    m = mask.shape[0]
+    inside_y = _views_inside(a, m, lens_shape[0]).astype(np.float64)
+    inside_x = _views_inside(a, m, lens_shape[1]).astype(np.float64)
+    reached = np.einsum("kvp,vw,kwq->kpq", inside_y, mask.astype(np.float64), inside_x)
+    share = (reached >= 0.5 * mask.sum()).mean(axis=(1, 2))
+    return share if np.ndim(a) else share[0]
+
+
+def usable_a_bound(view_mask, lens_shape: tuple[int, int], min_area: float = MIN_REFOCUSED_AREA) -> float:
+    """The largest |a| whose slice keeps at least ``min_area`` of its pixels refocused (:func:`refocused_fraction`).
+
+    The share never rises with |a| (every view's span N − |a·(c − k)| shrinks) and is the same for ±a;
+    found by bisection to 1e-4 of a lens per view step.
+    """
+    lo, hi = 0.0, float(max(lens_shape))
+    if refocused_fraction(hi, view_mask, lens_shape) >= min_area:
+        return hi
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if refocused_fraction(mid, view_mask, lens_shape) >= min_area:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-4:
+            break
+    return lo
+
+
+def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], source: str, distance_mm=None,
+                         lowest_a: float | None = None) -> None:
+    """Refuse slices whose refocused area (pixels averaging at least half the summed views) is under half.
+
+    Parameters
+    ----------
+    a_values : sequence of float
+    view_mask : (m̂, m̂) bool array or int m̂
+        The views the slices sum (an int: all of an m̂ × m̂ light field).
+    lens_shape : (Ny, Nx)
+    source : str
+        The capture, named in the message.
+    distance_mm : callable, optional
+        a → distance from the sensor, to give the usable range in millimetres too.
+    lowest_a : float, optional
+        The lowest a with a physical meaning (below it slices focus nearer than the main lens's front
+        focal plane); the usable range starts there if that is above −bound.
+
+    Raises
+    ------
+    LfprocError
+        One line naming the first refused a, its refocused share and the usable range, far end first.
+    """
+    from ..errors import LfprocError
+
+    a_values = np.atleast_1d(np.asarray(a_values, dtype=np.float64))
+    share = refocused_fraction(a_values, view_mask, lens_shape)
+    bad = np.flatnonzero(share < MIN_REFOCUSED_AREA)
+    if not len(bad):
+        return
+    a, bound = float(a_values[bad[0]]), usable_a_bound(view_mask, lens_shape)
+    lo = float(lowest_a) if lowest_a is not None and -bound < lowest_a < bound else -bound
+    n = int(np.sum(view_mask)) if np.ndim(view_mask) else int(view_mask) ** 2
+    where = ""
+    if distance_mm is not None:
+        far, near = (float(distance_mm(x)) for x in (lo, bound))
+        where = f", i.e. focused from {_mm(far)} (a={lo:+.3g}) to {_mm(near)} (a={bound:+.3g})"
+    raise LfprocError(f"{source}: at a={a:g} only {100 * share[bad[0]]:.0f} % of the {lens_shape[0]}x{lens_shape[1]}"
+                      f"-lens slice averages at least half of the {n} summed views (the others shift off the "
+                      f"capture); refocus within a = {lo:+.3g} … {bound:+.3g}{where}")
+
+
+def _mm(value: float) -> str:
+    return "infinity" if not np.isfinite(value) else f"{value:.1f} mm"

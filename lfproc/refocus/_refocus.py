@@ -32,7 +32,7 @@ MIN_BAND_ROWS = 8
 
 
 # ----------------------------------------------------------------------------- public entry point
-def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarray:
+def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, *, aperture: float | None = None) -> np.ndarray:
     """Refocused slice(s) of a light field by centred shift-and-sum (Eq. 9).
 
     Parameters
@@ -50,6 +50,9 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
         position (py/s, px/s). ``1`` (default) is the lens grid itself. The output of the call (all K
         slices) may take at most :data:`MAX_OUTPUT_BYTES` (16 GiB).
+    aperture : float, optional
+        A synthetic aperture f-number: average only the views inside it (:func:`lfproc.with_aperture`,
+        which needs ``lf``'s camera). ``None`` (default): every view that carries light.
 
     Returns
     -------
@@ -63,6 +66,12 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         :data:`MAX_OUTPUT_BYTES`), a malformed light field, non-finite pixels that reach a slice, or
         finite float64 values beyond the float32 range.
     """
+    if aperture is not None:
+        from ..viewpoints import with_aperture   # light (numpy); the aperture is geometry, not refocusing
+
+        if getattr(lf, "camera", None) is None:
+            raise LfprocError("refocus: aperture= needs a LightField with its camera")
+        lf = with_aperture(lf, aperture)
     views = _views_array(lf)
     slopes, scalar = _slopes(a)
     interpolation = _interpolation(interpolation)

@@ -5,6 +5,7 @@ Layout of a page folder::
     index.html        the page: HTML, CSS, JavaScript and its data inline (works from file://)
     geometry.json     the same data minus the per-lens maps: slices, views, camera, calibration
     slices/STEM_a+1.017.png …   one 8-bit sRGB image per slice (names as lfproc refocus)
+    slices/f8/STEM_a+1.017.png … the same slices through each narrower synthetic aperture (f/8 …)
     views/STEM_view_05_05.png … one per view inside the main lens aperture
     depth.png         the depth map, coloured (legend in metres on the page)
 
@@ -21,7 +22,9 @@ import numpy as np
 
 from .. import geometry
 from ..atomic import write_json_atomic, write_text_atomic
-from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, upscale_factor, view_name
+from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, summed_views_metadata, upscale_factor, \
+    view_name
+from ..viewpoints import with_aperture
 from ._estimate import estimate_depth
 from ._images import depth_colours, image_extension, write_all
 from ._page import encode_array, render_page
@@ -61,26 +64,32 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
 
     camera = lf.camera
     focus = estimate_depth(lf, a_values, depth_map)
-    a_values = scene_slices(camera, focus) if a_values is None else np.asarray(a_values, dtype=np.float64)
+    extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
+    a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
+        np.asarray(a_values, dtype=np.float64)
     stack = refocus(lf, a_values)
     tone = ToneMap.for_images(stack)
     extension = image_extension(lf.lens_shape)
-    jobs, slices = [], []
-    names = slice_names(stem, a_values)
-    for k, record in enumerate(geometry.slice_geometry(camera, a_values).records()):
-        path = f"slices/{names[k]}{extension}"
-        jobs.append((os.path.join(outdir, path), lambda k=k: tone(stack[k])))
-        slices.append(dict(record, image=path))
+    jobs = []
+    apertures = []
+    for f_number in page_apertures(camera):
+        summed = with_aperture(lf, f_number)
+        aperture_stack = stack if f_number is None else refocus(summed, a_values)
+        folder = "slices" if f_number is None else f"slices/f{f_number:g}"
+        apertures.append(_aperture_record(camera, summed.view_mask, f_number, a_values, stem, folder, extension))
+        for k, record in enumerate(apertures[-1]["slices"]):
+            jobs.append((os.path.join(outdir, record["image"]), lambda k=k, s=aperture_stack: tone(s[k])))
+    slices = apertures[0]["slices"]
     views = _view_records(camera, stem, extension, getattr(lf, "view_mask", None))
     for item in views["items"]:
         ky, kx = item["view"]
         jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
-    intervals = slice_intervals_a(camera, a_values)
+    intervals = slice_intervals_a(camera, a_values, extent)
     a_far, a_near = float(intervals.min()), float(intervals.max())
     jobs.append((os.path.join(outdir, "depth.png"),
                  lambda: depth_colours(focus.a, focus.confidence, a_far, a_near, focus.min_confidence)))
     write_all(jobs)
-    slice_index = sharpest_slice(camera, a_values, focus.a)
+    slice_index = sharpest_slice(camera, a_values, focus.a, extent)
     data = {
         "format": "lfproc-viewer-1",
         "source": source,
@@ -89,6 +98,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         "display": {"scale": upscale_factor(lf.lens_shape, options.min_long_side), "upscale": options.upscale,
                     "tone_map": {"black": tone.black, "white": tone.white, "description": tone.describe()}},
         "slices": slices,
+        "apertures": apertures,
         "views": views,
         "depth": _depth_record(camera, focus, a_far, a_near),
         "camera": camera_summary(camera),
@@ -103,15 +113,49 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     return page
 
 
+def page_apertures(camera) -> list:
+    """The synthetic apertures a page offers: ``None`` (every view with light), then 2, 4 and 8 times the
+    main lens's f-number (two, four and six stops) while they hold more than the central view (one view
+    does not refocus; needs ``f_number``)."""
+    if camera.f_number is None:
+        return [None]
+    widest, narrowest = geometry.aperture_limits(camera)
+    return [None] + [widest * k for k in (2.0, 4.0, 8.0)
+                     if widest * k <= narrowest and geometry.aperture_views(camera, widest * k).sum() > 1]
+
+
+def _aperture_record(camera, view_mask, f_number, a_values, stem: str, folder: str, extension: str) -> dict:
+    """One aperture of the page: its label, equivalent f-number, views summed and slices with their DOF."""
+    extent, extra = summed_views_metadata(camera, view_mask)
+    names = slice_names(stem, a_values)
+    slices = [dict(record, image=f"{folder}/{names[k]}{extension}")
+              for k, record in enumerate(geometry.slice_geometry(camera, a_values, extent).records())]
+    n_views = extra.get("views_summed", camera.m_hat ** 2)
+    equivalent = extra.get("aperture_f_number", geometry.equivalent_f_number(camera))
+    label = ("all views" if f_number is None else f"f/{f_number:g}") + \
+        f" ({n_views} view{'' if n_views == 1 else 's'}, f/{equivalent:.2g} equivalent)"
+    summed = np.argwhere(np.ones((camera.m_hat,) * 2, bool) if view_mask is None else view_mask).tolist()
+    return {"f_number": f_number, "aperture_f_number": equivalent, "views_summed": n_views, "label": label,
+            "summed_views": summed, "slices": slices}
+
+
 def _view_records(camera, stem: str, extension: str, view_mask=None) -> dict:
     """The views inside the aperture (and, with ``view_mask``, carrying light) with their virtual cameras
-    (Eqs. 17, 33, 34) and image paths."""
+    (Eqs. 17, 33, 34) and image paths.
+
+    ``marker_mm`` (y, x) is where the page's aperture diagram draws each view: its virtual camera,
+    ``position_mm``, seen in the orientation of the pictures. The main lens inverts the image, so the
+    pictures show the scene turned by 180° and a virtual camera at +x in object space sits at −x in
+    them: a view whose near objects shift left (the camera moved right, as the picture shows it) is
+    drawn to the right.
+    """
     from ..viewpoints import viewpoint_geometry
 
     keep = geometry.views_inside_aperture(camera)
     if view_mask is not None:
         keep = keep & np.asarray(view_mask, dtype=bool)
-    items = [dict(vg.metadata(), image=f"views/{view_name(stem, *vg.view)}{extension}")
+    items = [dict(vg.metadata(), image=f"views/{view_name(stem, *vg.view)}{extension}",
+                  marker_mm=[-vg.position_mm[0] + 0.0, -vg.position_mm[1] + 0.0])
              for row in viewpoint_geometry(camera) for vg in row if keep[vg.view]]
     return {"m_hat": camera.m_hat, "center": camera.center_index, "baseline_mm": geometry.baseline_mm(camera, 1),
             "aperture_radius_mm": (camera.main_focal_length_mm / (2 * camera.f_number)) if camera.f_number else None,

@@ -11,12 +11,12 @@ from ..errors import LfprocError
 
 #: most slices on one page (a wider plan is thinned evenly in a)
 MAX_SLICES = 48
-def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
+def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) -> np.ndarray:
     """The fewest slices whose DOFs cover the scene (:func:`lfproc.geometry.plan_depth_range`, as ``--depth-range``).
 
     The scene's range is the 2nd to 98th percentile of the refocus parameter of the lenses whose
     depth is known with at least ``focus.min_confidence`` (the whole sweep if fewer than 10 are),
-    widened by half a slice's DOF at each end.
+    widened by half a slice's DOF at each end. ``view_extent``: the views the slices sum (their DOF).
     """
     confident = (focus.confidence >= focus.min_confidence) & np.isfinite(focus.a)
     a = focus.a[confident] if confident.sum() >= 10 else focus.sweep_a
@@ -28,7 +28,7 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
     near = min(near, far) if math.isfinite(near) else geometry.slice_distance_mm(camera, a_inf + 1.0)
     try:  # covers what can be covered (DOFs that shrink to nothing are left out, far part first)
-        planned = geometry.plan_depth_range(camera, near, far, max_slices=4 * max_slices).a
+        planned = geometry.plan_depth_range(camera, near, far, max_slices=4 * max_slices, view_extent=view_extent).a
     except LfprocError:  # nothing coverable: even steps in a
         planned = np.array([])
     if len(planned) == 0:
@@ -38,9 +38,9 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     return np.asarray(planned, dtype=np.float64)
 
 
-def slice_intervals_a(camera, a_values) -> np.ndarray:
+def slice_intervals_a(camera, a_values, view_extent=None) -> np.ndarray:
     """``(K, 2)``: each slice's DOF as an interval of ``a`` (far limit's a, near limit's a; Eq. 31 inverted)."""
-    geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)))
+    geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)), view_extent)
     a_inf = geometry.infinity_parameter(camera)
     far_a = [a_inf if not math.isfinite(f) else geometry.refocus_parameter(camera, f) for f in geo.far_mm]
     near_a = [geometry.refocus_parameter(camera, n) for n in geo.near_mm]
@@ -51,12 +51,12 @@ def slice_intervals_a(camera, a_values) -> np.ndarray:
 UNKNOWN_SLICE = 255
 
 
-def sharpest_slice(camera, a_values, lens_a: np.ndarray) -> np.ndarray:
+def sharpest_slice(camera, a_values, lens_a: np.ndarray, view_extent=None) -> np.ndarray:
     """Per lens, the index of the slice whose DOF holds the lens's ``a`` (the nearest one where none does;
     among overlapping ones, the one centred nearest); :data:`UNKNOWN_SLICE` where ``a`` is NaN.
     Returns uint8 ``(Ny, Nx)``."""
     a_values = np.asarray(a_values, dtype=np.float64)
-    intervals = slice_intervals_a(camera, a_values)
+    intervals = slice_intervals_a(camera, a_values, view_extent)
     lens_a = np.asarray(lens_a, dtype=np.float64)
     outside = np.maximum(intervals[:, 0, None, None] - lens_a, lens_a - intervals[:, 1, None, None])
     cost = np.maximum(outside, 0.0) + 1e-6 * np.abs(lens_a - a_values[:, None, None])

@@ -14,7 +14,8 @@
   var sliceIndex = decode(maps.slice_index), distance = decode(maps.distance_mm),
       confidence = decode(maps.confidence);
   var ny = data.lens_shape[0], nx = data.lens_shape[1];
-  var slices = data.slices, views = data.views.items, centre = data.views.center;
+  var apertures = data.apertures && data.apertures.length ? data.apertures : [{ label: "all views", slices: data.slices }];
+  var slices = apertures[0].slices, views = data.views.items, centre = data.views.center;
 
   function metres(mm) {  // as lfproc.outputs.metres: three significant digits
     if (mm === null || mm === undefined || !isFinite(mm)) { return "infinity"; }
@@ -38,7 +39,8 @@
   depth.src = data.depth.image;
 
   // preload every image so that sliding and dragging swap pictures at once
-  slices.concat(views).forEach(function (item) { new Image().src = item.image; });
+  apertures.reduce(function (all, ap) { return all.concat(ap.slices); }, []).concat(views)
+    .forEach(function (item) { new Image().src = item.image; });
 
   // ---------------------------------------------------------------- state: a slice or a view is shown
   var state = { mode: "slice", slice: 0, view: null };
@@ -53,8 +55,23 @@
     $("slice-readout").textContent = "This slice is focused at " + metres(s.distance_mm) + "; sharp from " +
       metres(s.near_mm) + " to " + metres(s.far_mm) + " (depth of field " +
       (isFinite(s.dof_mm) && s.dof_mm !== null ? metres(s.dof_mm) : "infinite") + ").";
+    $("aperture-readout").textContent = "depth of field " +
+      (isFinite(s.dof_mm) && s.dof_mm !== null ? metres(s.dof_mm) : "infinite") + " (" + metres(s.near_mm) +
+      " to " + metres(s.far_mm) + ")";
     drawAperture();
   }
+
+  // ---------------------------------------------------------------- synthetic aperture: the same slices, fewer views
+  var apertureSelect = $("aperture-select");
+  apertures.forEach(function (ap, i) {
+    var option = document.createElement("option");
+    option.value = String(i); option.textContent = ap.label;
+    apertureSelect.appendChild(option);
+  });
+  apertureSelect.addEventListener("change", function () {
+    slices = apertures[Number(apertureSelect.value)].slices;
+    showSlice(state.slice);
+  });
 
   function viewAt(ky, kx) {
     for (var i = 0; i < views.length; i++) {
@@ -145,7 +162,7 @@
 
   document.addEventListener("keydown", function (e) {
     var steps = { ArrowLeft: [0, -1], ArrowRight: [0, 1], ArrowUp: [-1, 0], ArrowDown: [1, 0] }[e.key];
-    if (!steps || e.target === slider) { return; }
+    if (!steps || e.target === slider || e.target === apertureSelect) { return; }
     e.preventDefault();
     var from = state.view || viewAt(centre, centre) || nearestView(centre, centre);
     var next = viewAt(from.view[0] + steps[0], from.view[1] + steps[1]);
@@ -180,7 +197,10 @@
     views.forEach(function (v) {
       var c = document.createElementNS(svgNS, "circle");
       c.setAttribute("class", "view" + (state.mode === "view" && state.view === v ? " current" : ""));
-      c.setAttribute("cx", String(v.position_mm[1] * scale)); c.setAttribute("cy", String(v.position_mm[0] * scale));
+      // each view's virtual camera as the pictures show it (marker_mm: position_mm through the inverting main lens)
+      var at = v.marker_mm || v.position_mm;
+      c.setAttribute("cx", String(at[1] * scale)); c.setAttribute("cy", String(at[0] * scale));
+      c.dataset.view = v.view[0] + "," + v.view[1];
       c.setAttribute("r", String(dot));
       c.addEventListener("click", function () { showView(v); });
       var title = document.createElementNS(svgNS, "title");
