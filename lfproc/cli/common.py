@@ -161,7 +161,7 @@ def _mm(value: float) -> str:
 
 
 #: options whose value may start with '-' (a negative number or range): argparse would take it for an option
-NEGATIVE_VALUE_OPTIONS = ("--a", "--refocus", "--disparity", "--gap")
+NEGATIVE_VALUE_OPTIONS = ("--a", "--refocus", "--disparity", "--gap", "--z-range")
 
 
 def join_negative_values(argv: list[str]) -> list[str]:

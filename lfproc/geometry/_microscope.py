@@ -218,3 +218,48 @@ def microscope_views(camera) -> MicroscopeViews:
         angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
     inside = np.abs(np.arange(-c, c + 1)) <= na_views(camera)
     return MicroscopeViews(np.arange(-c, c + 1), angle, inside, lateral_sampling_um(camera))
+
+
+def _a_for_lower_limit(camera, lower_um: float) -> float:
+    """The ``a`` whose lower DOF limit (``z_far_um``) is ``lower_um``: inverts :func:`microscope_slices`.
+
+    The far border-ray pair is A = (2ac − 1)/(2c + 1) where A ≥ 0 and (2ac − 1)/(2c − 1) below
+    (c = c_NA, :func:`._slices._dof_pairs`), and z_far = z(A) − λn/(2NA²).
+    """
+    scope = _scope(camera)
+    c = max(na_views(camera), 1)
+    wave = scope.wavelength_mm * UM_PER_MM * scope.immersion_index / scope.numerical_aperture ** 2
+    big_a = (lower_um + 0.5 * wave) / z_per_a_um(camera)
+    return (big_a * (2 * c + 1) + 1.0) / (2 * c) if big_a >= 0 else (big_a * (2 * c - 1) + 1.0) / (2 * c)
+
+
+def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = None,
+                 max_slices: int = 10000) -> np.ndarray:
+    """Slices for a depth range of a microscope, in µm from the native object plane (``--z-range``).
+
+    Without ``step_um``: the fewest slices whose DOF intervals [z_far, z_near] together cover
+    [z0, z1] (greedy from the far end, as :func:`plan_slices` for ``--depth-range``; neighbours overlap
+    by 1e-9 relative against rounding). With ``step_um``: slices at z0, z0 + step, … up to z1 (an
+    evenly spaced z-stack). Returns increasing ``a``.
+    """
+    lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise LfprocError(f"--z-range {z0_um}:{z1_um} must be finite micrometres, e.g. -50:50")
+    zeta = z_per_a_um(camera)
+    if step_um is not None:
+        if not (math.isfinite(step_um) and step_um > 0):
+            raise LfprocError(f"--z-range step must be a positive number of micrometres, got {step_um}")
+        count = int(math.floor((hi - lo) / step_um + 1e-9)) + 1
+        if count > max_slices:
+            raise LfprocError(f"--z-range {z0_um}:{z1_um}:{step_um} asks for {count} slices, more than {max_slices}; "
+                              f"use a larger STEP")
+        return (lo + step_um * np.arange(count)) / zeta
+    slices, edge = [], lo
+    while True:
+        a = _a_for_lower_limit(camera, edge - 1e-9 * max(1.0, abs(edge)))
+        slices.append(a)
+        edge = float(microscope_slices(camera, a).z_near_um)
+        if edge >= hi:
+            return np.array(slices)
+        if len(slices) >= max_slices:
+            raise LfprocError(f"--z-range {z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")
