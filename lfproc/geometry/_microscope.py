@@ -24,7 +24,9 @@ direction sines (α, β) = M·(u_x, u_y)/(n·ρ), ρ = |(u_x, u_y, f_s)|, and co
 displaces that ray laterally by z·(α, β)/γ, i.e. by M·z·(α, β)/(γ·p_m) lenses at the MLA. Written as
 a·g·(c − k) with the z(a) above, the per-view multiplier is g = f_s/(ρ·γ) ≥ 1 (g = 1 paraxially):
 with these shifts slice a is exactly the plane z(a). Paraxial shifts a·(c − k) instead focus view k at
-z(a)/g_k; their least-squares depth is z(a)·Σw·g/Σw·g² (w = |k − c|², the views inside the NA).
+z(a)/g_k: a point at depth z is sharpest (least squares over the views inside the NA, weights
+w = |k − c|², as the spread across the views behind a lens) in the paraxial slice a = (z/z(1))·Σw·g/Σw,
+so the paraxial tag z(a) overstates its depth by the fraction e = Σw·g/Σw − 1.
 """
 
 from __future__ import annotations
@@ -114,20 +116,21 @@ def aplanatic_gain(camera) -> np.ndarray:
 
 
 def paraxial_depth_error(camera) -> float:
-    """Relative error 1 − Σw·g/Σw·g² of the paraxial map (least squares over the views inside the NA)."""
+    """e = Σw·g/Σw − 1: the fraction by which a paraxial slice's z overstates the depth sharp in it (docstring)."""
     g = aplanatic_gain(camera)
     ux, uy, _ = _view_grid(camera)
     w = (ux * ux + uy * uy) * views_inside_na(camera)
     if not w.any():
         return 0.0
-    return float(1.0 - (w * g).sum() / (w * g * g).sum())
+    return float((w * g).sum() / w.sum() - 1.0)
 
 
 def uses_aplanatic(camera) -> bool:
     """Whether refocusing uses the sine condition's shifts: the camera file's ``aplanatic``, else automatic.
 
     Automatic: on where the paraxial map misses by more than a slice's DOF within the N_u resolvable
-    depths (|a| ≤ 1, Levoy et al. 2006), i.e. where paraxial_depth_error · |z(1)| > dof(1).
+    depths (|a| ≤ 1, Levoy et al. 2006): a point at z(1) is sharpest in the paraxial slice tagged
+    z(1)·(1 + e), on where e·z(1) > dof(1).
     """
     scope = _scope(camera)
     if scope.aplanatic is not None:
