@@ -28,7 +28,7 @@ immersion_index = 1.33
 tube_lens_focal_length_mm = 180.0
 wavelength_nm = 510
 """
-SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um"}
+SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um", "refocus_shifts"}
 
 
 @pytest.fixture(scope="module")
@@ -90,7 +90,7 @@ def test_refocus_decode_and_batch_tag_slices_in_micrometres(lfm):
     sidecars = sorted((lfm / "refocus").glob("*.json"))
     assert len(sidecars) == 5
     tags = [json.loads(p.read_text()) for p in sidecars]
-    assert all(set(t) == SLICE_KEYS for t in tags)
+    assert all(set(t) == SLICE_KEYS and t["refocus_shifts"] == "paraxial" for t in tags)
     assert sorted(t["z_um"] for t in tags) == pytest.approx([-8, -4, 0, 4, 8])
     embedded = tifffile.TiffFile(str(sidecars[0].with_suffix(".tif"))).pages[0].description
     assert json.loads(embedded)["z_um"] == pytest.approx(json.loads(sidecars[0].read_text())["z_um"])
