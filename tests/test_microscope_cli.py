@@ -13,6 +13,7 @@ import pytest
 import tifffile
 
 from conftest import SAMPLES, assert_clean_error, run_cli
+from test_browser_viewer import _click_lens, browser  # noqa: F401  (the browser fixture)
 from whitegen import covering_grid, white_image
 
 CAMERA = """name = "tiny-lfm"
@@ -131,3 +132,21 @@ def test_viewer_page_in_micrometres(lfm):
     assert data["unit"] == "um" and all("z_um" in s and "distance_mm" not in s for s in data["slices"])
     assert all("angle_deg" in v for v in data["views"]["items"])
     assert "z_um" in data["depth"]["ticks"][0]
+
+
+def test_viewer_page_reads_micrometres_in_the_browser(lfm, browser):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    out = lfm / "viewer-browser"
+    proc = run_cli("viewer", *_inputs(lfm), "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((out / "geometry.json").read_text())
+    browser.get((out / "index.html").as_uri())
+    WebDriverWait(browser, 10).until(lambda d: d.execute_script("return document.body.dataset.ready === 'true'"))
+    assert [e for e in browser.get_log("browser") if e["level"] == "SEVERE"] == []
+    photo = browser.find_element("id", "photo")
+    _click_lens(browser, photo, {"data": data}, data["lens_shape"][0] // 2, data["lens_shape"][1] // 2)
+    here = browser.find_element("id", "here-distance").text
+    assert here.endswith(" µm") or here == "unknown", here
+    assert "µm" in browser.find_element("id", "slice-readout").text
+    assert "native object plane" in browser.find_element("id", "depth-method").text

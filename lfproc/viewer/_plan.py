@@ -25,7 +25,10 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     a_lo, a_hi = a_lo - (1 + abs(a_lo)) / (2 * c), a_hi + (1 + abs(a_hi)) / (2 * c)
     if getattr(camera, "microscope", None) is not None:   # µm from the native plane, as --z-range
         zeta = geometry.z_per_a_um(camera)
-        planned = geometry.plan_z_range(camera, a_lo * zeta, a_hi * zeta, max_slices=4 * max_slices)
+        try:
+            planned = geometry.plan_z_range(camera, a_lo * zeta, a_hi * zeta, max_slices=4 * max_slices)
+        except LfprocError:   # more than 4x the page's slices: even steps in a
+            planned = np.linspace(a_lo, a_hi, max_slices)
         if len(planned) > max_slices:
             planned = np.linspace(planned[0], planned[-1], max_slices)
         return np.asarray(planned, dtype=np.float64)
