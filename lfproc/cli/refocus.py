@@ -61,7 +61,7 @@ def run(args) -> int:
         key = (camera.to_toml(), extent)
         if key not in plans:
             plans[key] = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, view_extent=extent)
+                                          max_slices=args.max_slices, view_extent=extent, z_range=args.z_range)
         return key, plans[key]
 
     def describe_once(key, camera, values, view_mask):

@@ -28,7 +28,8 @@ def add_view_options(p) -> None:
                    help="also one image tiling the views that carry light, and its labelled preview PNG")
     p.add_argument("--gif", action="store_true", help="also an animation walking the views along a circle")
     p.add_argument("--inside-aperture", action="store_true",
-                   help="only the views inside the main lens aperture (needs main_lens.f_number); the mosaic "
+                   help="only the views inside the main lens aperture (needs main_lens.f_number; a microscope's: "
+                        "its NA); the mosaic "
                         "shows the others black")
     add_preview_option(p, "each view")
 
@@ -36,7 +37,7 @@ def add_view_options(p) -> None:
 def check_view_options(args, camera) -> None:
     from ..errors import LfprocError
 
-    if args.inside_aperture and camera.f_number is None:
+    if args.inside_aperture and camera.f_number is None and not camera.is_microscope:   # a microscope: its NA
         raise LfprocError(f"{camera.source or 'camera'}: --inside-aperture needs main_lens.f_number in the camera "
                           f"file")
 

@@ -53,23 +53,40 @@ def summed_view_extent(view_mask) -> float:
     return max(1.0, (math.sqrt(12.0 * variance + 1.0) - 1.0) / 2.0)
 
 
+def _pupil(camera: Camera):
+    """(coordinates of the views' pupil cells (m̂,), the cell width, the length F multiplies the diameter by,
+    the widest f-number or None).
+
+    A camera's views sit at F_i = i·ΔB in the entrance pupil (Eq. 17), F = f_U / diameter. A microscope's
+    views are image-side ray slopes under the lenslets, i·p/f_s (p the sample pitch), and F = 1 / diameter
+    in slope: the image-side working f-number, M/(2·NA) for the objective's whole aperture.
+    """
+    if getattr(camera, "microscope", None) is not None:
+        step = camera.sample_pitch_mm / camera.mla_focal_length_mm
+        coords = (np.arange(camera.m_hat) - camera.center_index) * step
+        return coords, step, 1.0, 1.0 / (2.0 * camera.microscope.image_numerical_aperture)
+    return view_positions_mm(camera), float(baseline_mm(camera, 1)), camera.main_focal_length_mm, camera.f_number
+
+
 def equivalent_f_number(camera: Camera, view_extent=None) -> float:
     """N_eq = f_U·√3 / (2·(2r + 1)·ΔB): the f-number of the disc as spread as views of extent r (module docstring).
 
-    ``None`` is the full micro image (r = c).
+    ``None`` is the full micro image (r = c). A microscope's is image-side (:func:`_pupil`).
     """
     r = camera.center_index if view_extent is None else float(view_extent)
-    return camera.main_focal_length_mm * math.sqrt(3.0) / (2.0 * (2.0 * r + 1.0) * baseline_mm(camera, 1))
+    _, cell, length, _ = _pupil(camera)
+    return length * math.sqrt(3.0) / (2.0 * (2.0 * r + 1.0) * cell)
 
 
 def aperture_limits(camera: Camera) -> tuple[float, float]:
     """(widest, narrowest) synthetic aperture f-numbers of ``camera``.
 
-    The widest is the main lens's f-number (or, without one, the full micro image's); the narrowest
-    is one view, f_U/ΔB.
+    The widest is the main lens's f-number (a microscope objective's image-side M/(2·NA); without one, the
+    full micro image's); the narrowest is one view, f_U/ΔB.
     """
-    widest = camera.f_number if camera.f_number is not None else equivalent_f_number(camera)
-    return float(widest), camera.main_focal_length_mm / baseline_mm(camera, 1)
+    _, cell, length, widest = _pupil(camera)
+    widest = widest if widest is not None else equivalent_f_number(camera)
+    return float(widest), length / cell
 
 
 def aperture_views(camera: Camera, f_number: float) -> np.ndarray:
@@ -98,7 +115,7 @@ def aperture_views(camera: Camera, f_number: float) -> np.ndarray:
     if f > narrowest * (1.0 + 1e-9):
         raise LfprocError(f"--aperture {f:g} is narrower than one view (f/{narrowest:.3g} on this camera); give "
                           f"f/{widest:.3g} to f/{narrowest:.3g}")
-    pos = view_positions_mm(camera)
-    radius = camera.main_focal_length_mm / (2.0 * f)
+    pos, _, length, _ = _pupil(camera)
+    radius = length / (2.0 * f)
     r2 = pos[:, None] ** 2 + pos[None, :] ** 2
     return r2 <= radius * radius * (1.0 + 1e-12)

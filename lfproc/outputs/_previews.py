@@ -84,6 +84,8 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     views ``view_mask`` marks (all without it)."""
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
+    if geo.microscope:   # µm from the native object plane, positive towards the objective
+        return [f"z {r['z_um']:+.1f} um | DOF {r['z_far_um']:+.1f} - {r['z_near_um']:+.1f} um" for r in geo.records()]
     return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
                                                        np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
 
@@ -103,7 +105,11 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
 
 
 def view_label(camera, ky: int, kx: int) -> str:
-    """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17)."""
+    """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17); a
+    microscope's view: its angle in the object (sine condition)."""
+    if camera.is_microscope:
+        angles = geometry.microscope_views(camera).angle_deg
+        return f"view [{ky}, {kx}] | {np.hypot(angles[ky], angles[kx]):.1f} deg in the object"
     positions = geometry.view_positions_mm(camera)
     return f"view [{ky}, {kx}] | {np.hypot(positions[ky], positions[kx]):.2f} mm from the centre"
 
@@ -169,7 +175,9 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
     tiled, _ = mosaic_of_shown(views, keep, gap=1)
     shown = m * m if keep is None else int(np.count_nonzero(keep))
     label = f"{shown} of {m}x{m} views" + ("" if shown == m * m else " (black: no light or outside the aperture)")
-    if camera is not None:
+    if camera is not None and camera.is_microscope:
+        label += f" | {geometry.lateral_sampling_um(camera):.3g} um per lens"
+    elif camera is not None:
         label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
     frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
     return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame)

@@ -24,17 +24,23 @@ def summed_views_metadata(camera, view_mask=None) -> tuple[float | None, dict]:
     if view_mask is None or np.all(view_mask):
         return None, {}
     extent = geometry.summed_view_extent(view_mask)
+    if getattr(camera, "microscope", None) is not None:   # no main lens f-number: the views summed say it
+        return extent, {"views_summed": int(np.count_nonzero(view_mask))}
     return extent, {"aperture_f_number": geometry.equivalent_f_number(camera, extent),
                     "views_summed": int(np.count_nonzero(view_mask))}
 
 
 def slice_metadata(source: str, camera, a_values, view_mask=None) -> list[dict]:
-    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm.
+    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm; a
+    microscope's: source, a, z_um, z_near_um, z_far_um, dof_um and ``refocus_shifts`` ("aplanatic" where
+    :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial").
 
     The DOF is that of the views ``view_mask`` marks (the light field's, e.g. after
     :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``.
     """
     extent, extra = summed_views_metadata(camera, view_mask)
+    if getattr(camera, "microscope", None) is not None:
+        extra["refocus_shifts"] = "aplanatic" if geometry.uses_aplanatic(camera) else "paraxial"
     records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
     return [dict(source=source, **rec, **extra) for rec in records]
 
@@ -148,10 +154,15 @@ def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.nda
     listed = [vg.metadata() for row in viewpoint_geometry(camera) for vg in row
               if keep is None or keep[vg.view[0], vg.view[1]]]
     meta = {"source": source, "layout": "block (by, bx) holds view [ky0 + by, kx0 + bx]",
-            "first_view": [ky0, kx0], "views_per_side": int(views.shape[0]), "views_shown": len(listed),
-            "baseline_mm": geometry.baseline_mm(camera, 1), **tone_meta}
+            "first_view": [ky0, kx0], "views_per_side": int(views.shape[0]), "views_shown": len(listed), **tone_meta}
+    if camera.is_microscope:
+        meta["lateral_sampling_um"] = geometry.lateral_sampling_um(camera)
+    else:
+        meta["baseline_mm"] = geometry.baseline_mm(camera, 1)
     if keep is not None and not np.all(keep):
-        meta["blacked_out"] = "views without light (or outside the aperture) are 0 and not listed"
+        meta["blacked_out"] = ("views without light (or outside the objective's NA) are 0 and not listed"
+                               if camera.is_microscope else
+                               "views without light (or outside the aperture) are 0 and not listed")
     path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")
     write_image(path, _exposed(tiled, tone), meta, fmt)
     write_sidecar(path, dict(meta, views=listed))

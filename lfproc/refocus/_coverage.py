@@ -109,7 +109,8 @@ def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], sourc
     source : str
         The capture, named in the message.
     distance_mm : callable, optional
-        a → distance from the sensor, to give the usable range in millimetres too.
+        a → distance from the sensor, to give the usable range in millimetres too (or a → text, e.g. a
+        microscope's "z = 12.5 um").
     lowest_a : float, optional
         The lowest a with a physical meaning (below it slices focus nearer than the main lens's front
         focal plane); the usable range starts there if that is above −bound.
@@ -130,9 +131,9 @@ def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], sourc
     lo = float(lowest_a) if lowest_a is not None and -bound < lowest_a < bound else -bound
     n = int(np.sum(view_mask)) if np.ndim(view_mask) else int(view_mask) ** 2
     where = ""
-    if distance_mm is not None:
-        far, near = (float(distance_mm(x)) for x in (lo, bound))
-        where = f", i.e. focused from {_mm(far)} (a={lo:+.3g}) to {_mm(near)} (a={bound:+.3g})"
+    if distance_mm is not None:   # a → mm from the sensor, or a → text (a microscope's z in µm)
+        far, near = (d if isinstance(d := distance_mm(x), str) else _mm(float(d)) for x in (lo, bound))
+        where = f", i.e. focused from {far} (a={lo:+.3g}) to {near} (a={bound:+.3g})"
     raise LfprocError(f"{source}: at a={a:g} only {100 * share[bad[0]]:.0f} % of the {lens_shape[0]}x{lens_shape[1]}"
                       f"-lens slice averages at least half of the {n} summed views (the others shift off the "
                       f"capture); refocus within a = {lo:+.3g} … {bound:+.3g}{where}")
