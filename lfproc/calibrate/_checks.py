@@ -172,3 +172,81 @@ def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance
             f"{estimate.scale:.6f} +- {estimate.scale_sigma:.6f}) but the camera file says {given} "
             f"(scale {estimate.expected_scale:.6f}); set main_lens.exit_pupil_distance_mm, or check mla.pitch_mm "
             f"and sensor.pixel_pitch_mm")
+
+
+#: tiles per side of the sensor that `lattice_texture` samples (at most, fewer on small sensors)
+TEXTURE_TILES = 4
+#: tile size in lens pitches
+TEXTURE_TILE_PITCHES = 12.0
+#: the envelope divided out before comparing micro images is this many pitches wide (σ), so that lens-to-lens
+#: brightness changes (scene detail at lens resolution) count as texture while vignetting does not
+ENVELOPE_PITCHES = 2.0
+
+
+def lattice_texture(image, cfa: str, grid, tiles: int = TEXTURE_TILES) -> np.ndarray:
+    """Texture ratios (module docstring) of up to ``tiles`` × ``tiles`` tiles spread over the sensor.
+
+    Unlike `texture_ratio` this needs no calibration run: the lattice vector of each tile comes from a known
+    ``grid`` (`lfproc.LensGrid`), and only the tiles (``TEXTURE_TILE_PITCHES`` lenses wide, plus a margin)
+    are flattened, so it is cheap enough to run on every capture before decoding it.
+
+    Returns
+    -------
+    numpy.ndarray
+        One ratio per tile that holds lit micro images (dark tiles, e.g. outside the main lens's image
+        circle, are left out); empty when no tile does.
+    """
+    from scipy import ndimage
+
+    from ._flatten import flatten, smooth_large
+    from ._monochrome import white_to_mono
+
+    arr = np.asarray(image)
+    h, w = arr.shape[:2]
+    pitch = float(grid.pitch_px)
+    core = int(round(TEXTURE_TILE_PITCHES * pitch))
+    margin = int(math.ceil(3 * pitch))
+    ny = max(1, min(tiles, h // max(core, 1)))
+    nx = max(1, min(tiles, w // max(core, 1)))
+    sigma = max(0.08 * pitch, 0.7)
+    ratios = []
+    for cy in (np.arange(ny) + 0.5) * h / ny:
+        for cx in (np.arange(nx) + 0.5) * w / nx:
+            y0 = max(0, int(cy - core / 2 - margin)) // 2 * 2
+            x0 = max(0, int(cx - core / 2 - margin)) // 2 * 2
+            y1, x1 = min(h, int(cy + core / 2 + margin)), min(w, int(cx + core / 2 + margin))
+            mono = white_to_mono(arr[y0:y1, x0:x1], cfa if arr.ndim == 2 else "none")
+            flattened = flatten(mono, pitch)
+            if flattened.valid.mean() < 0.5:
+                continue
+            above = flattened.above_floor
+            envelope = smooth_large(above, ENVELOPE_PITCHES * pitch)
+            flat = ndimage.gaussian_filter(above / np.maximum(envelope, 1e-3 * float(envelope.max())), sigma)
+            ratio = _grid_tile_ratio(flat, grid, (x0, y0), (cx, cy), margin)
+            if ratio is not None:
+                ratios.append(ratio)
+    return np.asarray(ratios, dtype=float)
+
+
+def _grid_tile_ratio(flat, grid, offset, centre, margin: int, max_samples: int = 20_000):
+    """The texture ratio of one flattened crop, comparing it with itself half a lattice vector each way."""
+    from scipy import ndimage
+
+    rows, cols = np.meshgrid(np.arange(grid.rows), np.arange(grid.cols), indexing="ij")
+    xy = grid.lens_xy(rows, cols)
+    r, q = np.unravel_index(np.argmin(np.hypot(xy[..., 0] - centre[0], xy[..., 1] - centre[1])), rows.shape)
+    q2 = q + 1 if q + 1 < grid.cols else q - 1
+    a = (xy[r, q2] - xy[r, q]) * (1 if q2 > q else -1)
+    reach = int(math.ceil(0.5 * float(np.hypot(*a)))) + 2
+    h, w = flat.shape
+    lo = max(reach, margin // 2)
+    ys, xs = np.arange(lo, h - lo), np.arange(lo, w - lo)
+    if len(ys) < 2 or len(xs) < 2:
+        return None
+    stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
+    yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
+    plus = ndimage.map_coordinates(flat, [yy + 0.5 * a[1], xx + 0.5 * a[0]], order=1, mode="nearest")
+    minus = ndimage.map_coordinates(flat, [yy - 0.5 * a[1], xx - 0.5 * a[0]], order=1, mode="nearest")
+    mean = 0.5 * (plus.mean() + minus.mean())
+    den = float(np.sum((plus - mean) ** 2 + (minus - mean) ** 2))
+    return float(np.sum((plus - minus) ** 2)) / den if den > 0 else None
