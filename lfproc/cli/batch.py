@@ -60,7 +60,8 @@ def run(args) -> int:
     if to_decode and not (args.calib or args.white or args.white_dir):
         raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
                           "--calib GRID.json (from lfproc calibrate)")
-    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera")):
+    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera"),
+                       (args.dark, "--dark")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
     if args.a is None and args.depth_range is None and args.at is None and not args.views:
@@ -101,7 +102,8 @@ def run(args) -> int:
     outdir = os.path.abspath(args.outdir)
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
-                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture))
+                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture),
+                      _abs(args.dark))
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -120,7 +122,7 @@ def run(args) -> int:
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture),
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
-            "scheduler": args.scheduler})
+            "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
         return _process(args, jobs, manifest, camera)
 
 

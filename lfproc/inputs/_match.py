@@ -2,7 +2,8 @@
 
 Checked before anything is decoded (every command goes through `lfproc.pipeline`, which calls these):
 
-* **lattice kind**: the grid's ``grid`` equals the camera file's ``mla.grid``;
+* **lattice kind and Bayer pattern**: the grid's ``grid`` equals the camera file's ``mla.grid``, and the
+  camera file's ``sensor.cfa`` is the one the grid was calibrated with (where recorded);
 * **micro image pitch**: the grid's ``pitch_px`` against the camera's prediction, the lens pitch in pixels
   (``mla.pitch_mm / sensor.pixel_pitch_mm``) times the micro image scale ``(d_A + f_s)/d_A`` of a finite
   exit pupil (`lfproc.geometry.micro_image_scale`). Accepted within ``3σ + 1e-4`` of the calibration's own
@@ -51,6 +52,10 @@ def check_grid_fits_camera(camera, record) -> None:
     deviation = grid.pitch_px / expected - 1.0
     tolerance, recorded = pitch_tolerance(record)
     if abs(deviation) <= tolerance or _same_camera(camera, recorded):
+        recorded_cfa = (record.camera_facts or {}).get("cfa")
+        if recorded_cfa is not None and recorded_cfa != camera.cfa:
+            raise LfprocError(f"{record.path}: was calibrated with sensor.cfa = \"{recorded_cfa}\" but {cam} says "
+                              f"\"{camera.cfa}\"; use the camera file the grid was calibrated with, or calibrate again")
         return
     made_for = "" if recorded is None else \
         f", and it was calibrated for {recorded.get('lens_pitch_px', float('nan')):.3f} px per lens"

@@ -121,7 +121,7 @@ def made_from(camera, white_facts, white_hash: str, dark_facts=None, dark_hash: 
     return {
         "camera": {"source": os.path.abspath(camera.source) if camera.source else None,
                    "pixel_pitch_mm": camera.pixel_pitch_mm, "lens_pitch_mm": camera.mla_pitch_mm,
-                   "lens_pitch_px": camera.pitch_px, "grid": camera.grid, "m_hat": camera.m_hat,
+                   "lens_pitch_px": camera.pitch_px, "grid": camera.grid, "m_hat": camera.m_hat, "cfa": camera.cfa,
                    "micro_image_scale": float(micro_image_scale(camera))},
         "white": {"path": os.path.abspath(white_facts.path), "width": white_facts.width,
                   "height": white_facts.height, "cfa": white_facts.cfa, "channels": white_facts.channels,
