@@ -108,7 +108,7 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 
     estimate = find_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
                          source=white.source)
-    check_white_is_white(white.source, white.data, white.cfa, estimate.grid, estimate.texture)
+    check_white_is_white(white.source, white.data, white.cfa, estimate.grid)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
                               exit_pupil_warning(white.source, pupil, camera.exit_pupil_distance_mm))):

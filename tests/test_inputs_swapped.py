@@ -75,6 +75,11 @@ def test_renders_white_images_pass_and_captures_given_as_white_images_are_refuse
         vignetted = white * np.linspace(1.0, 0.5, white.shape[1])[None, :]      # plus strong vignetting
         for given in (white, np.round(vignetted * 255) / 255):                   # and 8 bits
             check_white_is_white(name, given, "RGGB", grid)
+    from whitegen import covering_grid, white_image       # an independent white: hexagonal, noisy, hot pixels,
+    lattice = covering_grid((360, 440), "hexagonal", 27.78, -1.2, (0.11, 0.43))   # cut by the main lens's rim
+    cut = white_image((360, 440), lattice, 0.45 * 27.78, vignetting=0.5, cut_radius_px=200.0, noise_sigma=0.01,
+                      hot_pixels=12, seed=7)
+    check_white_is_white("vignetted.tif", cut, "none", lattice)
     capture, _, grid = renders["faint far grating"]      # its micro images carry the grating (texture ratio 0.19)
     with pytest.raises(LfprocError, match="not a white image"):
         check_white_is_white("capture.tif", capture, "RGGB", grid)

@@ -53,7 +53,6 @@ def texture_ratio(measured, model, kind: str, tile_pitches: float = 16.0, max_sa
 
 def _tile_terms(m, model, tile, max_samples: int) -> tuple[float, float]:
     """Numerator and denominator of the texture ratio over one tile of a window."""
-    from scipy import ndimage
     flat, win = m.flat, m.window
     ty0, ty1, tx0, tx1 = tile
     centre = np.array([0.5 * (tx0 + tx1), 0.5 * (ty0 + ty1)])
@@ -66,6 +65,12 @@ def _tile_terms(m, model, tile, max_samples: int) -> tuple[float, float]:
         return 0.0, 0.0
     stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
     yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
+    return _half_vector_terms(flat, yy, xx, a)
+
+
+def _half_vector_terms(flat, yy, xx, a) -> tuple[float, float]:
+    """Numerator and denominator of the texture ratio: ``flat`` at (yy, xx) ± a/2 compared."""
+    from scipy import ndimage
     plus = ndimage.map_coordinates(flat, [yy + 0.5 * a[1], xx + 0.5 * a[0]], order=1, mode="nearest")
     minus = ndimage.map_coordinates(flat, [yy - 0.5 * a[1], xx - 0.5 * a[0]], order=1, mode="nearest")
     mean = 0.5 * (plus.mean() + minus.mean())
@@ -178,9 +183,8 @@ def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance
 TEXTURE_TILES = 4
 #: tile size in lens pitches
 TEXTURE_TILE_PITCHES = 12.0
-#: the envelope divided out before comparing micro images is this many pitches wide (σ), so that lens-to-lens
-#: brightness changes (scene detail at lens resolution) count as texture while vignetting does not
-ENVELOPE_PITCHES = 2.0
+#: `lattice_texture` compares micro images where the local white level is at least this share of the brightest
+FULLY_LIT = 0.5
 
 
 def lattice_texture(image, cfa: str, grid, tiles: int = TEXTURE_TILES) -> np.ndarray:
@@ -219,22 +223,25 @@ def lattice_texture(image, cfa: str, grid, tiles: int = TEXTURE_TILES) -> np.nda
             flattened = flatten(mono, pitch)
             if flattened.valid.mean() < 0.5:
                 continue
-            above = flattened.above_floor
-            envelope = smooth_large(above, ENVELOPE_PITCHES * pitch)
-            flat = ndimage.gaussian_filter(above / np.maximum(envelope, 1e-3 * float(envelope.max())), sigma)
-            ratio = _grid_tile_ratio(flat, grid, (x0, y0), (cx, cy), margin)
+            flat = ndimage.gaussian_filter(flattened.flat, sigma)
+            envelope = smooth_large(flattened.above_floor, pitch)
+            # well lit only: micro images cut by a vignetting edge differ from their neighbours in any image
+            inside = ndimage.binary_erosion(envelope >= FULLY_LIT * float(np.percentile(envelope, 99)),
+                                            iterations=max(1, int(round(pitch))))
+            ratio = _grid_tile_ratio(flat, inside, grid, (cx - x0, cy - y0), (x0, y0), margin)
             if ratio is not None:
                 ratios.append(ratio)
     return np.asarray(ratios, dtype=float)
 
 
-def _grid_tile_ratio(flat, grid, offset, centre, margin: int, max_samples: int = 20_000):
-    """The texture ratio of one flattened crop, comparing it with itself half a lattice vector each way."""
-    from scipy import ndimage
-
+def _grid_tile_ratio(flat, valid, grid, centre, origin, margin: int, max_samples: int = 20_000):
+    """The texture ratio of one flattened crop (``origin`` its top-left (x, y) on the sensor, ``centre`` the
+    tile's centre in the crop), comparing it with itself half a lattice vector each way where both ends are
+    lit (``valid``: beyond a mechanical vignetting cut there is nothing to compare)."""
     rows, cols = np.meshgrid(np.arange(grid.rows), np.arange(grid.cols), indexing="ij")
-    xy = grid.lens_xy(rows, cols)
-    r, q = np.unravel_index(np.argmin(np.hypot(xy[..., 0] - centre[0], xy[..., 1] - centre[1])), rows.shape)
+    xy = grid.lens_xy(rows, cols)            # the lattice vector of the lens nearest the tile's centre
+    r, q = np.unravel_index(np.argmin(np.hypot(xy[..., 0] - origin[0] - centre[0],
+                                               xy[..., 1] - origin[1] - centre[1])), rows.shape)
     q2 = q + 1 if q + 1 < grid.cols else q - 1
     a = (xy[r, q2] - xy[r, q]) * (1 if q2 > q else -1)
     reach = int(math.ceil(0.5 * float(np.hypot(*a)))) + 2
@@ -245,8 +252,9 @@ def _grid_tile_ratio(flat, grid, offset, centre, margin: int, max_samples: int =
         return None
     stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
     yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
-    plus = ndimage.map_coordinates(flat, [yy + 0.5 * a[1], xx + 0.5 * a[0]], order=1, mode="nearest")
-    minus = ndimage.map_coordinates(flat, [yy - 0.5 * a[1], xx - 0.5 * a[0]], order=1, mode="nearest")
-    mean = 0.5 * (plus.mean() + minus.mean())
-    den = float(np.sum((plus - mean) ** 2 + (minus - mean) ** 2))
-    return float(np.sum((plus - minus) ** 2)) / den if den > 0 else None
+    lit = (valid[np.clip(np.rint(yy + 0.5 * a[1]).astype(int), 0, h - 1), np.clip(np.rint(xx + 0.5 * a[0]).astype(int), 0, w - 1)]
+           & valid[np.clip(np.rint(yy - 0.5 * a[1]).astype(int), 0, h - 1), np.clip(np.rint(xx - 0.5 * a[0]).astype(int), 0, w - 1)])
+    if lit.sum() < 100:
+        return None
+    num, den = _half_vector_terms(flat, yy[lit], xx[lit], a)
+    return num / den if den > 0 else None

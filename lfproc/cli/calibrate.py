@@ -49,7 +49,7 @@ def run(args) -> int:
     estimate = find_grid(capture.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=cfa,
                          source=args.white)
     grid = estimate.grid
-    check_white_is_white(args.white, capture.data, cfa, grid, estimate.texture)
+    check_white_is_white(args.white, capture.data, cfa, grid)
     pupil = implied_exit_pupil(grid.pitch_px, estimate.pitch_sigma_px, camera)
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
                   camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,

@@ -1,12 +1,13 @@
 """Swapped inputs: a capture given as the white image, a white image given as the capture.
 
 * **A capture given as the white image** (``lfproc calibrate``, ``--white``): in a white image every micro
-  image repeats its neighbour; a capture's micro images carry scene texture. The texture ratio of the
-  calibration (`lfproc.calibrate.texture_ratio`, over the whole image) and the largest of the per-tile
-  ratios (`lfproc.calibrate.lattice_texture`, which also catches a capture whose texture fills only part
-  of the frame) must stay at or below `TEXTURE_LIMIT` (0.04; white images measure 0.000–0.008 with noise,
-  vignetting and 8-bit quantisation, the bundled sample's capture 0.05 overall and 0.11 in its most
-  textured tile).
+  image repeats its neighbour; a capture's micro images carry scene texture. The largest of the per-tile
+  texture ratios over the well-lit micro images (`lfproc.calibrate.lattice_texture`, which also catches
+  a capture whose texture fills only part of the frame) must stay at or below `TEXTURE_LIMIT` (0.04;
+  white images measure 0.0005–0.008 with noise, hot pixels, vignetting with a sharp rim cut and 8-bit
+  quantisation, the bundled sample's capture 0.11 in its most textured tile, the Lytro sample's 0.067).
+  A capture whose micro images hardly differ from their neighbours (a textured plane far from the
+  focus, 0.015) is not recognised.
 * **A white image given as the capture**: decoded (and devignetted), a white image is a smooth field with
   no scene in it. Each view is a pinhole image of the scene, sharp at every depth, so a capture shows its
   scene in every view at lens resolution. For the central view and the four views halfway to the rim, the
@@ -32,12 +33,11 @@ MIN_LENSES_PER_SIDE = 20
 WHITE_FLATNESS = 0.005
 
 
-def check_white_is_white(source: str, image, cfa: str, grid, global_ratio: float | None = None) -> None:
+def check_white_is_white(source: str, image, cfa: str, grid) -> None:
     """Refuse a white image that carries scene texture (module docstring)."""
     from ..calibrate import lattice_texture
 
-    tiles = lattice_texture(image, cfa, grid)
-    worst = max([float(global_ratio or 0.0), *(float(t) for t in tiles)])
+    worst = max([0.0, *(float(t) for t in lattice_texture(image, cfa, grid))])
     if worst > TEXTURE_LIMIT:
         raise LfprocError(f"{source}: this is a capture of a scene, not a white image: its micro images differ from "
                           f"their neighbours (texture ratio {worst:.2f}, a white image gives < {TEXTURE_LIMIT}); "
