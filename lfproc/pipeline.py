@@ -3,7 +3,13 @@
 ``--white WHITE`` calibrates the grid from the white image and devignettes with it; ``--calib GRID.json``
 reads a grid written by ``lfproc calibrate`` and devignettes with the white image recorded in it (if
 that file still exists); both together use the given grid and the given white image. Without any
-white image the captures are decoded without devignetting, and a warning says so.
+white image the captures are decoded without devignetting, and a warning says so. ``--dark DARK`` is
+subtracted from the white image and every capture; a grid calibrated with one records it, and ``--calib``
+subtracts it again (`lfproc.inputs`, docs/inputs.md).
+
+Before anything is read in full, camera, grid, white image, dark frame and captures are checked against
+each other (lattice kind, micro image pitch, sensor size, Bayer pattern) and every input's header is
+read; a capture given as the white image and a white image given as the capture are refused.
 
 Lytro captures: ``--white-dir DIR`` picks the white image of the first capture's camera (serial) with
 the nearest zoom and focus steps from a calibration folder and says which on stderr; a Lytro white
@@ -187,8 +193,8 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     elif white_capture is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
-    return DecodeSetup(camera, record.grid, white_capture, interpolation, demosaic_method, white_metadata,
-                       record=record, dark=dark_capture, reference=reference)
+    return DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
+                       demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference)
 
 
 def _record_of(grid, white_capture):
