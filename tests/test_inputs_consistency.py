@@ -44,7 +44,13 @@ def test_a_grid_of_another_camera_is_refused(grid_file, tmp_path):
     proc = run_cli("views", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "illum-like.toml",
                    "--calib", grid_file, "-o", tmp_path / "b")
     assert_clean_error(proc, str(grid_file), "illum-like.toml", "rectangular", "hexagonal")
-    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+    proc = run_cli("batch", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "paper-f100.toml",
+                   "--calib", grid_file, "--a", "1", "-o", tmp_path / "c")
+    assert_clean_error(proc, str(grid_file), "paper-f100.toml", "25.000 px")
+    proc = run_cli("viewer", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "illum-like.toml",
+                   "--calib", grid_file, "-o", tmp_path / "d")
+    assert_clean_error(proc, str(grid_file), "illum-like.toml", "hexagonal")
+    assert not any((tmp_path / name).exists() for name in "abcd")
 
 
 def test_the_right_camera_passes_and_old_grid_files_still_load_and_are_checked(grid_file, tmp_path):

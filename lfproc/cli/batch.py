@@ -84,6 +84,9 @@ def run(args) -> int:
         camera, camera_toml = LightField.read_camera(sources[0]), ""
         if camera is None:
             raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
+    if args.calib and to_decode:   # a grid of another camera: refused here, naming the camera file
+        from ..inputs import check_grid_fits_camera, read_grid_record
+        check_grid_fits_camera(camera, read_grid_record(args.calib))
     if args.views:
         check_view_options(args, camera)
     if args.a is not None or args.depth_range is not None or args.at is not None:
