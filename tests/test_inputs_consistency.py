@@ -111,3 +111,17 @@ def test_sensor_size_and_bayer_pattern_must_match(grid_file, tmp_path):
     proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", CAMERA, "--white", crop, "--a", "1",
                    "-o", tmp_path / "c")    # a white image of another size than the capture, before calibrating
     assert_clean_error(proc, str(crop), "600x400", "840x600")
+
+
+def test_a_damaged_provenance_record_is_one_error_not_a_crash(grid_file, tmp_path):
+    from lfproc.errors import LfprocError
+    from lfproc.inputs import read_grid_record
+
+    data = json.loads(grid_file.read_text())
+    good = data["made_from"]
+    for bad in (1, {"camera": 1}, {**good, "camera": {**good["camera"], "lens_pitch_px": "11"}},
+                {**good, "white": {**good["white"], "channels": [1]}}, {**good, "dark": {"path": [1], "hash": "x"}}):
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(dict(data, made_from=bad)))
+        with pytest.raises(LfprocError, match="made_from"):
+            read_grid_record(str(path))

@@ -80,15 +80,31 @@ def read_grid_record(path: str) -> GridRecord:
 
 
 def _valid_made_from(made_from) -> bool:
+    """Whether a ``made_from`` record has the types the checks rely on (a damaged file is refused, not trusted)."""
     if not isinstance(made_from, dict):
         return False
     camera, white, dark = made_from.get("camera"), made_from.get("white"), made_from.get("dark")
-    numbers_ok = isinstance(camera, dict) and all(
-        isinstance(camera.get(k), (int, float)) and not isinstance(camera.get(k), bool)
-        and math.isfinite(camera[k]) and camera[k] > 0 for k in ("lens_pitch_px", "micro_image_scale"))
-    white_ok = white is None or (isinstance(white, dict) and all(
-        isinstance(white.get(k), int) and not isinstance(white.get(k), bool) for k in ("width", "height")))
-    return numbers_ok and white_ok and (dark is None or isinstance(dark, dict))
+    if not isinstance(camera, dict) or not all(_positive(camera.get(k)) for k in ("lens_pitch_px", "micro_image_scale")):
+        return False
+    if not all(_optional(camera.get(k), str) for k in ("grid", "cfa")):
+        return False
+    if white is not None and not (isinstance(white, dict) and all(_count(white.get(k)) for k in ("width", "height"))
+                                  and _optional(white.get("channels"), int) and all(
+                                      _optional(white.get(k), str) for k in ("cfa", "path", "hash"))):
+        return False
+    return dark is None or (isinstance(dark, dict) and all(isinstance(dark.get(k), str) for k in ("path", "hash")))
+
+
+def _positive(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+
+
+def _count(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value > 0
+
+
+def _optional(value, kind) -> bool:
+    return value is None or (isinstance(value, kind) and not isinstance(value, bool))
 
 
 def _pitch_sigma(data: dict, grid) -> float | None:
