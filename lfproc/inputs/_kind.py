@@ -62,15 +62,15 @@ def lens_flatness(views: np.ndarray, view_mask=None) -> float:
     chosen = [(ky, kx) for ky, kx in ((c, c), (c - h, c), (c + h, c), (c, c - h), (c, c + h)) if mask[ky, kx]]
     if not chosen or min(views.shape[2:4]) < MIN_LENSES_PER_SIDE:
         return float("inf")
+    stack = np.stack([views[ky, kx].mean(axis=-1) for ky, kx in chosen]).astype(np.float32)   # (V, Ny, Nx)
+    trend = ndimage.median_filter(stack, size=(1, 5, 5), mode="nearest")[:, 2:-2, 2:-2]
+    inner = stack[:, 2:-2, 2:-2]
     values = []
-    for ky, kx in chosen:
-        view = views[ky, kx].mean(axis=-1, dtype=np.float64)
-        trend = ndimage.median_filter(view, size=5, mode="nearest")[2:-2, 2:-2]
-        inner = view[2:-2, 2:-2]
-        top = float(np.percentile(trend, 95))
-        lit = trend > 0.05 * top
+    for view, level in zip(inner, trend):
+        top = float(np.percentile(level, 95))
+        lit = level > 0.05 * top
         if top > 0 and lit.sum() >= 25:
-            values.append(float(np.percentile(np.abs(inner[lit] / trend[lit] - 1.0), 99)))
+            values.append(float(np.percentile(np.abs(view[lit] / level[lit] - 1.0), 99)))
     return float(np.median(values)) if values else float("inf")
 
 
