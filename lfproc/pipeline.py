@@ -3,7 +3,13 @@
 ``--white WHITE`` calibrates the grid from the white image and devignettes with it; ``--calib GRID.json``
 reads a grid written by ``lfproc calibrate`` and devignettes with the white image recorded in it (if
 that file still exists); both together use the given grid and the given white image. Without any
-white image the captures are decoded without devignetting, and a warning says so.
+white image the captures are decoded without devignetting, and a warning says so. ``--dark DARK`` is
+subtracted from the white image and every capture; a grid calibrated with one records it, and ``--calib``
+subtracts it again (`lfproc.inputs`, docs/inputs.md).
+
+Before anything is read in full, camera, grid, white image, dark frame and captures are checked against
+each other (lattice kind, micro image pitch, sensor size, Bayer pattern) and every input's header is
+read; a capture given as the white image and a white image given as the capture are refused.
 
 Lytro captures: ``--white-dir DIR`` picks the white image of the first capture's camera (serial) with
 the nearest zoom and focus steps from a calibration folder and says which on stderr; a Lytro white
@@ -14,7 +20,6 @@ metadata (`camera_for_captures`).
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import warnings
@@ -30,7 +35,12 @@ from .lightfield import LightField
 
 @dataclass(frozen=True, eq=False)
 class DecodeSetup:
-    """Everything needed to decode captures of one camera: the camera, its grid and white image."""
+    """Everything needed to decode captures of one camera: the camera, its grid and white image.
+
+    ``record`` (an `lfproc.inputs.GridRecord`) says what the grid was made from, ``dark`` is the dark
+    frame (`lfproc.io.Capture`, already subtracted from ``white``) that is subtracted from every capture,
+    and ``reference`` (`lfproc.inputs.ImageFacts`) the sensor size and CFA every capture must have.
+    """
 
     camera: Camera
     grid: LensGrid
@@ -39,6 +49,9 @@ class DecodeSetup:
     demosaic_method: str = "fast"
     white_metadata: object | None = None   # lfproc.io.LytroMetadata of a Lytro white image, else None
     _decoders: dict = field(default_factory=dict, repr=False)
+    record: object | None = None           # lfproc.inputs.GridRecord
+    dark: object | None = None             # lfproc.io.Capture of the dark frame
+    reference: object | None = None        # lfproc.inputs.ImageFacts every capture must match
 
     def decoder_for(self, shape: tuple, cfa: str):
         """The (cached) decoder for captures of this sensor shape and CFA.
@@ -54,52 +67,84 @@ class DecodeSetup:
                 white, white_cfa = self.white.data, self.white.cfa
             else:
                 white, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
-            self._decoders[key] = make_decoder(white, self.grid, self.camera.m_hat, white_cfa,
-                                               interpolation=self.interpolation,
-                                               demosaic_method=self.demosaic_method)
+            decoder = make_decoder(white, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
+                                   demosaic_method=self.demosaic_method)
+            if not np.asarray(decoder.views_delivered).any():
+                where = self.white.source if self.white is not None else "the grid"
+                raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
+                                  f"image where the grid puts one); pass the white image of this camera as --white")
+            self._decoders[key] = decoder
         return self._decoders[key]
+
+    def check_capture(self, capture) -> None:
+        """Refuse a capture whose size, channels or CFA differ from the white image's (or the grid's record)."""
+        from .inputs import ImageFacts, check_fits_grid_extent, check_same_sensor
+
+        facts = ImageFacts.of_capture(capture)
+        if self.reference is not None:
+            check_same_sensor(facts, self.reference, "capture", _reference_name(self))
+        elif self.record is not None:
+            check_fits_grid_extent(facts, self.record)
+
+
+def _reference_name(setup) -> str:
+    if setup.white is not None and setup.reference is not None and setup.reference.path == setup.white.source:
+        return "white image"
+    return f"white image that {setup.record.path} was calibrated on" if setup.record is not None else "white image"
 
 
 def read_grid(path: str) -> tuple[LensGrid, str | None]:
     """A GRID.json written by ``lfproc calibrate``: the grid and the white image it recorded (or None)."""
-    try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except FileNotFoundError:
-        raise LfprocError(f"{path}: grid file not found; run 'lfproc calibrate WHITE --camera CAM -o {path}'") \
-            from None
-    except (OSError, ValueError) as exc:
-        raise LfprocError(f"{path}: not a readable grid file ({exc}); run lfproc calibrate again") from None
-    if not isinstance(data, dict):
-        raise LfprocError(f"{path}: not a grid file written by 'lfproc calibrate'; run lfproc calibrate again")
-    return LensGrid.from_json_dict(data, source=path), data.get("white_image")
+    from .inputs import read_grid_record
+
+    record = read_grid_record(path)
+    return record.grid, record.white_image
 
 
-def calibrate_white(white, camera: Camera) -> LensGrid:
+def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
     """Fit the lens grid to a white :class:`~lfproc.io.Capture`; what ``lfproc calibrate`` would warn about
-    (an untrustworthy fit, scene texture, an exit pupil the camera file contradicts) is warned here too."""
+    (an untrustworthy fit, an exit pupil the camera file contradicts) is warned here too, and a capture of a
+    scene given as the white image is refused (`lfproc.inputs.check_white_is_white`).
+
+    With ``record``, returns an `lfproc.inputs.GridRecord` holding what the grid was made from (the white
+    image's facts and hash, the ``dark`` frame's) instead of the bare `LensGrid`.
+    """
     from .calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
+    from .inputs import check_white_is_white
 
     estimate = find_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
                          source=white.source)
+    check_white_is_white(white.source, white.data, white.cfa, estimate.grid)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
                               exit_pupil_warning(white.source, pupil, camera.exit_pupil_distance_mm))):
         warnings.warn(line.replace(": warning: ", ": ", 1), stacklevel=2)
-    return estimate.grid
+    if not record:
+        return estimate.grid
+    from .inputs import GridRecord, ImageFacts, file_hash, made_from
+
+    facts = made_from(camera, ImageFacts.of_capture(white), file_hash(white.source),
+                      None if dark is None else ImageFacts.of_capture(dark),
+                      None if dark is None else file_hash(dark.source))
+    return GridRecord(white.source, estimate.grid, os.path.abspath(white.source), facts, estimate.pitch_sigma_px)
 
 
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
                      interpolation: str = "linear", demosaic_method: str = "fast",
                      grid: LensGrid | None = None, white_dir: str | None = None,
-                     captures: tuple | list = ()) -> DecodeSetup:
-    """Resolve ``--calib``/``--white``/``--white-dir`` into a :class:`DecodeSetup` (see the module docstring).
+                     captures: tuple | list = (), dark: str | None = None) -> DecodeSetup:
+    """Resolve ``--calib``/``--white``/``--white-dir``/``--dark`` into a :class:`DecodeSetup` (module docstring).
 
     ``grid``, when given, is the grid these files were already calibrated to (by another process):
     it is used as is, and the white image is only read for devignetting. ``captures`` are the inputs
     to decode: ``white_dir`` picks the white image for the first of them, and a Lytro white image is
     checked against it (same camera and zoom) before anything is calibrated.
+
+    Cheap checks come first (docs/inputs.md): the grid file is read and checked against the camera, the
+    headers of the white image, the dark frame and the captures are read and checked against each other
+    and the grid's record; only then is the white image read and calibrated.
     """
+    from .inputs import check_grid_fits_camera, check_same_sensor, probe_image, read_grid_record, reference_facts
     from .io import read_capture
 
     if white is not None and white_dir is not None:
@@ -110,11 +155,19 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     first = _lytro_metadata_of(captures[0]) if captures else None
     if white_dir is not None:
         white = _white_from_folder(white_dir, first, captures[0] if captures else None)
-    recorded_white = None
-    known_grid = grid
-    if calib is not None:
-        grid, recorded_white = read_grid(calib)
-    white_path = white or (recorded_white if recorded_white and os.path.exists(recorded_white) else None)
+    record = read_grid_record(calib) if calib is not None else None
+    if record is not None:
+        check_grid_fits_camera(camera, record)
+    white_path = white or _recorded_white(record)
+    white_facts = probe_image(white_path, camera) if white_path else None
+    recorded = reference_facts(record)
+    if white_facts is not None and recorded is not None:
+        check_same_sensor(white_facts, recorded, "white image", f"white image that {calib} was calibrated on")
+    reference = white_facts or recorded
+    dark_path = _dark_for(dark, record)
+    if dark_path is not None:
+        check_same_sensor(probe_image(dark_path, camera), reference, "dark frame", _name_of(reference, calib))
+    _check_capture_headers(captures, camera, reference, record, calib)
     white_metadata = _lytro_metadata_of(white_path) if white_path else None
     if white_metadata is not None and white_metadata.modulation_frame is False:
         print(f"lfproc: warning: {white_path}: its metadata marks it as a capture, not a white image "
@@ -122,15 +175,92 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     if first is not None and white_metadata is not None:
         from .io import check_white_matches
         check_white_matches(first, white_metadata)
+    # the expensive part: read the white image and the dark frame, calibrate
+    from .inputs import read_dark, subtract_dark
+
+    dark_capture = read_dark(dark_path, camera) if dark_path else None
     white_capture = read_capture(white_path, camera) if white_path else None
-    if known_grid is not None:
-        grid = known_grid
-    elif calib is None:
-        grid = calibrate_white(white_capture, camera)
+    if white_capture is not None:
+        white_capture = subtract_dark(white_capture, dark_capture, "white image")
+    if white_capture is not None and (record is not None or grid is not None):   # not calibrated here: checked here
+        from .inputs import check_white_is_white
+        check_white_is_white(white_capture.source, white_capture.data, white_capture.cfa,
+                             grid if grid is not None else record.grid)
+    if grid is not None:
+        record = record or _record_of(grid, white_capture)
+    elif record is None:
+        record = calibrate_white(white_capture, camera, record=True, dark=dark_capture)
     elif white_capture is None:
-        warnings.warn(f"{calib}: no white image available (recorded: {recorded_white}); decoding without "
+        warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
-    return DecodeSetup(camera, grid, white_capture, interpolation, demosaic_method, white_metadata)
+    return DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
+                       demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference)
+
+
+def _record_of(grid, white_capture):
+    from .inputs import GridRecord
+
+    return GridRecord(white_capture.source if white_capture is not None else "grid", grid)
+
+
+def _name_of(reference, calib) -> str:
+    if reference is None:
+        return "white image"
+    return "white image" if calib is None else f"white image that {calib} was calibrated on"
+
+
+def _recorded_white(record) -> str | None:
+    """The white image a grid file recorded, if it is still there with the content it was calibrated from."""
+    from .inputs import same_file_content
+
+    if record is None or not record.white_image or not os.path.exists(record.white_image):
+        return None
+    recorded_hash = (record.white_facts or {}).get("hash")
+    if not same_file_content(record.white_image, recorded_hash):
+        raise LfprocError(f"{record.white_image}: this white image, recorded in {record.path}, has changed since the "
+                          f"grid was calibrated from it (its content hash differs); calibrate again, or pass "
+                          f"--white WHITE to devignette with it anyway")
+    return record.white_image
+
+
+def _dark_for(dark: str | None, record) -> str | None:
+    """``--dark`` as given, or the dark frame the grid file recorded; a different one is refused (one line)."""
+    from .inputs import file_hash, same_file_content
+
+    recorded = record.dark_facts if record is not None else None
+    if dark is not None:
+        if recorded and recorded.get("hash") and os.path.isfile(dark) and file_hash(dark) != recorded["hash"]:
+            raise LfprocError(f"{dark}: this dark frame differs from the one {record.path} was calibrated with "
+                              f"({recorded.get('path')}); pass that one, or calibrate again with --dark {dark}")
+        return dark
+    if not recorded:
+        return None
+    path = recorded.get("path")
+    if not path or not same_file_content(path, recorded.get("hash")):
+        raise LfprocError(f"{record.path}: was calibrated with the dark frame {path}, which is missing or has "
+                          f"changed since; pass the same dark frame with --dark DARK, or calibrate again")
+    return path
+
+
+def _check_capture_headers(captures, camera, reference, record, calib) -> None:
+    """Every capture's header read and checked before the white image is calibrated; when none of them could
+    be decoded, the first one's problem is the command's one error line (else each fails in its turn)."""
+    from .inputs import check_fits_grid_extent, check_same_sensor, probe_image
+    from .lightfield import is_lightfield_file
+
+    errors = []
+    paths = [p for p in captures if not is_lightfield_file(p)]
+    for path in paths:
+        try:
+            facts = probe_image(path, camera)
+            if reference is not None:
+                check_same_sensor(facts, reference, "capture", _name_of(reference, calib))
+            elif record is not None:
+                check_fits_grid_extent(facts, record)
+        except LfprocError as exc:
+            errors.append(exc)
+    if paths and len(errors) == len(paths):
+        raise errors[0]
 
 
 def _lytro_metadata_of(path: str):
@@ -188,7 +318,12 @@ def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: fl
 
 
 def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
-    """Read and decode one capture (a Lytro capture is checked against a Lytro white image first)."""
+    """Read and decode one capture (a Lytro capture is checked against a Lytro white image first).
+
+    Before decoding, the capture is checked against the white image (size, channels, CFA) and the dark frame
+    is subtracted; after, a capture that is really a white image is refused (`lfproc.inputs`).
+    """
+    from .inputs import check_capture_is_not_white, subtract_dark
     from .io import check_white_matches, is_lytro_file, read_capture, read_lytro
 
     if setup.white_metadata is not None and os.path.isfile(path) and is_lytro_file(path):
@@ -196,11 +331,14 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
         check_white_matches(capture_metadata, setup.white_metadata)
     else:
         capture = read_capture(path, setup.camera)
+    setup.check_capture(capture)
+    capture = subtract_dark(capture, setup.dark)
     decoder = setup.decoder_for(capture.data.shape, capture.cfa)
     try:
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{path}: {exc}") from None
+    check_capture_is_not_white(path, views, decoder.views_delivered)
     return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered)
 
 

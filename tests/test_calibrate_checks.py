@@ -13,7 +13,7 @@ import json
 
 import numpy as np
 import pytest
-from conftest import run_cli
+from conftest import assert_clean_error, run_cli
 from scipy import ndimage
 from scipy.spatial import cKDTree
 from whitegen import covering_grid, drifting_white, true_centres_inside, white_image
@@ -168,7 +168,9 @@ def test_cli_reports_model_and_exit_pupil_and_warns_on_a_contradiction(tmp_path)
     assert len(lines) == 1 and str(white) in lines[0] and "exit pupil" in lines[0] and "infinite" in lines[0]
 
 
-def test_cli_warns_when_a_capture_is_given_as_the_white_image(tmp_path):
+def test_cli_refuses_a_capture_given_as_the_white_image(tmp_path):
+    """Issue 20: a capture given as the white image is refused in one line (it used to write a grid after
+    warnings); the white image of the same render calibrates without any warning."""
     import tifffile
 
     from lfproc.scene import Noise, Plane, Scene
@@ -179,15 +181,16 @@ def test_cli_warns_when_a_capture_is_given_as_the_white_image(tmp_path):
     camera = Camera.from_toml(camera_path)
     scene = Scene((Plane(1500.0, Noise(feature_mm=6.0, seed=1, low=0.1, high=0.9)),), background=0.05)
     sim = render(camera, scene, (300, 420), ideal_views=False)
-    for name, pixels, warned in (("white.tif", sim.white, False), ("capture.tif", sim.raw, True)):
+    for name, pixels, refused in (("white.tif", sim.white, False), ("capture.tif", sim.raw, True)):
         path = tmp_path / name
         tifffile.imwrite(path, pixels)
-        proc = run_cli("calibrate", path, "--camera", camera_path, "-o", tmp_path / f"{name}.json")
-        assert proc.returncode == 0, proc.stderr
-        texture = [line for line in proc.stderr.splitlines() if "texture ratio" in line]
-        assert bool(texture) == warned, proc.stderr
-        if warned:
-            assert len(texture) == 1 and str(path) in texture[0]
+        out = tmp_path / f"{name}.json"
+        proc = run_cli("calibrate", path, "--camera", camera_path, "-o", out)
+        if refused:
+            assert_clean_error(proc, str(path), "texture ratio", "not a white image")
+            assert not out.exists()
+        else:
+            assert proc.returncode == 0 and "texture ratio" not in proc.stderr, proc.stderr
 
 
 def test_simulated_finite_exit_pupil_white_gives_micro_image_centres_and_the_exit_pupil():

@@ -15,7 +15,7 @@ CAPTURE_EXTENSIONS = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".
                       ".tif", ".tiff", ".png", ".exr", ".lfr", ".lfp", ".raw", ".npz")
 #: Job fields that are not parameters of the outputs (where they go, and the camera file's text,
 #: which the fingerprint hashes separately)
-_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml")
+_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml", "dark")
 
 
 @dataclass(frozen=True)
@@ -42,6 +42,7 @@ class Job:
     gif: bool = False           # with views: also the animation
     inside_aperture: bool = False  # with views: only those inside the main lens aperture
     aperture: float | None = None  # synthetic aperture f-number for the slices (None: every view with light)
+    dark: str | None = None     # dark frame (--dark) or None; stamped into the fingerprint when given
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""
@@ -49,12 +50,14 @@ class Job:
                 for f in fields(self) if f.name not in _NOT_PARAMETERS}
 
     def fingerprint(self) -> str:
-        """Changes whenever the capture, the camera, the white image, the grid file, lfproc's version or
+        """Changes whenever the capture, the camera, the white image, the grid file, the dark frame, lfproc's version or
         any parameter that shapes the outputs changes (not when OUTDIR moves)."""
         from .. import __version__
 
-        payload = json.dumps([__version__, self.source, self.stem, self.camera_toml, self.parameters(),
-                              [file_stamp(p) for p in (self.source, self.calib, self.white)]],
+        inputs = [file_stamp(p) for p in (self.source, self.calib, self.white)]
+        if self.dark is not None:   # only then: manifests written without a dark frame stay valid
+            inputs.append(file_stamp(self.dark))
+        payload = json.dumps([__version__, self.source, self.stem, self.camera_toml, self.parameters(), inputs],
                              sort_keys=True, default=str)
         return hashlib.sha256(payload.encode()).hexdigest()[:32]
 

@@ -53,7 +53,6 @@ def texture_ratio(measured, model, kind: str, tile_pitches: float = 16.0, max_sa
 
 def _tile_terms(m, model, tile, max_samples: int) -> tuple[float, float]:
     """Numerator and denominator of the texture ratio over one tile of a window."""
-    from scipy import ndimage
     flat, win = m.flat, m.window
     ty0, ty1, tx0, tx1 = tile
     centre = np.array([0.5 * (tx0 + tx1), 0.5 * (ty0 + ty1)])
@@ -66,6 +65,12 @@ def _tile_terms(m, model, tile, max_samples: int) -> tuple[float, float]:
         return 0.0, 0.0
     stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
     yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
+    return _half_vector_terms(flat, yy, xx, a)
+
+
+def _half_vector_terms(flat, yy, xx, a) -> tuple[float, float]:
+    """Numerator and denominator of the texture ratio: ``flat`` at (yy, xx) ± a/2 compared."""
+    from scipy import ndimage
     plus = ndimage.map_coordinates(flat, [yy + 0.5 * a[1], xx + 0.5 * a[0]], order=1, mode="nearest")
     minus = ndimage.map_coordinates(flat, [yy - 0.5 * a[1], xx - 0.5 * a[0]], order=1, mode="nearest")
     mean = 0.5 * (plus.mean() + minus.mean())
@@ -172,3 +177,84 @@ def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance
             f"{estimate.scale:.6f} +- {estimate.scale_sigma:.6f}) but the camera file says {given} "
             f"(scale {estimate.expected_scale:.6f}); set main_lens.exit_pupil_distance_mm, or check mla.pitch_mm "
             f"and sensor.pixel_pitch_mm")
+
+
+#: tiles per side of the sensor that `lattice_texture` samples (at most, fewer on small sensors)
+TEXTURE_TILES = 4
+#: tile size in lens pitches
+TEXTURE_TILE_PITCHES = 12.0
+#: `lattice_texture` compares micro images where the local white level is at least this share of the brightest
+FULLY_LIT = 0.5
+
+
+def lattice_texture(image, cfa: str, grid, tiles: int = TEXTURE_TILES) -> np.ndarray:
+    """Texture ratios (module docstring) of up to ``tiles`` × ``tiles`` tiles spread over the sensor.
+
+    Unlike `texture_ratio` this needs no calibration run: the lattice vector of each tile comes from a known
+    ``grid`` (`lfproc.LensGrid`), and only the tiles (``TEXTURE_TILE_PITCHES`` lenses wide, plus a margin)
+    are flattened, so it is cheap enough to run on every capture before decoding it.
+
+    Returns
+    -------
+    numpy.ndarray
+        One ratio per tile that holds lit micro images (dark tiles, e.g. outside the main lens's image
+        circle, are left out); empty when no tile does.
+    """
+    from scipy import ndimage
+
+    from ._flatten import flatten, smooth_large
+    from ._monochrome import white_to_mono
+
+    arr = np.asarray(image)
+    h, w = arr.shape[:2]
+    pitch = float(grid.pitch_px)
+    core = int(round(TEXTURE_TILE_PITCHES * pitch))
+    margin = int(math.ceil(3 * pitch))
+    ny = max(1, min(tiles, h // max(core, 1)))
+    nx = max(1, min(tiles, w // max(core, 1)))
+    sigma = max(0.08 * pitch, 0.7)
+    ratios = []
+    for cy in (np.arange(ny) + 0.5) * h / ny:
+        for cx in (np.arange(nx) + 0.5) * w / nx:
+            y0 = max(0, int(cy - core / 2 - margin)) // 2 * 2
+            x0 = max(0, int(cx - core / 2 - margin)) // 2 * 2
+            y1, x1 = min(h, int(cy + core / 2 + margin)), min(w, int(cx + core / 2 + margin))
+            mono = white_to_mono(arr[y0:y1, x0:x1], cfa if arr.ndim == 2 else "none")
+            flattened = flatten(mono, pitch)
+            if flattened.valid.mean() < 0.5:
+                continue
+            flat = ndimage.gaussian_filter(flattened.flat, sigma)
+            envelope = smooth_large(flattened.above_floor, pitch)
+            # well lit only: micro images cut by a vignetting edge differ from their neighbours in any image
+            inside = ndimage.binary_erosion(envelope >= FULLY_LIT * float(np.percentile(envelope, 99)),
+                                            iterations=max(1, int(round(pitch))))
+            ratio = _grid_tile_ratio(flat, inside, grid, (cx - x0, cy - y0), (x0, y0), margin)
+            if ratio is not None:
+                ratios.append(ratio)
+    return np.asarray(ratios, dtype=float)
+
+
+def _grid_tile_ratio(flat, valid, grid, centre, origin, margin: int, max_samples: int = 20_000):
+    """The texture ratio of one flattened crop (``origin`` its top-left (x, y) on the sensor, ``centre`` the
+    tile's centre in the crop), comparing it with itself half a lattice vector each way where both ends are
+    lit (``valid``: beyond a mechanical vignetting cut there is nothing to compare)."""
+    rows, cols = np.meshgrid(np.arange(grid.rows), np.arange(grid.cols), indexing="ij")
+    xy = grid.lens_xy(rows, cols)            # the lattice vector of the lens nearest the tile's centre
+    r, q = np.unravel_index(np.argmin(np.hypot(xy[..., 0] - origin[0] - centre[0],
+                                               xy[..., 1] - origin[1] - centre[1])), rows.shape)
+    q2 = q + 1 if q + 1 < grid.cols else q - 1
+    a = (xy[r, q2] - xy[r, q]) * (1 if q2 > q else -1)
+    reach = int(math.ceil(0.5 * float(np.hypot(*a)))) + 2
+    h, w = flat.shape
+    lo = max(reach, margin // 2)
+    ys, xs = np.arange(lo, h - lo), np.arange(lo, w - lo)
+    if len(ys) < 2 or len(xs) < 2:
+        return None
+    stride = max(1, int(math.sqrt(len(ys) * len(xs) / max_samples)))
+    yy, xx = np.meshgrid(ys[::stride], xs[::stride], indexing="ij")
+    lit = (valid[np.clip(np.rint(yy + 0.5 * a[1]).astype(int), 0, h - 1), np.clip(np.rint(xx + 0.5 * a[0]).astype(int), 0, w - 1)]
+           & valid[np.clip(np.rint(yy - 0.5 * a[1]).astype(int), 0, h - 1), np.clip(np.rint(xx - 0.5 * a[0]).astype(int), 0, w - 1)])
+    if lit.sum() < 100:
+        return None
+    num, den = _half_vector_terms(flat, yy[lit], xx[lit], a)
+    return num / den if den > 0 else None

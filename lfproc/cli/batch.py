@@ -77,7 +77,8 @@ def run(args) -> int:
     if to_decode and not (args.calib or args.white or args.white_dir):
         raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
                           "--calib GRID.json (from lfproc calibrate)")
-    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera")):
+    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera"),
+                       (args.dark, "--dark")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
     if args.a is None and args.depth_range is None and args.at is None and args.z_range is None and not args.views:
@@ -104,6 +105,9 @@ def run(args) -> int:
         camera, camera_toml = LightField.read_camera(sources[0]), ""
         if camera is None:
             raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
+    if args.calib and to_decode:   # a grid of another camera: refused here, naming the camera file
+        from ..inputs import check_grid_fits_camera, read_grid_record
+        check_grid_fits_camera(camera, read_grid_record(args.calib))
     if args.views:
         check_view_options(args, camera)
     if args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None:
@@ -123,7 +127,8 @@ def run(args) -> int:
     outdir = os.path.abspath(args.outdir)
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
-                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture)
+                      args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
+                      _abs(args.dark))
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -142,7 +147,7 @@ def run(args) -> int:
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
-            "scheduler": args.scheduler})
+            "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
         return _process(args, jobs, manifest, camera)
 
 

@@ -14,6 +14,8 @@ def register(sub) -> None:
     p.add_argument("--camera", required=True, metavar="CAM",
                    help="camera TOML file: its mla.grid and pitch (mla.pitch_mm / sensor.pixel_pitch_mm) are checked")
     p.add_argument("-o", "--output", required=True, metavar="GRID.json", help="grid file to write")
+    p.add_argument("--dark", metavar="DARK", help="dark frame subtracted from the white image first (recorded in "
+                                                  "GRID.json, and reused by --calib)")
     p.add_argument("--plot", metavar="FILE.png",
                    help="also draw the fitted centres over the white image (needs matplotlib)")
     p.set_defaults(func=run)
@@ -26,24 +28,39 @@ def run(args) -> int:
     from ..atomic import write_text_atomic
     from ..calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
     from ..camera import Camera
+    from ..inputs import (ImageFacts, check_same_sensor, check_white_is_white, file_hash, made_from, probe_image,
+                          read_dark, subtract_dark)
     from ..io import read_capture
+    from .capture_loop import require_output_folder
 
     camera = Camera.from_toml(args.camera)
+    # cheap checks first: where the grid goes, the white image's and the dark frame's headers
+    require_output_file(args.output)
     if args.plot:  # fail before any work (and before any output) when matplotlib is missing
         from ..plots import require_matplotlib
         require_matplotlib()
-    capture = read_capture(args.white, camera)
+        require_output_folder(os.path.dirname(os.path.abspath(args.plot)), "--plot FILE.png")
+    white_facts = probe_image(args.white, camera)
+    if args.dark:
+        check_same_sensor(probe_image(args.dark, camera), white_facts, "dark frame", "white image")
+    dark = read_dark(args.dark, camera) if args.dark else None
+    capture = subtract_dark(read_capture(args.white, camera), dark, "white image")
     cfa = capture.cfa if capture.data.ndim == 2 else "none"
     estimate = find_grid(capture.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=cfa,
                          source=args.white)
     grid = estimate.grid
+    check_white_is_white(args.white, capture.data, cfa, grid)
     pupil = implied_exit_pupil(grid.pitch_px, estimate.pitch_sigma_px, camera)
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
                   camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,
                   micro_image_scale=pupil.scale, micro_image_scale_sigma=pupil.scale_sigma,
                   # null: the fit cannot tell the scale from 1 (telecentric); the range's null end is infinity
                   implied_exit_pupil_distance_mm=None if math.isinf(pupil.distance_mm) else pupil.distance_mm,
-                  implied_exit_pupil_range_mm=[None if math.isinf(v) else v for v in pupil.range_mm])
+                  implied_exit_pupil_range_mm=[None if math.isinf(v) else v for v in pupil.range_mm],
+                  pitch_sigma_px=estimate.pitch_sigma_px,
+                  made_from=made_from(camera, ImageFacts.of_capture(capture), file_hash(args.white),
+                                      None if dark is None else ImageFacts.of_capture(dark),
+                                      None if dark is None else file_hash(args.dark)))
     write_text_atomic(args.output, grid_json_text(record))
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
@@ -56,6 +73,17 @@ def run(args) -> int:
           f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
           f"micro image scale {pupil.scale:.6f}, exit pupil {pupil.describe()}")
     return 0
+
+
+def require_output_file(path: str) -> None:
+    """Fail before any work when the grid file cannot be written there: its folder is a file or not writable,
+    or the path is a folder."""
+    from ..errors import LfprocError
+    from .capture_loop import require_output_folder
+
+    if os.path.isdir(path):
+        raise LfprocError(f"{path}: is a folder; give the grid file's name, e.g. -o {os.path.join(path, 'grid.json')}")
+    require_output_folder(os.path.dirname(os.path.abspath(path)), "-o GRID.json")
 
 
 def grid_json_text(record: dict) -> str:

@@ -25,10 +25,18 @@ def add_decode_options(p) -> None:
                                                     "calibrates the grid (without --calib) and corrects vignetting")
     p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
                                                       "capture's camera with the nearest zoom and focus steps")
+    add_dark_option(p)
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
                    help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
+
+
+def add_dark_option(p) -> None:
+    p.add_argument("--dark", metavar="DARK",
+                   help="dark frame (same camera, size and mode; lens cap on): subtracted per pixel from every capture "
+                        "and white image after the same level mapping; recorded in grids made with it "
+                        "(see docs/inputs.md)")
 
 
 def add_output_folder_option(p) -> None:
@@ -124,15 +132,16 @@ def setup_from_args(args, camera=None, captures=None):
     camera = camera or camera_from_args(args)
     return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
                             demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
-                            captures=captures_of(args) if captures is None else list(captures))
+                            captures=captures_of(args) if captures is None else list(captures),
+                            dark=getattr(args, "dark", None))
 
 
-def require_output_folder(path: str) -> None:
+def require_output_folder(path: str, option: str = "-o OUTDIR") -> None:
     """Fail before any work when OUTDIR cannot be written: a file, a read-only folder, or a missing parent
     that cannot be created. Nothing is created here (the writers create the folder)."""
     path = os.path.abspath(path)
     if os.path.exists(path) and not os.path.isdir(path):
-        raise LfprocError(f"{path}: cannot write there (it is a file, not a folder); choose another -o OUTDIR")
+        raise LfprocError(f"{path}: cannot write there (it is a file, not a folder); choose another {option}")
     existing = path
     while not os.path.exists(existing):
         parent = os.path.dirname(existing)
@@ -141,7 +150,7 @@ def require_output_folder(path: str) -> None:
         existing = parent
     if not os.path.isdir(existing) or not _can_create_files_in(existing):
         raise LfprocError(f"{path}: cannot write there ({existing} is not a writable folder); "
-                          f"choose another output folder with -o")
+                          f"choose another {option}")
 
 
 def _can_create_files_in(folder: str) -> bool:

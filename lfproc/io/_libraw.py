@@ -14,8 +14,13 @@ from ._checks import _NotThisFormat
 BAYER_PATTERNS = ("RGGB", "BGGR", "GRBG", "GBRG")
 
 
-def read_libraw_capture(path: str, camera=None) -> Capture:
-    """Read a camera raw through rawpy: visible mosaic, per-channel black and white levels, CFA."""
+def read_libraw_capture(path: str, camera=None, fallback: bool = False) -> Capture:
+    """Read a camera raw through rawpy: visible mosaic, per-channel black and white levels, CFA.
+
+    ``fallback``: LibRaw is only tried because the reader the extension chose did not recognise the file
+    (a ``.tif`` that is no TIFF); then a file LibRaw cannot open is not a camera raw either, and the
+    caller says "not an image" rather than "corrupt camera raw" (the reader that fails decides).
+    """
     import rawpy
 
     try:
@@ -23,6 +28,8 @@ def read_libraw_capture(path: str, camera=None) -> Capture:
     except rawpy.LibRawFileUnsupportedError:
         raise _NotThisFormat("LibRaw: not a supported camera raw") from None
     except rawpy.LibRawError as exc:
+        if fallback:
+            raise _NotThisFormat(f"LibRaw: {_libraw_message(exc)}") from None
         raise LfprocError(f"{path}: truncated or corrupt camera raw ({_libraw_message(exc)}); "
                           f"re-copy the file from the camera") from None
     try:

@@ -68,8 +68,10 @@ def read_capture(path: str | os.PathLike, camera=None) -> Capture:
         readers = readers[::-1]
     reasons = []
     hint = " (a Lytro .raw needs its metadata NAME.txt or NAME.json beside it)" if extension == ".raw" else ""
-    for reader in readers:
+    for index, reader in enumerate(readers):
         try:
+            if reader is read_libraw_capture and index > 0:
+                return reader(path, camera, fallback=True)   # the extension chose another reader
             return reader(path, camera)
         except _NotThisFormat as exc:
             reasons.append(str(exc))

@@ -1,0 +1,85 @@
+"""Issue 20: a capture given as the white image and a white image given as the capture are each refused with
+one clear line (no internal validation message); renders from lfproc.simulate and the bundled sample."""
+
+import numpy as np
+import pytest
+from conftest import SAMPLES, assert_clean_error, run_cli
+
+from lfproc.camera import Camera
+from lfproc.decode import make_decoder
+from lfproc.errors import LfprocError
+from lfproc.inputs import WHITE_FLATNESS, check_capture_is_not_white, check_white_is_white, lens_flatness
+
+SAMPLE = SAMPLES / "sample"
+CAMERA = SAMPLE / "camera.toml"
+
+
+def test_sample_white_as_capture_and_capture_as_white_are_refused(tmp_path):
+    grid = tmp_path / "grid.json"
+    assert run_cli("calibrate", SAMPLE / "white.png", "--camera", CAMERA, "-o", grid).returncode == 0
+    # the white image as the capture: refocused silently before
+    proc = run_cli("refocus", SAMPLE / "white.png", "--camera", CAMERA, "--calib", grid, "--a", "1", "-o", tmp_path / "a")
+    assert_clean_error(proc, str(SAMPLE / "white.png"), "looks like a white image, not a capture")
+    # both swapped: ended in "light field view_mask must be 11x11 booleans ..." before
+    proc = run_cli("refocus", SAMPLE / "white.png", "--camera", CAMERA, "--white", SAMPLE / "capture.png", "--a", "1",
+                   "-o", tmp_path / "b")
+    assert_clean_error(proc, str(SAMPLE / "capture.png"), "not a white image")
+    assert "view_mask" not in proc.stderr
+    # calibrate wrote a grid after three warnings before
+    proc = run_cli("calibrate", SAMPLE / "capture.png", "--camera", CAMERA, "-o", tmp_path / "g2.json")
+    assert_clean_error(proc, str(SAMPLE / "capture.png"), "not a white image")
+    assert not (tmp_path / "g2.json").exists()
+    # --calib with a capture as the devignetting white image
+    proc = run_cli("views", SAMPLE / "capture.png", "--camera", CAMERA, "--calib", grid, "--white",
+                   SAMPLE / "capture.png", "-o", tmp_path / "c")
+    assert_clean_error(proc, str(SAMPLE / "capture.png"), "not a white image")
+    assert not any(tmp_path.glob("[abc]/*"))
+
+
+CAM = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
+             image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=64,
+             white_level=16383, micro_image_px=11)
+
+
+def _render(texture, distance_mm, noise=None, seed=0):
+    from lfproc.simulate import Plane, Scene, render
+    sim = render(CAM, Scene((Plane(distance_mm, texture),), background=0.5), (264, 352), rotation_deg=0.3,
+                 ideal_views=False, shot_noise_photons=noise, pixel_samples=2, aperture_samples=2, seed=seed)
+    norm = lambda raw: (raw.astype(np.float32) - 64) / (16383 - 64)   # noqa: E731
+    return norm(sim.raw), norm(sim.white), sim.grid
+
+
+@pytest.fixture(scope="module")
+def renders():
+    from lfproc.simulate import Noise, Sinusoid
+    return {"textured": _render(Noise(6.0, low=0.3, high=0.9), 800.0),
+            "low contrast": _render(Noise(6.0, low=0.45, high=0.55), 800.0),          # +-10 % texture
+            "faint far grating": _render(Sinusoid(20.0, low=0.4, high=0.6), 5000.0),
+            "noisy": _render(Noise(6.0, low=0.45, high=0.55), 800.0, noise=300)}
+
+
+def test_renders_captures_pass_and_white_images_given_as_captures_are_refused(renders):
+    for name, (capture, white, grid) in renders.items():
+        decoder = make_decoder(white, grid, CAM.m_hat, "RGGB")
+        views = decoder(capture, "RGGB")
+        assert lens_flatness(views, decoder.views_delivered) > 2 * WHITE_FLATNESS, name
+        check_capture_is_not_white(name, views, decoder.views_delivered)
+        eight_bit = np.round(white * 255) / 255                          # an 8-bit copy of the white image
+        for given in (white, eight_bit):
+            with pytest.raises(LfprocError, match="looks like a white image"):
+                check_capture_is_not_white(name, decoder(given, "RGGB"), decoder.views_delivered)
+
+
+def test_renders_white_images_pass_and_captures_given_as_white_images_are_refused(renders):
+    for name, (capture, white, grid) in renders.items():
+        vignetted = white * np.linspace(1.0, 0.5, white.shape[1])[None, :]      # plus strong vignetting
+        for given in (white, np.round(vignetted * 255) / 255):                   # and 8 bits
+            check_white_is_white(name, given, "RGGB", grid)
+    from whitegen import covering_grid, white_image       # an independent white: hexagonal, noisy, hot pixels,
+    lattice = covering_grid((360, 440), "hexagonal", 27.78, -1.2, (0.11, 0.43))   # cut by the main lens's rim
+    cut = white_image((360, 440), lattice, 0.45 * 27.78, vignetting=0.5, cut_radius_px=200.0, noise_sigma=0.01,
+                      hot_pixels=12, seed=7)
+    check_white_is_white("vignetted.tif", cut, "none", lattice)
+    capture, _, grid = renders["faint far grating"]      # its micro images carry the grating (texture ratio 0.19)
+    with pytest.raises(LfprocError, match="not a white image"):
+        check_white_is_white("capture.tif", capture, "RGGB", grid)
