@@ -30,7 +30,11 @@ from .lightfield import LightField
 
 @dataclass(frozen=True, eq=False)
 class DecodeSetup:
-    """Everything needed to decode captures of one camera: the camera, its grid and white image."""
+    """Everything needed to decode captures of one camera: the camera, its grid and white image.
+
+    ``white`` is the white image read already (for calibration) or None; ``white_path`` its file, read
+    only when the decoder's prepared state is not in the decoder cache (:mod:`lfproc.decoder_cache`).
+    """
 
     camera: Camera
     grid: LensGrid
@@ -39,25 +43,57 @@ class DecodeSetup:
     demosaic_method: str = "fast"
     white_metadata: object | None = None   # lfproc.io.LytroMetadata of a Lytro white image, else None
     _decoders: dict = field(default_factory=dict, repr=False)
+    white_path: str | None = None
+
+    @property
+    def has_white(self) -> bool:
+        return self.white is not None or self.white_path is not None
 
     def decoder_for(self, shape: tuple, cfa: str):
-        """The (cached) decoder for captures of this sensor shape and CFA.
+        """The decoder for captures of this sensor shape and CFA, from this setup's memory, else from
+        the decoder cache, else derived (and cached).
 
         With a white image there is one decoder (it rejects captures of another size or CFA);
         without one, a flat white of each capture's shape stands in.
         """
+        key = "white" if self.has_white else (tuple(shape[:2]), cfa)
+        if key not in self._decoders:
+            from .decoder_cache import cached_decoder
+
+            self._decoders[key] = cached_decoder(self._cache_key(shape, cfa), lambda: self._make_decoder(shape, cfa))
+        return self._decoders[key]
+
+    def prepare(self) -> None:
+        """Have the white image's decoder ready now (from the cache, or derived and cached): a batch does
+        this once before its workers start, and a bad white image fails before any capture is read."""
+        if self.has_white:
+            self.decoder_for((), "none")
+
+    def _make_decoder(self, shape: tuple, cfa: str):
         from .decode import make_decoder
 
-        key = "white" if self.white is not None else (tuple(shape[:2]), cfa)
-        if key not in self._decoders:
-            if self.white is not None:
-                white, white_cfa = self.white.data, self.white.cfa
-            else:
-                white, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
-            self._decoders[key] = make_decoder(white, self.grid, self.camera.m_hat, white_cfa,
-                                               interpolation=self.interpolation,
-                                               demosaic_method=self.demosaic_method)
-        return self._decoders[key]
+        if self.has_white:
+            white = self.white
+            if white is None:
+                from .io import read_capture
+                white = read_capture(self.white_path, self.camera)
+            data, white_cfa = white.data, white.cfa
+        else:
+            data, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
+        return make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
+                            demosaic_method=self.demosaic_method)
+
+    def _cache_key(self, shape: tuple, cfa: str) -> str:
+        from .decoder_cache import array_digest, decoder_key, file_digest
+
+        if self.white_path is not None:
+            white = file_digest(self.white_path)
+        elif self.white is not None:
+            white = array_digest(self.white.data, self.white.cfa)
+        else:
+            white = f"flat {tuple(shape)} {cfa}"
+        return decoder_key(white=white, camera=self.camera, grid=self.grid, interpolation=self.interpolation,
+                           demosaic_method=self.demosaic_method)
 
 
 def read_grid(path: str) -> tuple[LensGrid, str | None]:
@@ -122,15 +158,20 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     if first is not None and white_metadata is not None:
         from .io import check_white_matches
         check_white_matches(first, white_metadata)
-    white_capture = read_capture(white_path, camera) if white_path else None
+    # the white image is read here only to calibrate; for decoding, only if its prepared state is not cached
+    white_capture = read_capture(white_path, camera) if white_path and known_grid is None and calib is None \
+        else None
     if known_grid is not None:
         grid = known_grid
     elif calib is None:
         grid = calibrate_white(white_capture, camera)
-    elif white_capture is None:
+    elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {recorded_white}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
-    return DecodeSetup(camera, grid, white_capture, interpolation, demosaic_method, white_metadata)
+    setup = DecodeSetup(camera, grid, white_capture, interpolation, demosaic_method, white_metadata,
+                        white_path=white_path)
+    setup.prepare()
+    return setup
 
 
 def _lytro_metadata_of(path: str):
