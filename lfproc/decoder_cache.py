@@ -20,7 +20,8 @@ image (and a dark frame, when one is subtracted), the camera, the grid and the d
   most ``LFPROC_CACHE_MAX_GB`` (default 4) GB.
 * **Where**: ``$LFPROC_CACHE_DIR/decoders`` (default ``$XDG_CACHE_HOME/lfproc/decoders``, i.e.
   ``~/.cache/lfproc/decoders``); ``LFPROC_NO_CACHE=1`` disables it (every command derives again);
-  ``lfproc cache --clear`` empties it.
+  ``python -m lfproc.decoder_cache`` says where it is and what it holds, ``--clear`` empties it (or
+  remove the folder: nothing else lives there).
 
 A cache that cannot be written (read-only or full disk) is skipped with one warning: decoding never
 fails because of it.
@@ -133,9 +134,9 @@ def code_digest() -> str:
 
 def grid_identity(grid: LensGrid) -> dict:
     """The grid's defining fields (what ``LensGrid.from_json_dict`` reads; the derived centres left out)."""
-    data = grid.to_json_dict()
-    data.pop("centers_xy_px", None)
-    return data
+    return {"grid": grid.kind, "pitch_px": grid.pitch_px, "rotation_deg": grid.rotation_deg,
+            "residual_rms_px": grid.residual_rms_px, "origin_xy_px": list(grid.origin_xy_px), "rows": grid.rows,
+            "cols": grid.cols, "deviation": None if grid.deviation is None else grid.deviation.to_json_dict()}
 
 
 def decoder_key(*, white: str, camera, grid: LensGrid, interpolation: str, demosaic_method: str,
@@ -307,3 +308,28 @@ def cached_decoder(key: str, build):
         return decoder
     finally:
         lock.__exit__(None, None, None)
+
+
+def main(argv=None) -> int:
+    """``python -m lfproc.decoder_cache [--clear]``: the cache's folder, entries and size; or empty it."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m lfproc.decoder_cache", description=main.__doc__)
+    parser.add_argument("--clear", action="store_true", help="remove every entry")
+    args = parser.parse_args(argv)
+    folder = cache_dir()
+    if folder is None:
+        print("decoder cache disabled (LFPROC_NO_CACHE)")
+        return 0
+    if args.clear:
+        print(f"{folder}: removed {clear(folder)} entries")
+        return 0
+    found = entries(folder)
+    size = sum(os.path.getsize(p) for p in found)
+    print(f"{folder}: {len(found)} entries, {size / 1e9:.2f} GB of at most {max_bytes() / 1e9:.2f} GB "
+          f"(LFPROC_CACHE_MAX_GB)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

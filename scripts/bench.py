@@ -123,7 +123,7 @@ def paper_9um_camera(cfa: str = "none", grid: str = "rectangular"):
 def noise_scene(camera, a: float, tint=(1.0, 1.0, 1.0)):
     """One plane with band-limited noise at the distance that slice ``a`` focuses on."""
     from lfproc import geometry
-    from lfproc.scene import Noise, Plane, Scene
+    from lfproc.simulate import Noise, Plane, Scene
 
     d = geometry.slice_distance_mm(camera, a)
     feature = 4 * camera.mla_pitch_mm * (d - camera.sensor_to_main_lens_mm) / camera.main_focal_length_mm

@@ -64,7 +64,7 @@ def bias_rows() -> list[dict]:
 # ----------------------------------------------------------------------------- 2. colour
 def colour_scene(kind: str):
     from lfproc import Camera, geometry, simulate
-    from lfproc.scene import Noise, Plane, Scene, Uniform
+    from lfproc.simulate import Noise, Plane, Scene, Uniform
 
     cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
                  image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=0,

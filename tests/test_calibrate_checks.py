@@ -171,7 +171,7 @@ def test_cli_reports_model_and_exit_pupil_and_warns_on_a_contradiction(tmp_path)
 def test_cli_warns_when_a_capture_is_given_as_the_white_image(tmp_path):
     import tifffile
 
-    from lfproc.scene import Noise, Plane, Scene
+    from lfproc.simulate import Noise, Plane, Scene
     from lfproc.simulate import render
     camera_text = CAMERA_TOML.format(pixel=0.009, pitch=0.25, f_s=2.749, grid="rectangular", f_number=11.0, pupil="")
     camera_path = tmp_path / "cam.toml"
