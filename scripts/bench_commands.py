@@ -308,10 +308,71 @@ def merge_results(previous: dict | None, new: dict) -> dict:
     return merged
 
 
-def _row(label: str, now: dict, before: dict | None, target: str) -> str:
-    was = f"{before['seconds']:.1f} s, {before['peak_gb']:.2f} GB" if before else "—"
+#: the profile in issue 24, before this work (same capture, 2 cores, one run each)
+BEFORE_PROFILE = [
+    ("`lfproc refocus CAP --camera C --calib GRID.json --a 0:2:0.5`", "10.7–11.6 s, 2.08 GB",
+     "preparing the decoder from the white image 4.1 s (its inverse alone 3.6 s), decoding 2.8 s, reading "
+     "capture and white PNG 1.8 s, building the LightField 0.8 s, refocus + writing ≈ 0.6 s"),
+    ("the same with `--white` (calibrates too)", "10.3 s, 2.12 GB", ""),
+    ("`lfproc views …` (225 TIFFs)", "8.3 s, 2.02 GB", ""),
+]
+#: the phases of PHASES that every decoding command shares (up to the LightField)
+SHARED_PHASES = 5
+
+
+def _row(label: str, now: dict, before: dict | None, target: str, shared_cpu: float | None) -> str:
+    was = "—"
+    if before:
+        cpu_then = f", {before['cpu_s']:.1f} s CPU" if "cpu_s" in before else ""
+        was = f"{before['seconds']:.1f} s{cpu_then}, {before['peak_gb']:.2f} GB"
     cpu = f"{now['cpu_s']:.1f}" if "cpu_s" in now else "—"
-    return f"| `lfproc {label}` | {was} | {now['seconds']:.1f} | {cpu} | {now['peak_gb']:.2f} | {target} |"
+    where = ""
+    if shared_cpu is not None and "cpu_s" in now and "first run" not in label and "NO_CACHE" not in label \
+            and "--white" not in label:
+        where = f"decode path {shared_cpu:.1f} s CPU + the command's own work {max(0.0, now['cpu_s'] - shared_cpu):.1f} s"
+    return (f"| `lfproc {label}` | {was} | {now['seconds']:.1f} | {cpu} | {now['peak_gb']:.2f} | {where} | "
+            f"{target} |")
+
+
+def targets_table(r: dict) -> list[str]:
+    """The issue's targets against this run: wall, CPU, and wall divided by the run's load factor."""
+    load = r.get("load") or {}
+    factor = min(load["before"]["load_factor"], load["after"]["load_factor"]) if load else 1.0
+    rows = {row["case"]: row for row in r.get("commands") or []}
+    phase = {p["phase"]: p for p in (r.get("phases") or {}).get("phases", [])}
+    checks = []
+    refocus = rows.get("refocus --calib, 5 slices (cache ready)")
+    if refocus:
+        checks.append(("`lfproc refocus`, saved calibration", f"≤ {TARGETS['refocus_s']:g} s",
+                       refocus["seconds"], refocus.get("cpu_s"), TARGETS["refocus_s"]))
+        checks.append(("… its peak memory", f"≤ {TARGETS['peak_gb']:g} GB", None, None, None,
+                       refocus["peak_gb"] <= TARGETS["peak_gb"], f"{refocus['peak_gb']:.2f} GB"))
+    views = rows.get("views --calib, 225 TIFFs (cache ready)")
+    if views:
+        checks.append(("`lfproc views`", f"≤ {TARGETS['views_s']:g} s", views["seconds"], views.get("cpu_s"),
+                       TARGETS["views_s"]))
+    if "decoding" in phase:
+        checks.append(("decoding (a phase of refocus)", f"≤ {TARGETS['decode_s']:g} s", phase["decoding"]["wall_s"],
+                       phase["decoding"]["cpu_s"], TARGETS["decode_s"]))
+    if r.get("batch"):
+        b = r["batch"]
+        one = b["workers_1"]
+        checks.append((f"batch of {b['captures']}, per capture (1 worker)", f"≤ {TARGETS['batch_s_per_capture']:g} s",
+                       one["per_capture_s"], one["cpu_s"] / b["captures"], TARGETS["batch_s_per_capture"]))
+        checks.append(("batch, 2 workers against 1", f"≥ {TARGETS['batch_speedup']:g}×", None, None, None,
+                       b["speedup"] >= TARGETS["batch_speedup"], f"{b['speedup']:.2f}×"))
+    lines = ["| target | goal | wall s | CPU s | wall ÷ load factor | met |", "| --- | --- | --- | --- | --- | --- |"]
+    for check in checks:
+        if check[2] is None:
+            name, goal, _, _, _, ok, value = check
+            lines.append(f"| {name} | {goal} | {value} | | | {'yes' if ok else 'no'} |")
+            continue
+        name, goal, wall, cpu, limit = check
+        estimate = wall / factor
+        verdict = "yes" if wall <= limit else ("on an idle machine (estimate)" if estimate <= limit else "no")
+        lines.append(f"| {name} | {goal} | {wall:.2f} | {'—' if cpu is None else f'{cpu:.2f}'} | {estimate:.2f} | "
+                     f"{verdict} |")
+    return lines
 
 
 def markdown(r: dict) -> str:
@@ -327,18 +388,31 @@ def markdown(r: dict) -> str:
                       f"(before the commands) and {load['after']['load_factor']:.1f}× (after) its CPU time in wall "
                       "time (1.0 = an idle core): wall times below are inflated by about that much; CPU times "
                       "and memory are not."]
+    if r.get("commands") and r.get("load"):
+        lines += ["", "## Targets (issue 24)", "", *targets_table(r), "",
+                  "*wall ÷ load factor* divides the wall time by the slowdown the load gauge measured in this run: "
+                  "an estimate of the wall time on an idle machine, for runs on a shared one."]
     if r.get("commands"):
         before = {row["case"]: row for row in r.get("before_commands") or []}
         targets = {"refocus --calib, 5 slices (cache ready)": f"≤ {TARGETS['refocus_s']:g} s, "
                                                               f"≤ {TARGETS['peak_gb']:g} GB",
                    "views --calib, 225 TIFFs (cache ready)": f"≤ {TARGETS['views_s']:g} s"}
-        lines += ["", "| command | before (wall, peak) | wall s | CPU s | peak GB | target |",
-                  "| --- | --- | --- | --- | --- | --- |"]
+        phase_list = (r.get("phases") or {}).get("phases")
+        shared = sum(p["cpu_s"] for p in phase_list[:SHARED_PHASES]) if phase_list else None
+        lines += ["", "## Commands, before and after", "",
+                  "| command | before (wall, CPU, peak) | wall s | CPU s | peak GB | where the CPU time goes | target |",
+                  "| --- | --- | --- | --- | --- | --- | --- |"]
         for row in r["commands"]:
-            lines.append(_row(row["case"], row, before.get(row["case"]), targets.get(row["case"], "")))
+            lines.append(_row(row["case"], row, before.get(row["case"]), targets.get(row["case"], ""), shared))
+        lines += ["", "*Decode path*: the CPU time of the first phases below (starting, imports, the decoder from the "
+                      "cache, reading the capture, decoding, the LightField), which every decoding command shares; "
+                      "the rest is the command's own work (refocusing, depth sweep, viewer images, writing)."]
         if r.get("before_code"):
-            lines += ["", f"*Before*: the same script's commands on the code of {r['before_code']} (no decoder "
-                          "cache: every command derives the decoder), in the same run."]
+            lines += ["", f"*Before*: the same commands on the code of {r['before_code']} (no decoder cache: every "
+                          "command derives the decoder; it ignores `LFPROC_NO_CACHE`), in the same run."]
+        lines += ["", "The profile of issue 24, before this work (one run each, a less loaded machine):", "",
+                  "| command | then | where the time went |", "| --- | --- | --- |"]
+        lines += [f"| {c} | {t} | {w} |" for c, t, w in BEFORE_PROFILE]
     if r.get("floors"):
         f = r["floors"]
         lines += ["", "Floors measured in the same run: Python starting and importing numpy, OpenCV, numba, "

@@ -37,6 +37,7 @@ def test_markdown_of_partial_and_older_results():
     old_row = {"case": "views, 225 TIFFs, --calib", "seconds": 10.7, "peak_gb": 2.02}
     page = bc.markdown({"date": "d", "machine": "m", "commands": [old_row, ROW], "before_commands": [old_row]})
     assert "| `lfproc views, 225 TIFFs, --calib` | 10.7 s, 2.02 GB | 10.7 | — | 2.02 |" in page
+    assert "| `lfproc refocus --calib, 5 slices (cache ready)` | — | 4.2 | 3.9 | 0.90 |" in page
     assert "≤ 5 s, ≤ 1.5 GB" in page
 
 
