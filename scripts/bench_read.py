@@ -5,7 +5,6 @@ OpenImageIO's own read and ``numpy.fromfile``; a stage of ``scripts/bench.py`` (
 
 from __future__ import annotations
 
-import argparse
 import os
 import tempfile
 import sys
@@ -74,16 +73,13 @@ def suite_section(r: dict) -> list[str]:
     return out
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the small capture of bench.py --quick")
-    args = parser.parse_args(argv)
-    s = suite.settings_for(args.quick, None)
-    big = suite.big_capture(s)
+def measure(s, big) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
-        r = {"read": stage_read(big["sim"].raw, big["camera"], s, tmp)}
-    print("\n".join(suite_section(r)))
-    return 0
+        return {"read": stage_read(big["sim"].raw, big["camera"], s, tmp)}
+
+
+def main(argv=None) -> int:
+    return suite.run_stage_alone(__doc__.splitlines()[0], measure, suite_section, argv)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -61,19 +60,16 @@ def suite_section(r: dict) -> list[str]:
     return out
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the small capture of bench.py --quick")
-    args = parser.parse_args(argv)
-    s = suite.settings_for(args.quick, None)
-    big = suite.big_capture(s)
+def measure(s, big) -> dict:
     from lfproc.decode import make_decoder
 
     camera = big["camera"]
     views = make_decoder(big["white"], big["sim"].grid, camera.m_hat, camera.cfa)(big["raw"])
-    r = {"views": stage_views(views, camera, s)}
-    print("\n".join(suite_section(r)))
-    return 0
+    return {"views": stage_views(views, camera, s)}
+
+
+def main(argv=None) -> int:
+    return suite.run_stage_alone(__doc__.splitlines()[0], measure, suite_section, argv)
 
 
 if __name__ == "__main__":

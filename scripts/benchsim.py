@@ -149,3 +149,16 @@ def big_capture(s: Settings) -> dict:
                           pixel_samples=1, aperture_samples=1, ideal_views=False, seed=1)
     return {"sim": sim, "camera": camera, "raw": normalised(sim.raw, camera), "white": normalised(sim.white, camera),
             "render_s": time.perf_counter() - start}
+
+
+def run_stage_alone(description: str, measure, section, argv=None) -> int:
+    """A stage script run on its own: ``--quick`` picks the small capture; ``measure(settings, capture)``
+    gives the stage's results (keyed as in ``bench.py``), whose section of the page is printed."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--quick", action="store_true", help="the small capture of bench.py --quick")
+    args = parser.parse_args(argv)
+    s = settings_for(args.quick, None)
+    print("\n".join(section(measure(s, big_capture(s)))))
+    return 0
