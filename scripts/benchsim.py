@@ -98,7 +98,8 @@ def noise_scene(camera, a: float, tint=(1.0, 1.0, 1.0)):
 
 def normalised(dn: np.ndarray, camera) -> np.ndarray:
     """16-bit DN to the linear float32 that ``read_capture`` returns."""
-    return (dn.astype(np.float32) - np.float32(camera.black_level)) / np.float32(camera.white_level - camera.black_level)
+    black, white = camera.raw_levels(65535.0)   # the simulator's 16-bit DN; a camera without a white level: 65535
+    return (dn.astype(np.float32) - np.float32(black)) / np.float32(white - black)
 
 
 def centre_crop(camera, full_shape, crop_shape) -> tuple[tuple[slice, slice], object]:
