@@ -39,11 +39,13 @@ def view_runs(delivered: np.ndarray) -> list[tuple[int, int, int]]:
 
 
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
-              interpolation: str, runs: list | None = None) -> np.ndarray:
+              interpolation: str, runs: list | None = None, scratch: np.ndarray | None = None) -> np.ndarray:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
     With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
+    ``scratch``, a flat float32 buffer reused from band to band, holds the result where it is large
+    enough (a fresh band-sized array costs its page faults again for every band).
     """
     runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
@@ -51,7 +53,10 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
     strip = to_channels(sensor[y0:y1], cfa, demosaic_method)
     channels = strip.shape[2]
     n = len(rows)
-    out = np.empty((m_hat, m_hat * n, grid.cols, channels), dtype=np.float32)
+    shape = (m_hat, m_hat * n, grid.cols, channels)
+    size = int(np.prod(shape))
+    out = scratch[:size].reshape(shape) if scratch is not None and scratch.size >= size else \
+        np.empty(shape, dtype=np.float32)
     flag = cv_flag(interpolation)
     if strip.shape[0] == 0:
         out[...] = 0.0
@@ -106,10 +111,14 @@ class Decoder:
         out = np.zeros((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
         runs = view_runs(np.ones((m, m), bool) if self.views_delivered is None else self.views_delivered)
         step = _band_rows(m, grid.cols, self.channels)
+        scratch = None
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation, runs)
+            if scratch is None:   # the first band is the largest (hexagonal bands read one or two rows more)
+                scratch = np.empty(m * m * (len(rows) + 2) * grid.cols * self.channels, dtype=np.float32)
+            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation, runs,
+                              scratch)
             for ky, kx0, kx1 in runs:
                 run = views[ky:ky + 1, kx0:kx1]
                 run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
@@ -130,9 +139,10 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     c = (m_hat - 1) // 2
     runs = view_runs(delivered) or [(c, c, c + 1)]   # none delivered: the central view for the level alone
     step = _band_rows(m_hat, grid.cols, channels)
+    scratch = np.empty(m_hat * m_hat * min(step, grid.rows) * grid.cols * channels, dtype=np.float32)
     for r0 in range(0, grid.rows, step):
         rows = range(r0, min(r0 + step, grid.rows))
-        band = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation, runs)
+        band = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation, runs, scratch)
         for ky, kx0, kx1 in runs:
             inverse[ky, kx0:kx1, r0:rows.stop] = band[ky, kx0:kx1]
     # the bright level over the views delivered (a strided subset): the others are 0 and carry no signal
