@@ -14,6 +14,7 @@ metadata (`camera_for_captures`).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sys
@@ -171,7 +172,9 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     setup = DecodeSetup(camera, grid, white_capture, interpolation, demosaic_method, white_metadata,
                         white_path=white_path)
     setup.prepare()
-    return setup
+    # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
+    # travel to batch workers); the file is read again only if the decoder must be derived again
+    return dataclasses.replace(setup, white=None) if white_path is not None else setup
 
 
 def _lytro_metadata_of(path: str):
