@@ -124,8 +124,8 @@ STAGE_PAGES = [
     "numpy 2.4 s | ≤ 0.5 s |",
     "| `lfproc calibrate`, 41 Mpx white | 2.6 s CPU, 0.34 GB peak | one FFT of the image 0.84 s CPU; previous code "
     "40 s, 2.96 GB | ≤ 3 s, ≤ 1.5 GB |",
-    "| `lfproc refocus` / `views`, whole command, saved calibration | 4.0 / 4.1 s CPU, 0.92 / 0.85 GB peak | the "
-    "code before the decoder cache, same run: 8.7 / 8.3 s CPU, 2.08 / 2.02 GB | ≤ 5 s, ≤ 1.5 GB |",
+    "| `lfproc refocus` / `views`, whole command, saved calibration | 3.9 / 3.2 s CPU, 0.89 / 0.83 GB peak | the "
+    "code before the decoder cache, same run: 8.0 / 7.7 s CPU, 2.08 / 2.02 GB | ≤ 5 s, ≤ 1.5 GB |",
     "| writing 225 view TIFFs + sidecars | 58–98 % of the disk's sequential speed (two runs, fastest of 3 each) | one `tofile` of the same bytes | "
     "≥ 50 % |",
     "| depth map of a 15 × 15 × 434 × 625 × 3 light field | 1.7 s | 28 × one refocused slice | ≤ 10 s |",
