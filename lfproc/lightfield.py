@@ -59,7 +59,7 @@ class LightField:
             if mask.shape != v.shape[:2] or not mask.any():
                 raise LfprocError(f"light field view_mask must be {v.shape[0]}x{v.shape[0]} booleans marking at least "
                                   f"one view, got shape {mask.shape}")
-            if not mask.all() and v[~mask].any():
+            if not mask.all() and _any_nonzero(v, ~mask):
                 raise LfprocError("light field views that view_mask leaves out must be 0 (refocusing sums every "
                                   "view); build it with LightField.from_views, which zeroes them")
             object.__setattr__(self, "view_mask", None if mask.all() else mask)
@@ -81,7 +81,7 @@ class LightField:
         arr = np.ascontiguousarray(arr)
         if view_mask is not None:
             unmarked = ~np.asarray(view_mask, dtype=bool)
-            if unmarked.shape == arr.shape[:2] and unmarked.any() and arr[unmarked].any():
+            if unmarked.shape == arr.shape[:2] and unmarked.any() and _any_nonzero(arr, unmarked):
                 arr = arr.copy() if arr is views else arr
                 arr[unmarked] = 0.0
         return cls(arr, camera, grid, view_mask)
@@ -163,6 +163,12 @@ class LightField:
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
         return cls.from_views(views, camera, grid, members.get("view_mask"))
+
+
+def _any_nonzero(views: np.ndarray, which: np.ndarray) -> bool:
+    """Whether any of the views ``which`` marks holds a nonzero value: view by view, no copy (the views
+    a decoder never wrote are never-touched zero memory, and stay so)."""
+    return any(views[ky, kx].any() for ky, kx in zip(*np.nonzero(which)))
 
 
 def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:

@@ -20,6 +20,7 @@ metadata (`camera_for_captures`).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 import warnings
@@ -38,8 +39,11 @@ class DecodeSetup:
     """Everything needed to decode captures of one camera: the camera, its grid and white image.
 
     ``record`` (an `lfproc.inputs.GridRecord`) says what the grid was made from, ``dark`` is the dark
-    frame (`lfproc.io.Capture`, already subtracted from ``white``) that is subtracted from every capture,
-    and ``reference`` (`lfproc.inputs.ImageFacts`) the sensor size and CFA every capture must have.
+    frame (`lfproc.io.Capture`) that is subtracted from the white image and every capture, and
+    ``reference`` (`lfproc.inputs.ImageFacts`) the sensor size and CFA every capture must have. ``white``
+    is the white image (dark frame subtracted) where it was read already (to calibrate) or None;
+    ``white_path`` its file, read only when the decoder's prepared state is not in the decoder cache
+    (:mod:`lfproc.decoder_cache`).
     """
 
     camera: Camera
@@ -52,29 +56,70 @@ class DecodeSetup:
     record: object | None = None           # lfproc.inputs.GridRecord
     dark: object | None = None             # lfproc.io.Capture of the dark frame
     reference: object | None = None        # lfproc.inputs.ImageFacts every capture must match
+    white_path: str | None = None
+
+    @property
+    def has_white(self) -> bool:
+        return self.white is not None or self.white_path is not None
 
     def decoder_for(self, shape: tuple, cfa: str):
-        """The (cached) decoder for captures of this sensor shape and CFA.
+        """The decoder for captures of this sensor shape and CFA, from this setup's memory, else from
+        the decoder cache, else derived (and cached).
 
         With a white image there is one decoder (it rejects captures of another size or CFA);
         without one, a flat white of each capture's shape stands in.
         """
+        key = "white" if self.has_white else (tuple(shape[:2]), cfa)
+        if key not in self._decoders:
+            from .decoder_cache import cached_decoder
+
+            self._decoders[key] = cached_decoder(self._cache_key(shape, cfa), lambda: self._make_decoder(shape, cfa))
+        return self._decoders[key]
+
+    def prepare(self) -> None:
+        """Have the white image's decoder ready now (from the cache, or derived and cached): a batch does
+        this once before its workers start, and a bad white image fails before any capture is read."""
+        if self.has_white:
+            self.decoder_for((), "none")
+
+    def _make_decoder(self, shape: tuple, cfa: str):
         from .decode import make_decoder
 
-        key = "white" if self.white is not None else (tuple(shape[:2]), cfa)
-        if key not in self._decoders:
-            if self.white is not None:
-                white, white_cfa = self.white.data, self.white.cfa
-            else:
-                white, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
-            decoder = make_decoder(white, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
-                                   demosaic_method=self.demosaic_method)
-            if not np.asarray(decoder.views_delivered).any():
-                where = self.white.source if self.white is not None else "the grid"
-                raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
-                                  f"image where the grid puts one); pass the white image of this camera as --white")
-            self._decoders[key] = decoder
-        return self._decoders[key]
+        if self.has_white:
+            white = self.white if self.white is not None else self._read_white()
+            data, white_cfa = white.data, white.cfa
+        else:
+            data, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
+        decoder = make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
+                               demosaic_method=self.demosaic_method)
+        if not np.asarray(decoder.views_delivered).any():
+            where = self.white_path or (self.white.source if self.white is not None else "the grid")
+            raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
+                              f"image where the grid puts one); pass the white image of this camera as --white")
+        return decoder
+
+    def _read_white(self):
+        """The white image from its file, dark frame subtracted, checked to be a white image (not a capture
+        of a scene) against the grid it is used with: what a decoder derived anew needs."""
+        from .inputs import check_white_is_white, subtract_dark
+        from .io import read_capture
+
+        white = subtract_dark(read_capture(self.white_path, self.camera), self.dark, "white image")
+        check_white_is_white(white.source, white.data, white.cfa, self.grid)
+        return white
+
+    def _cache_key(self, shape: tuple, cfa: str) -> str:
+        from .decoder_cache import array_digest, decoder_key, file_digest
+
+        if self.white_path is not None:
+            white = file_digest(self.white_path)
+        elif self.white is not None:
+            white = array_digest(self.white.data, self.white.cfa)
+        else:
+            white = f"flat {tuple(shape)} {cfa}"
+        dark = None if self.dark is None else array_digest(self.dark.data, self.dark.cfa)
+        return decoder_key(white=white, dark=dark, camera=self.camera, grid=self.grid,
+                           interpolation=self.interpolation, demosaic_method=self.demosaic_method)
 
     def check_capture(self, capture) -> None:
         """Refuse a capture whose size, channels or CFA differ from the white image's (or the grid's record)."""
@@ -175,32 +220,32 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     if first is not None and white_metadata is not None:
         from .io import check_white_matches
         check_white_matches(first, white_metadata)
-    # the expensive part: read the white image and the dark frame, calibrate
+    # the expensive part: read the white image (to calibrate here, or on a decoder cache miss) and the dark frame
     from .inputs import read_dark, subtract_dark
 
     dark_capture = read_dark(dark_path, camera) if dark_path else None
-    white_capture = read_capture(white_path, camera) if white_path else None
-    if white_capture is not None:
-        white_capture = subtract_dark(white_capture, dark_capture, "white image")
-    if white_capture is not None and (record is not None or grid is not None):   # not calibrated here: checked here
-        from .inputs import check_white_is_white
-        check_white_is_white(white_capture.source, white_capture.data, white_capture.cfa,
-                             grid if grid is not None else record.grid)
+    white_capture = None
     if grid is not None:
-        record = record or _record_of(grid, white_capture)
+        record = record or _record_of(grid, white_path)
     elif record is None:
+        white_capture = subtract_dark(read_capture(white_path, camera), dark_capture, "white image")
         record = calibrate_white(white_capture, camera, record=True, dark=dark_capture)
-    elif white_capture is None:
+    elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
-    return DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
-                       demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference)
+    setup = DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
+                        demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
+                        white_path=white_path)
+    setup.prepare()
+    # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
+    # travel to batch workers); the file is read again only if the decoder must be derived again
+    return dataclasses.replace(setup, white=None) if white_path is not None else setup
 
 
-def _record_of(grid, white_capture):
+def _record_of(grid, white_path):
     from .inputs import GridRecord
 
-    return GridRecord(white_capture.source if white_capture is not None else "grid", grid)
+    return GridRecord(white_path if white_path is not None else "grid", grid)
 
 
 def _name_of(reference, calib) -> str:

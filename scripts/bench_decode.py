@@ -14,7 +14,7 @@
    The floor holds what any decoder must: the two 16-bit sensor images and the output views. The
    straightforward implementation is the previous ``lfproc/decode.py`` (git commit 3cabae7): a full
    demosaiced float32 image, full float64 sample positions, full-size maps and temporaries. Whole
-   ``lfproc decode`` and ``lfproc refocus`` commands on the same sensor are measured too.
+   Whole commands on the same sensor: ``scripts/bench_commands.py``.
 
 Writes ``docs/benchmarks-decode.md`` and ``.json``.
 """
@@ -22,6 +22,7 @@ Writes ``docs/benchmarks-decode.md`` and ``.json``.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime as dt
 import json
 import os
@@ -30,9 +31,14 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib as bl  # noqa: E402  (this folder)
+import benchsim as suite  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
@@ -64,7 +70,7 @@ def bias_rows() -> list[dict]:
 # ----------------------------------------------------------------------------- 2. colour
 def colour_scene(kind: str):
     from lfproc import Camera, geometry, simulate
-    from lfproc.scene import Noise, Plane, Scene, Uniform
+    from lfproc.simulate import Noise, Plane, Scene, Uniform
 
     cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
                  image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=0,
@@ -185,23 +191,6 @@ def illum_rows(folder: Path) -> list[dict]:
     return rows
 
 
-def command_rows(folder: Path) -> list[dict]:
-    """Peak RSS of whole commands on the Illum-sized capture of ``scripts/bench_commands.py`` (PNG files)."""
-    sys.path.insert(0, str(ROOT / "scripts"))
-    import bench_commands
-
-    bench_commands.make_capture(folder)
-    base = [str(folder / "capture.png"), "--camera", str(folder / "camera.toml"), "--calib",
-            str(folder / "grid.json"), "--white", str(folder / "white.png")]
-    rows = []
-    for label, argv in (("lfproc decode", ["decode", *base, "-o", str(folder / "lf.lfp.npz")]),
-                        ("lfproc refocus, 5 slices", ["refocus", *base, "--a", "-1:3", "-o", str(folder / "r")])):
-        result = bench_commands.run_command(argv)
-        rows.append({"command": label, "seconds": result["seconds"], "peak_gb": result["peak_bytes"] / 1e9})
-        print("command", rows[-1], flush=True)
-    return rows
-
-
 # ----------------------------------------------------------------------------- report
 def markdown(result: dict) -> str:
     lines = ["# Decoding benchmarks", "",
@@ -248,13 +237,6 @@ def markdown(result: dict) -> str:
             lines.append(f"| {names[r['mode']]} | {' × '.join(map(str, r['shape']))} | {r['prepare_s']:.2f} | "
                          f"{r['decode_s']:.2f} | {r['peak_gb']:.2f} | {r['peak_gb'] / floor:.2f} |")
         lines.append("")
-    if result.get("commands"):
-        lines += ["Whole commands on the same sensor (the PNG capture of `scripts/bench_commands.py`, `--calib` "
-                  "and `--white`), peak RSS of a fresh process; the target for refocus is ≤ 2.5 GB (it was "
-                  "3.22 GB with the previous decoder, `docs/benchmarks-commands.md`):", "",
-                  "| command | wall s | peak RSS (GB) |", "| --- | --- | --- |"]
-        lines += [f"| `{r['command']}` | {r['seconds']:.1f} | {r['peak_gb']:.2f} |" for r in result["commands"]]
-        lines.append("")
     return "\n".join(lines)
 
 
@@ -262,7 +244,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(ROOT / "docs"))
     parser.add_argument("--skip-illum", action="store_true")
-    parser.add_argument("--only", choices=["bias", "colour", "illum", "commands"])
+    parser.add_argument("--only", choices=["bias", "colour", "illum"])
     args = parser.parse_args(argv)
     result = {"machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.python_version()}",
               "date": dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
@@ -274,9 +256,6 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory(prefix="lfproc-bench-decode-") as tmp:
             result["illum_setup"] = make_illum(Path(tmp))
             result["illum"] = illum_rows(Path(tmp))
-    if args.only in (None, "commands") and not args.skip_illum:
-        with tempfile.TemporaryDirectory(prefix="lfproc-bench-decode-") as tmp:
-            result["commands"] = command_rows(Path(tmp))
     out = Path(args.out)
     json_path = out / "benchmarks-decode.json"
     if json_path.exists() and args.only:      # keep the other sections of an earlier full run
@@ -285,6 +264,192 @@ def main(argv=None) -> int:
     (out / "benchmarks-decode.md").write_text(markdown(result))
     print(f"wrote {out / 'benchmarks-decode.md'}")
     return 0
+
+
+# ----------------------------------------------------------------------------- the stage of scripts/bench.py
+def remap_floor(image: np.ndarray, grid, m_hat: int, interpolation: str, repeats: int) -> float:
+    """Median time of cv2.remap alone: the decoder's sample maps (float32, precomputed) into one output."""
+    import cv2
+
+    from lfproc.decode import sample_positions
+
+    flag = {"nearest": cv2.INTER_NEAREST, "linear": cv2.INTER_LINEAR, "cubic": cv2.INTER_CUBIC,
+            "lanczos": cv2.INTER_LANCZOS4}[interpolation]
+    x, y = sample_positions(grid, m_hat)
+    maps = [(np.ascontiguousarray(x[k].reshape(-1, grid.cols), dtype=np.float32),
+             np.ascontiguousarray(y[k].reshape(-1, grid.cols), dtype=np.float32)) for k in range(m_hat)]
+    del x, y
+    out = np.empty((m_hat, m_hat * grid.rows, grid.cols, image.shape[2]), dtype=np.float32)
+
+    def run():
+        for k, (mx, my) in enumerate(maps):
+            cv2.remap(image, mx, my, flag, dst=out[k], borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+    return bl.measure(run, repeats, memory=False).median_s
+
+
+def stage_decode_speed(raw: np.ndarray, white: np.ndarray, grid, camera, s: suite.Settings) -> tuple[dict, np.ndarray]:
+    """Decode the big capture with every interpolation and demosaic; floors; the component costs."""
+    from lfproc.decode import hex_to_rect, make_decoder, to_channels
+
+    mpx = raw.size / 1e6
+    small = (min(raw.shape[0], 400), min(raw.shape[1], 560))
+    where, small_grid = suite.centre_crop(camera, raw.shape, small)
+    small_raw, small_white = raw[where], white[where]
+    make_decoder(small_white, small_grid, camera.m_hat, camera.cfa)(small_raw)   # imports, OpenCV start-up
+    decoder, prepare_s = bl.time_once(lambda: make_decoder(white, grid, camera.m_hat, camera.cfa,
+                                                           interpolation="linear", demosaic_method="fast"))
+    copy_floor = bl.measure(lambda: raw.copy(), s.cheap_repeats, memory=False).median_s
+    rows, views = [], None
+    cases = [(interp, "fast") for interp in suite.INTERPOLATIONS] + [("linear", "careful")]
+    for interp, method in cases:
+        # the same decoder with another interpolation/demosaic for the capture: the per-capture call is
+        # what is timed; make_decoder (the white image's share) is timed once, for linear/fast
+        dec = dataclasses.replace(decoder, interpolation=interp, demosaic_method=method)
+        timing, result = bl.measure_keeping(lambda: dec(raw), s.repeats)
+        rows.append({"interpolation": interp, "demosaic": method, "timing": timing.as_dict(),
+                     "mpx_per_s": mpx / timing.median_s, "ratio_to_copy": timing.median_s / copy_floor,
+                     "meets_target": timing.median_s <= suite.DECODE_TARGET_S})
+        suite.log(f"  decode {interp}/{method}: {timing.median_s:.2f} s (peak {timing.peak_mb:.0f} MB)")
+        if interp == "linear" and method == "fast":
+            views = result
+        del result
+    image = to_channels(raw, camera.cfa, "fast")
+    for row in rows:
+        if row["demosaic"] == "fast":
+            row["remap_floor_s"] = remap_floor(image, grid, camera.m_hat, row["interpolation"], s.repeats)
+            row["ratio_to_remap"] = row["timing"]["median_s"] / row["remap_floor_s"]
+    components = {
+        "demosaic_fast_s": bl.measure(lambda: to_channels(raw, camera.cfa, "fast"), s.cheap_repeats, memory=False).median_s,
+        "demosaic_careful_s": bl.measure(lambda: to_channels(raw, camera.cfa, "careful"), s.cheap_repeats,
+                                         memory=False).median_s,
+    }
+    if grid.kind == "hexagonal":
+        raw_views = decoder.inverse_white   # hexagonal-lattice views, the shape hex_to_rect receives
+        components["hex_to_rect_s"] = bl.measure(lambda: hex_to_rect(raw_views, grid), s.cheap_repeats,
+                                                 memory=False).median_s
+    result = {"sensor_shape": list(raw.shape), "mpx": mpx, "lens_grid": [grid.rows, grid.cols, grid.kind],
+              "views_shape": list(views.shape), "views_gb": views.nbytes / 1e9, "prepare_s": prepare_s,
+              "copy_floor_s": copy_floor, "rows": rows, "components": components}
+    return result, views
+
+
+def stage_decode_scaling(raw, white, camera, s: suite.Settings, full_row: dict) -> dict:
+    """Decode (linear, fast) time against sensor size: central crops of the big capture, exact crop grids."""
+    from lfproc.decode import make_decoder
+
+    points = []
+    for shape in suite.crop_shapes(raw.shape):
+        if tuple(shape) == tuple(raw.shape):
+            median = full_row["timing"]["median_s"]
+        else:
+            where, grid = suite.centre_crop(camera, raw.shape, shape)
+            crop_raw, crop_white = np.ascontiguousarray(raw[where]), np.ascontiguousarray(white[where])
+            dec = make_decoder(crop_white, grid, camera.m_hat, camera.cfa)
+            median = bl.measure(lambda: dec(crop_raw), s.cheap_repeats, memory=False).median_s
+        points.append({"sensor_shape": list(shape), "mpx": shape[0] * shape[1] / 1e6, "median_s": median})
+        suite.log(f"  decode scaling {shape}: {median:.3f} s")
+    fit = bl.power_law_fit([p["mpx"] for p in points], [p["median_s"] for p in points])
+    return {"points": points, "fit": fit}
+
+
+def render_psnr_capture(camera, s: suite.Settings):
+    from lfproc import simulate
+
+    tint = (1.0, 0.7, 0.4) if camera.cfa != "none" else (1.0, 1.0, 1.0)
+    return simulate.render(camera, suite.noise_scene(camera, 1.0, tint), s.psnr_shape, rotation_deg=0.4,
+                           offset_px=(0.3, -0.2), rim_radius_mm=None, pixel_samples=s.psnr_pixel_samples,
+                           aperture_samples=s.psnr_aperture_samples, seed=1)
+
+
+def stage_decode_accuracy(s: suite.Settings) -> dict:
+    """PSNR of decoded views against the simulator's ideal views (9 µm pixels, 250 µm lenses, m̂ = 25)."""
+    from lfproc.decode import decode, hex_to_rect
+
+    rows = []
+
+    def add(label, sim, interp, method, rings=1):
+        cam = sim.camera
+        views = decode(suite.normalised(sim.raw, cam), suite.normalised(sim.white, cam), sim.grid, cam.m_hat, cam.cfa,
+                       interpolation=interp, demosaic_method=method)
+        ideal, weight = sim.ideal_views, sim.ideal_weight
+        if sim.grid.kind == "hexagonal":
+            ideal, _ = hex_to_rect(ideal, sim.grid)
+            weight = hex_to_rect(weight[..., None], sim.grid)[0][..., 0]
+        kind = sim.grid.kind
+        mask = bl.decode_psnr_mask(weight, kind, rings_excluded=rings)
+        value = bl.psnr_db(views[mask], ideal[mask])
+        outer = bl.decode_psnr_mask(weight, kind, rings_excluded=-1) & ~mask
+        outer_db = bl.psnr_db(views[outer], ideal[outer]) if outer.any() else None
+        rows.append({"capture": label, "interpolation": interp, "demosaic": method, "psnr_db": value,
+                     "outer_ring_psnr_db": outer_db, "rings_excluded": rings,
+                     "meets_target": value >= suite.PSNR_TARGET_DB if interp != "nearest" else None})
+        suite.log(f"  PSNR {label} {interp}/{method}: {value:.1f} dB")
+
+    start = time.perf_counter()
+    mono = render_psnr_capture(suite.paper_9um_camera(), s)
+    for interp in suite.INTERPOLATIONS:
+        add("mono, rectangular", mono, interp, "fast")
+    bayer = render_psnr_capture(suite.paper_9um_camera("RGGB"), s)
+    for method in ("fast", "careful"):
+        add("RGGB, rectangular", bayer, "linear", method)
+    add("RGGB, rectangular", bayer, "cubic", "careful")
+    hexa = render_psnr_capture(suite.paper_9um_camera(grid="hexagonal"), s)
+    add("mono, hexagonal", hexa, "linear", "fast")
+    # convergence: one more sample per axis must not change the PSNR (the reference is not the limit)
+    finer = dataclasses.replace(s, psnr_pixel_samples=s.psnr_pixel_samples + 1,
+                                psnr_aperture_samples=s.psnr_aperture_samples + 1)
+    add(f"mono, rectangular, {finer.psnr_pixel_samples}²×{finer.psnr_aperture_samples}² samples",
+        render_psnr_capture(suite.paper_9um_camera(), finer), "linear", "fast")
+    return {"sensor_shape": list(s.psnr_shape), "pixel_samples": s.psnr_pixel_samples,
+            "aperture_samples": s.psnr_aperture_samples, "rows": rows,
+            "seconds_incl_render": time.perf_counter() - start}
+
+
+def suite_section(r: dict) -> list[str]:
+    """The decode section of docs/benchmarks.md (``scripts/bench.py``)."""
+    out = []
+    dec, acc, sc = r["decode"], r["decode_accuracy"], r["decode_scaling"]
+    comp = dec["components"]
+    out += ["## Decode (`lfproc.decode.make_decoder` + call)", "",
+            f"Speed on the {dec['sensor_shape'][1]} × {dec['sensor_shape'][0]} px capture ({dec['mpx']:.1f} Mpx, "
+            f"{dec['lens_grid'][0]} × {dec['lens_grid'][1]} hexagonal lenses → views "
+            f"{' × '.join(str(v) for v in dec['views_shape'])} float32 = {dec['views_gb']:.2f} GB). Target ≤ "
+            f"{suite.DECODE_TARGET_S:g} s. `make_decoder` (demosaic and resample the white image, once per white "
+            f"image) took {dec['prepare_s']:.2f} s for linear/fast; the table times the per-capture call. "
+            f"Floors: a numpy copy of the sensor ({bl.fmt(dec['copy_floor_s'])} s) and `cv2.remap` alone with the "
+            f"decoder's float32 maps on the demosaiced image, same interpolation.", "",
+            bl.markdown_table(["interpolation", "demosaic", "time s (min)", "Mpx/s", "× remap floor", "× copy",
+                               "peak MB", f"≤ {suite.DECODE_TARGET_S:g} s (median / fastest)"],
+                              [[x["interpolation"], x["demosaic"], bl.fmt_timing(x["timing"]), x["mpx_per_s"],
+                                x.get("ratio_to_remap"), x["ratio_to_copy"], bl.fmt_peak(x["timing"]),
+                                ("yes" if x["meets_target"] else "no") + " / "
+                                + ("yes" if x["timing"]["min_s"] <= suite.DECODE_TARGET_S else "no")]
+                               for x in dec["rows"]]), "",
+            "Where the time goes (medians, same capture): demosaic fast "
+            f"{bl.fmt(comp['demosaic_fast_s'])} s, careful {bl.fmt(comp['demosaic_careful_s'])} s"
+            + (f"; hexagonal → rectangular resampling (`hex_to_rect`) {bl.fmt(comp['hex_to_rect_s'])} s"
+               if "hex_to_rect_s" in comp else "")
+            + "; `cv2.remap` as in the floor column; the rest is the white-image multiply.", "",
+            f"Accuracy: PSNR of the decoded views against the simulator's ideal views, {acc['sensor_shape'][1]} × "
+            f"{acc['sensor_shape'][0]} px captures of the paper's f100 camera with 9 µm pixels under 250 µm lenses "
+            f"(27.8 px → m̂ = 25), a noise texture on the plane of slice a = 1, rendered with "
+            f"{acc['pixel_samples']}² pixel × {acc['aperture_samples']}² aperture samples. Compared: samples all of "
+            f"whose rays pass, lenses off the border, views whose sample lies at least 1.5 effective pixels inside "
+            f"the lens's cell: all but the outer ring on a rectangular lattice; the outer views read the neighbouring "
+            f"micro image (crosstalk) and are listed separately. The last row repeats the first linear row with one "
+            f"more sample per axis: the reference has converged when it barely moves. Target ≥ {suite.PSNR_TARGET_DB:g} dB (linear).", "",
+            bl.markdown_table(["capture", "interpolation", "demosaic", "PSNR dB", "outer views PSNR dB"],
+                              [[x["capture"], x["interpolation"], x["demosaic"], x["psnr_db"],
+                                x["outer_ring_psnr_db"]] for x in acc["rows"]]), "",
+            "Hexagonal: the decoded views are compared with the ideal views passed through the same "
+            "`hex_to_rect`, so the row measures the decoding, not the hexagonal-to-rectangular interpolation.", "",
+            "### Decode time against sensor size (linear, fast demosaic)", "",
+            bl.markdown_table(["sensor px", "Mpx", "time s", "Mpx/s"],
+                              [[f"{p['sensor_shape'][1]} × {p['sensor_shape'][0]}", p["mpx"], p["median_s"],
+                                p["mpx"] / p["median_s"]] for p in sc["points"]]), "",
+            f"Fit: time ∝ size^{sc['fit']['exponent']:.2f} (R² = {sc['fit']['r2']:.3f}).", ""]
+    return out
 
 
 if __name__ == "__main__":

@@ -51,7 +51,7 @@ def test_camera():
 def scenes(camera):
     """(name, Scene, {plane index: role}) of each accuracy scene; roles "textured" or "textureless"."""
     from lfproc import geometry
-    from lfproc.scene import Noise, Plane, Scene, Uniform
+    from lfproc.simulate import Noise, Plane, Scene, Uniform
 
     d = lambda a: float(geometry.slice_distance_mm(camera, a))
     out = [("cards: textured wall a=0.57, textured card a=1.43, textureless card a=1.10",

@@ -22,10 +22,16 @@ import argparse
 import importlib
 import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib as bl  # noqa: E402  (this folder)
+import benchsim as suite  # noqa: E402
 
 TARGET_FLOOR_RATIO = 1.5
 TARGET_BASELINE_SPEEDUP = 8.0
@@ -142,6 +148,119 @@ def main(argv=None) -> int:
             "checks": results,
         })
     return 0 if all(res["pass"] for res in results) else 1
+
+
+# ----------------------------------------------------------------------------- the stage of scripts/bench.py
+def first_refocus_calls() -> dict:
+    """First calls in this process on a tiny light field: numba compile or load from its on-disk cache."""
+    from lfproc.refocus import refocus
+
+    tiny = np.ones((3, 3, 4, 5, 3), dtype=np.float32)
+    _, gather = bl.time_once(lambda: refocus(tiny, 1.0))
+    _, interp = bl.time_once(lambda: refocus(tiny, 0.5))
+    return {"first_call_gather_s": gather, "first_call_interpolated_s": interp}
+
+
+def fresh_compile_seconds() -> dict:
+    """The same first calls in a subprocess whose numba cache is empty: the compile time of a fresh install."""
+    code = ("import time, numpy as np\n"
+            "t = time.perf_counter(); from lfproc.refocus import refocus; imp = time.perf_counter() - t\n"
+            "v = np.ones((3, 3, 4, 5, 3), np.float32)\n"
+            "t = time.perf_counter(); refocus(v, 1.0); g = time.perf_counter() - t\n"
+            "t = time.perf_counter(); refocus(v, 0.5); i = time.perf_counter() - t\n"
+            "print(imp, g, i)\n")
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True,
+                             cwd=str(suite.ROOT))
+    imp, gather, interp = (float(v) for v in out.stdout.split())
+    return {"import_s": imp, "compile_gather_s": gather, "compile_interpolated_s": interp}
+
+
+def stage_refocus(views: np.ndarray, s: suite.Settings, first_calls: dict) -> dict:
+    """Refocus timings on the decoded light field, accuracy on a crop and on an analytic plane."""
+    from lfproc.refocus import refocus
+
+    gb = views.nbytes / 1e9
+    floor = bl.measure(lambda: views.sum(axis=(0, 1)), s.cheap_repeats)
+    cases = [("integer a", suite.INTEGER_A, "linear", 1), ("integer a", suite.INTEGER_A, "linear", 2)]
+    cases += [("real a", suite.REAL_A, interp, up) for up in (1, 2) for interp in suite.REFOCUS_INTERPOLATIONS]
+    ny, nx = s.refocus_accuracy_lenses
+    y0, x0 = (views.shape[2] - ny) // 2, (views.shape[3] - nx) // 2
+    crop = np.ascontiguousarray(views[:, :, y0:y0 + ny, x0:x0 + nx])
+    plane, texture = bl.plane_light_field(views.shape[0], (ny, nx), suite.REAL_A)
+    rows = []
+    for label, a, interp, up in cases:
+        timing = bl.measure(lambda: refocus(views, a, interp, up), s.cheap_repeats)
+        reference = bl.refocus_reference(crop, a, interp, up)
+        got = refocus(crop, a, interp, up)
+        scale = float(np.max(np.abs(reference)))
+        row = {"case": label, "a": a, "interpolation": interp if (a != int(a) or up > 1) else "(gather)",
+               "upsample": up, "timing": timing.as_dict(), "gb_per_s": gb / timing.median_s,
+               "ratio_to_floor": timing.median_s / floor.median_s,
+               "max_rel_error_vs_float64": float(np.max(np.abs(got - reference))) / scale,
+               "psnr_vs_float64_db": bl.psnr_db(got, reference)}
+        if label == "real a":
+            out = refocus(plane, a, interp, up)
+            py = np.arange(out.shape[0]) / up
+            px = np.arange(out.shape[1]) / up
+            truth = texture(py[:, None], px[None, :])
+            border = 2 * up   # cubic taps clamp at the array edge; compare the interior
+            row["plane_psnr_db"] = bl.psnr_db(out[border:-border, border:-border, 0],
+                                              truth[border:-border, border:-border], peak=1.0)
+        rows.append(row)
+        suite.log(f"  refocus {label} {interp} x{up}: {timing.median_s:.3f} s, {row['ratio_to_floor']:.2f} x floor")
+    scaling = {"slices": list(suite.SLICE_COUNTS), "integer_s": [], "real_linear_s": []}
+    for k in suite.SLICE_COUNTS:
+        integer = [float((i % 5) - 2) for i in range(k)]        # cycles through −2 … 2
+        real = [float(v) for v in np.linspace(-2.0, 2.0, k) + 0.37]   # fractional positions
+        scaling["integer_s"].append(bl.measure(lambda: refocus(views, integer), s.cheap_repeats, memory=False).median_s)
+        scaling["real_linear_s"].append(bl.measure(lambda: refocus(views, real), s.cheap_repeats, memory=False).median_s)
+        suite.log(f"  refocus {k} slices: {scaling['integer_s'][-1]:.3f} s integer, {scaling['real_linear_s'][-1]:.3f} s real")
+    scaling["integer_fit"] = bl.power_law_fit(suite.SLICE_COUNTS, scaling["integer_s"])
+    scaling["real_linear_fit"] = bl.power_law_fit(suite.SLICE_COUNTS, scaling["real_linear_s"])
+    return {"views_shape": list(views.shape), "gb": gb, "floor": floor.as_dict(),
+            "floor_gb_per_s": gb / floor.median_s, "rows": rows, "scaling": scaling,
+            "accuracy_crop_lenses": [ny, nx], "compile": first_calls}
+
+
+def suite_section(r: dict) -> list[str]:
+    """The refocus section of docs/benchmarks.md (``scripts/bench.py``)."""
+    out = []
+    rf = r["refocus"]
+    comp_r = rf["compile"]
+    out += ["## Refocus (`lfproc.refocus`)", "",
+            f"Light field: the decoded views above, {' × '.join(str(v) for v in rf['views_shape'])} float32 "
+            f"({rf['gb']:.2f} GB). Floor: `views.sum(axis=(0, 1))`, {bl.fmt(rf['floor']['median_s'])} s "
+            f"({rf['floor_gb_per_s']:.1f} GB/s), one read of the data. Integer a = {suite.INTEGER_A:g}, real a = "
+            f"{suite.REAL_A}. Accuracy: (1) against a plain float64 numpy implementation of the contract's formula "
+            f"(`benchlib.refocus_reference`) on a {rf['accuracy_crop_lenses'][0]} × {rf['accuracy_crop_lenses'][1]}-lens "
+            f"crop: the float32 arithmetic's error; (2) *plane PSNR*: a light field of one textured plane at "
+            f"disparity a = {suite.REAL_A} (two sinusoids below 0.2 cycles per lens) refocused at that a against the "
+            f"texture itself: the interpolation's error.", "",
+            bl.markdown_table(["case", "interpolation", "upsample", "time s (min)", "GB/s", "× floor", "peak MB",
+                               "max rel. err vs float64", "plane PSNR dB"],
+                              [[x["case"], x["interpolation"], str(x["upsample"]), bl.fmt_timing(x["timing"]), x["gb_per_s"],
+                                x["ratio_to_floor"], bl.fmt_peak(x["timing"]), x["max_rel_error_vs_float64"],
+                                x.get("plane_psnr_db")] for x in rf["rows"]]), "",
+            f"Compilation (excluded above): first call in this process (numba's on-disk cache present) "
+            f"{bl.fmt(comp_r['first_call_gather_s'])} s gather, {bl.fmt(comp_r['first_call_interpolated_s'])} s "
+            f"interpolated"
+            + (f"; in a fresh process with an empty cache (a fresh install) {bl.fmt(comp_r['compile_gather_s'])} s "
+               f"and {bl.fmt(comp_r['compile_interpolated_s'])} s, after {bl.fmt(comp_r['import_s'])} s to import"
+               if "compile_gather_s" in comp_r else "") + ".", "",
+            "### Refocus time against slices per call", "",
+            "Integer slices cycle through a = −2 … 2; real slices are spread evenly over [−1.63, 2.37] (linear interpolation).",
+            "",
+            bl.markdown_table(["slices K", "integer s", "× floor", "real (linear) s", "× floor"],
+                              [[str(k), ti, ti / rf["floor"]["median_s"], tr, tr / rf["floor"]["median_s"]]
+                               for k, ti, tr in zip(rf["scaling"]["slices"], rf["scaling"]["integer_s"],
+                                                    rf["scaling"]["real_linear_s"])]), "",
+            f"Fits: integer time ∝ K^{rf['scaling']['integer_fit']['exponent']:.2f} (R² = "
+            f"{rf['scaling']['integer_fit']['r2']:.3f}); real time ∝ K^{rf['scaling']['real_linear_fit']['exponent']:.2f} "
+            f"(R² = {rf['scaling']['real_linear_fit']['r2']:.3f}).", ""]
+    return out
+
 
 if __name__ == "__main__":
     sys.exit(main())

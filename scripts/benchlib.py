@@ -310,6 +310,16 @@ def fmt(value, digits: int = 3) -> str:
     return f"{value:.{decimals}f}"
 
 
+def fmt_timing(timing: dict) -> str:
+    """A :class:`Timing` (as a dict) for a table: the median, the minimum in brackets."""
+    return f"{fmt(timing['median_s'])} ({fmt(timing['min_s'])})"
+
+
+def fmt_peak(timing: dict) -> str:
+    """The traced peak memory of a :class:`Timing` (as a dict), in MB."""
+    return fmt(timing.get("peak_mb"), 2 if (timing.get("peak_mb") or 0) < 10 else 3)
+
+
 def markdown_table(headers: list[str], rows: list[list]) -> str:
     """A GitHub markdown table; cells are formatted with :func:`fmt` unless already strings."""
     lines = ["| " + " | ".join(headers) + " |", "|" + "|".join(" --- " for _ in headers) + "|"]

@@ -22,7 +22,7 @@ import numpy as np
 
 import lfproc
 from lfproc import Camera, geometry, simulate
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
                 image_distance_mm=30.0, f_number=2.0, micro_image_px=13, name="lytro-like").with_focus_distance(600.0)

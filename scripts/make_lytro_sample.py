@@ -23,7 +23,7 @@ sys.path.insert(0, str(ROOT / "tests"))       # the byte-level Lytro writer the 
 
 import lytrogen  # noqa: E402
 from lfproc import Camera, geometry, simulate  # noqa: E402
-from lfproc.scene import Noise, Plane, Scene  # noqa: E402
+from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
 
 SAMPLE = ROOT / "samples" / "lytro"
 SHAPE = (336, 448)        # sensor rows, columns: about 22 x 26 lenses

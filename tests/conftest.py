@@ -1,14 +1,23 @@
 """Shared helpers: run the CLI in a subprocess exactly as a user would."""
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 SAMPLES = ROOT / "lfproc" / "samples"   # the package data (samples/ at the top links here)
+
+# the decoder cache (lfproc.decoder_cache) of the test run: its own folder, not the user's ~/.cache,
+# inherited by the CLI subprocesses; removed at the end
+if "LFPROC_CACHE_DIR" not in os.environ:
+    os.environ["LFPROC_CACHE_DIR"] = tempfile.mkdtemp(prefix="lfproc-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["LFPROC_CACHE_DIR"], True)
 
 
 def run_cli(*args, cwd=None, timeout=600):

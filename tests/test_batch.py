@@ -23,7 +23,7 @@ from lfproc import batch, simulate
 from lfproc.camera import Camera
 from lfproc.cli import main
 from lfproc.io import write_image
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 from conftest import assert_clean_error, run_cli
 

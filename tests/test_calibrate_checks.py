@@ -173,7 +173,7 @@ def test_cli_refuses_a_capture_given_as_the_white_image(tmp_path):
     warnings); the white image of the same render calibrates without any warning."""
     import tifffile
 
-    from lfproc.scene import Noise, Plane, Scene
+    from lfproc.simulate import Noise, Plane, Scene
     from lfproc.simulate import render
     camera_text = CAMERA_TOML.format(pixel=0.009, pitch=0.25, f_s=2.749, grid="rectangular", f_number=11.0, pupil="")
     camera_path = tmp_path / "cam.toml"

@@ -12,7 +12,7 @@ from scipy import ndimage
 
 from lfproc import Camera, geometry, simulate
 from lfproc.decode import make_decoder
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 A_TRUE = 1.93
 

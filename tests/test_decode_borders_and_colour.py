@@ -8,7 +8,7 @@ import pytest
 
 from lfproc import Camera, LensGrid, geometry, simulate
 from lfproc.decode import make_decoder, sample_positions
-from lfproc.scene import Noise, Plane, Scene, Uniform
+from lfproc.simulate import Noise, Plane, Scene, Uniform
 
 
 def test_partial_lenses_are_cropped_and_lens_indices_follow_the_grid():

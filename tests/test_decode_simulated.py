@@ -8,7 +8,7 @@ import pytest
 from lfproc import Camera, geometry
 from lfproc import simulate
 from lfproc.decode import decode, make_decoder
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 from conftest import SAMPLES
 

@@ -17,7 +17,7 @@ import lfproc
 from lfproc import Camera, LightField, geometry, simulate
 from lfproc.io import read_capture, read_metadata, write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield
-from lfproc.scene import Noise, Plane, Scene, Uniform
+from lfproc.simulate import Noise, Plane, Scene, Uniform
 
 A_TRUE = {"card": 1.43, "blank": 1.1, "wall": 0.57}   # off the sweep's 0.1-spaced slices
 

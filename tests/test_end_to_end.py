@@ -14,7 +14,7 @@ from lfproc.io import read_metadata, write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield
 from lfproc.io import read_capture
 from lfproc.refocus import refocus
-from lfproc.scene import Checkerboard, Noise, Plane, Scene
+from lfproc.simulate import Checkerboard, Noise, Plane, Scene
 
 from conftest import assert_clean_error, run_cli
 

@@ -18,7 +18,7 @@ from lfproc import simulate
 from lfproc.io import write_image
 from lfproc.pipeline import load_lightfield, prepare_decoding
 from lfproc.refocus import refocus
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 from plainref import measured_shift
 
 EXIT_PUPIL_MM = 45.0

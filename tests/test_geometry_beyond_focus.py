@@ -11,7 +11,7 @@ from lfproc import Camera, LfprocError
 from lfproc import geometry as g
 
 from lfproc import simulate  # noqa: E402
-from lfproc.scene import Noise, Plane, Scene  # noqa: E402
+from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
 
 # Lytro-like, telecentric: 13 px micro images (c = 6), f/2 matched to the micro lenses, focused at 600 mm
 LYTRO = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,

@@ -6,7 +6,7 @@ from lfproc import Camera
 from lfproc import geometry as g
 
 from lfproc import simulate  # noqa: E402
-from lfproc.scene import Noise, Plane, Scene  # noqa: E402
+from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
 from plainref import measured_shift  # noqa: E402
 
 CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,

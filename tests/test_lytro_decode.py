@@ -26,7 +26,7 @@ from lfproc import simulate
 from lfproc.errors import LfprocError
 from lfproc.io import write_image
 from lfproc.pipeline import camera_for_captures, load_lightfield, prepare_decoding
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 MODELS = {
     # name: (camera, sensor shape (H, W), bits, endianness)

@@ -12,7 +12,7 @@ from lfproc import geometry, simulate
 from lfproc.camera import Camera
 from lfproc.errors import LfprocError
 from lfproc.grid import LensGrid
-from lfproc.scene import (Checkerboard, ImageTexture, Noise, Plane, Scene, Sinusoid, Uniform, load_scene_file,
+from lfproc.simulate import (Checkerboard, ImageTexture, Noise, Plane, Scene, Sinusoid, Uniform, load_scene_file,
                           parse_scene_dict)
 
 from conftest import ROOT, assert_clean_error, run_cli
@@ -277,10 +277,10 @@ def test_bad_channels_are_user_errors(channels):
 
 @pytest.mark.parametrize("scene", [None, "scene.toml", (), 0.5])
 def test_ideal_views_need_a_scene(scene):
-    with pytest.raises(LfprocError, match="scene must be an lfproc.scene.Scene"):
+    with pytest.raises(LfprocError, match="scene must be an lfproc.simulate.Scene"):
         simulate.render_ideal_views(camera(m=5, f_number=2.0), scene, (40, 50))
     if scene is not None:  # render_radiance documents None as the white image
-        with pytest.raises(LfprocError, match="scene must be an lfproc.scene.Scene"):
+        with pytest.raises(LfprocError, match="scene must be an lfproc.simulate.Scene"):
             simulate.render_radiance(camera(m=5, f_number=2.0), scene, (40, 50))
 
 
@@ -366,7 +366,7 @@ def test_image_texture_file_keeps_its_colour(tmp_path, channels):
     assert out.open(str(tmp_path / "red.png"), oiio.ImageSpec(12, 8, len(channels), oiio.UINT8))
     assert out.write_image(pixels)
     out.close()
-    texture_pixels = __import__("lfproc.scene", fromlist=["x"]).read_texture_image(str(tmp_path / "red.png"))
+    texture_pixels = __import__("lfproc.simulate", fromlist=["x"]).read_texture_image(str(tmp_path / "red.png"))
     np.testing.assert_array_equal(texture_pixels, np.broadcast_to([1.0, 0.0, 0.0], (8, 12, 3)))
     parsed = parse_scene_dict({"camera": str(ROOT / "samples" / "cameras" / "paper-f100.toml"), "background": 0.5,
                                "plane": [{"distance_mm": 600.0, "texture": "image", "path": "red.png",

@@ -12,7 +12,7 @@ import pytest
 from lfproc import geometry, simulate
 from lfproc.camera import Camera
 from lfproc.errors import LfprocError
-from lfproc.scene import Noise, Plane, Scene, Uniform, parse_scene_dict
+from lfproc.simulate import Noise, Plane, Scene, Uniform, parse_scene_dict
 from plainref import shifted_views
 
 F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main lens and micro lens

@@ -8,7 +8,7 @@ from scipy import ndimage
 
 from lfproc import Camera, geometry, simulate
 from lfproc.io import write_image
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 NEAR_A, FAR_A = 1.3, 0.4
 

@@ -31,8 +31,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from ..errors import LfprocError
-    from ..scene import load_scene_file
-    from ..simulate import render
+    from ..simulate import load_scene_file, render
     from .capture_loop import require_output_folder
 
     scene_file = load_scene_file(args.scene)

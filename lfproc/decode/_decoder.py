@@ -25,25 +25,48 @@ def _band_rows(m_hat: int, cols: int, channels: int) -> int:
     return max(2, BAND_BYTES // max(1, m_hat * m_hat * cols * channels * 4))
 
 
+def view_runs(delivered: np.ndarray) -> list[tuple[int, int, int]]:
+    """``(ky, kx0, kx1)`` per view row with delivered views: the run from its first to its last one.
+
+    Only these views are resampled and devignetted; the others are 0 and never computed (for a
+    round aperture the runs hold about π/4 of the views of their bounding square)."""
+    runs = []
+    for ky, row in enumerate(np.asarray(delivered, dtype=bool)):
+        kx = np.flatnonzero(row)
+        if kx.size:
+            runs.append((ky, int(kx[0]), int(kx[-1]) + 1))
+    return runs
+
+
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
-              interpolation: str) -> np.ndarray:
+              interpolation: str, runs: list | None = None, scratch: np.ndarray | None = None) -> np.ndarray:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
+    With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
+    ``scratch``, a flat float32 buffer reused from band to band, holds the result where it is large
+    enough (a fresh band-sized array costs its page faults again for every band).
     """
+    runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
     y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0])
     strip = to_channels(sensor[y0:y1], cfa, demosaic_method)
     channels = strip.shape[2]
-    out = np.empty((m_hat, m_hat * len(rows), grid.cols, channels), dtype=np.float32)
+    n = len(rows)
+    shape = (m_hat, m_hat * n, grid.cols, channels)
+    size = int(np.prod(shape))
+    out = scratch[:size].reshape(shape) if scratch is not None and scratch.size >= size else \
+        np.empty(shape, dtype=np.float32)
     flag = cv_flag(interpolation)
     if strip.shape[0] == 0:
         out[...] = 0.0
     else:
         strip = np.ascontiguousarray(strip)
-        for ky, (map_x, map_y) in enumerate(band_maps(grid, m_hat, rows, y0)):
-            remap_into(out[ky], strip, map_x, map_y, flag)
-    return out.reshape(m_hat, m_hat, len(rows), grid.cols, channels)
+        maps = band_maps(grid, m_hat, rows, y0)
+        for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
+            map_x, map_y = maps[ky]
+            remap_into(out[ky, kx0 * n:kx1 * n], strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
+    return out.reshape(m_hat, m_hat, n, grid.cols, channels)
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,17 +107,26 @@ class Decoder:
                               f"{self.channels}; use a white image taken with the same camera settings")
         m, grid = self.m_hat, self.grid
         out_grid = self.output_grid
-        out = np.empty((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
+        # zeros: the views never delivered are never written, so their memory is never touched either
+        out = np.zeros((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
+        runs = view_runs(np.ones((m, m), bool) if self.views_delivered is None else self.views_delivered)
         step = _band_rows(m, grid.cols, self.channels)
+        scratch = None
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation)
-            views *= self.inverse_white[:, :, rows.start:rows.stop]
-            if grid.kind == "hexagonal":
-                hex_rows_to_rect(views, rows.start, out_rows, out[:, :, out_rows.start:out_rows.stop])
-            else:
-                out[:, :, out_rows.start:out_rows.stop] = views
+            if scratch is None:   # the first band is the largest (hexagonal bands read one or two rows more)
+                scratch = np.empty(m * m * (len(rows) + 2) * grid.cols * self.channels, dtype=np.float32)
+            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation, runs,
+                              scratch)
+            for ky, kx0, kx1 in runs:
+                run = views[ky:ky + 1, kx0:kx1]
+                run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
+                dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
+                if grid.kind == "hexagonal":
+                    hex_rows_to_rect(run, rows.start, out_rows, dst)
+                else:
+                    dst[...] = run
         return out
 
 
@@ -102,25 +134,38 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
                    interpolation: str, dark_fraction: float, delivered: np.ndarray) -> np.ndarray:
     """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
     channels = channel_count(white, cfa)
-    inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
+    # zeros: only the runs of delivered views are computed (and their memory touched)
+    inverse = np.zeros((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
+    c = (m_hat - 1) // 2
+    runs = view_runs(delivered) or [(c, c, c + 1)]   # none delivered: the central view for the level alone
     step = _band_rows(m_hat, grid.cols, channels)
+    scratch = np.empty(m_hat * m_hat * min(step, grid.rows) * grid.cols * channels, dtype=np.float32)
     for r0 in range(0, grid.rows, step):
         rows = range(r0, min(r0 + step, grid.rows))
-        inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation)
-    flat = inverse.reshape(-1)
-    subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
+        band = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation, runs, scratch)
+        for ky, kx0, kx1 in runs:
+            inverse[ky, kx0:kx1, r0:rows.stop] = band[ky, kx0:kx1]
+    # the bright level over the views delivered (a strided subset): the others are 0 and carry no signal
+    total = sum((kx1 - kx0) for _, kx0, kx1 in runs) * grid.rows * grid.cols * channels
+    stride = max(1, total // LEVEL_SAMPLES)
+    subset = np.concatenate([inverse[ky, kx0:kx1].reshape(-1)[::stride] for ky, kx0, kx1 in runs])
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
         raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
+    if not delivered.any():
+        inverse[c, c] = 0.0
+        return inverse
     threshold = np.float32(dark_fraction * bright)
-    for ky in range(m_hat):      # per view row: the boolean temporaries stay small
-        w = inverse[ky]
+    for ky, kx0, kx1 in runs:      # per view row: the boolean temporaries stay small
+        w = inverse[ky, kx0:kx1]
         # a sample carries signal only where every channel does: one dark channel alone would turn a
         # neutral sample magenta or green
         signal = np.broadcast_to((w > threshold).all(axis=-1, keepdims=True), w.shape)
         np.divide(np.float32(1.0), w, out=w, where=signal)
         w[~signal] = 0.0
-    inverse[~delivered] = 0.0
+        for kx in range(kx0, kx1):   # gaps inside a run (a mask that is not convex)
+            if not delivered[ky, kx]:
+                w[kx - kx0] = 0.0
     return inverse
 
 

@@ -113,7 +113,9 @@ def read_oiio_capture(path: str, camera=None) -> Capture:
         if black >= white:
             raise LfprocError(f"{path}: the camera's sensor.black_level {black:g} is not below this file's white level "
                               f"{white:g}; set sensor.black_level (and white_level) for this file in the camera file")
-        data = (pixels.astype(np.float32) - np.float32(black)) / np.float32(white - black)
+        data = pixels.astype(np.float32)        # in place from here: one full-size float image, not three
+        data -= np.float32(black)
+        data /= np.float32(white - black)
     else:
         require_finite_pixels(pixels, path)
         data = pixels.astype(np.float32)
@@ -129,7 +131,7 @@ def _colour_channels(pixels: np.ndarray, spec, path: str) -> np.ndarray:
     if spec.alpha_channel < 0 and len(keep) in (2, 4) and names and names[-1].upper() in ("A", "ALPHA"):
         keep = keep[:-1]
     if len(keep) in (1, 3):
-        return pixels[:, :, keep]
+        return pixels if keep == list(range(pixels.shape[2])) else pixels[:, :, keep]
     upper = [n.upper() for n in names]
     if all(c in upper for c in ("R", "G", "B")):
         return pixels[:, :, [upper.index(c) for c in ("R", "G", "B")]]

@@ -236,5 +236,5 @@ def render_ideal_views(camera: Camera, scene: Scene, sensor_shape, *, rotation_d
 
 def _check_scene(scene) -> None:
     if not isinstance(scene, Scene):
-        raise LfprocError(f"scene must be an lfproc.scene.Scene, got {type(scene).__name__}; build one with "
-                          f"lfproc.scene.Scene(planes, background) or load_scene_file")
+        raise LfprocError(f"scene must be an lfproc.simulate.Scene, got {type(scene).__name__}; build one with "
+                          f"lfproc.simulate.Scene(planes, background) or load_scene_file")

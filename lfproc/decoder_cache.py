@@ -1,0 +1,335 @@
+"""Derive once, reuse: the decoder's prepared state, cached on disk by the content of what it is made of.
+
+Preparing a :class:`lfproc.decode.Decoder` (the views it delivers, the lenses it keeps, the white
+image's resampled inverse) costs more than decoding a capture with it, and depends only on the white
+image (and a dark frame, when one is subtracted), the camera, the grid and the decoding settings. So
+:func:`cached_decoder` keeps it in a small on-disk cache (see ``docs/cache.md``):
+
+* **Key** (:func:`decoder_key`): SHA-256 of the white image file's bytes (with a Lytro raw's metadata
+  file beside it), of the dark frame's, the camera file's text (levels, CFA, m̂), the grid (its lattice
+  and smooth deviation), the interpolation and demosaicing, any other decoder option, lfproc's version
+  and the source of the code that derives the state (``decode/``, ``io/``, ``grid.py``). Any change to
+  any of them is another key: an entry is never stale, it is simply not found.
+* **Entry**: one file ``KEY.lfdec``: a JSON header (the decoder's fields: numbers, strings, grids) and
+  its arrays; blocks of an array that are 0 (the views the decoder never delivers) are not stored.
+  Written atomically (:func:`lfproc.atomic.atomic_path`): a reader sees a whole entry or none.
+* **Concurrency**: the process that derives an entry holds an exclusive lock (``KEY.lock``) while it
+  does; others wanting the same entry wait for it and then read it, so a batch derives once, not once
+  per worker.
+* **Bound**: after each write, the least recently used entries are removed until the folder holds at
+  most ``LFPROC_CACHE_MAX_GB`` (default 4) GB.
+* **Where**: ``$LFPROC_CACHE_DIR/decoders`` (default ``$XDG_CACHE_HOME/lfproc/decoders``, i.e.
+  ``~/.cache/lfproc/decoders``); ``LFPROC_NO_CACHE=1`` disables it (every command derives again);
+  ``python -m lfproc.decoder_cache`` says where it is and what it holds, ``--clear`` empties it (or
+  remove the folder: nothing else lives there).
+
+A cache that cannot be written (read-only or full disk) is skipped with one warning: decoding never
+fails because of it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import glob
+import hashlib
+import json
+import os
+import struct
+import warnings
+
+import numpy as np
+
+from .errors import LfprocError
+from .grid import LensGrid
+
+#: bump when the entry layout changes
+CACHE_FORMAT = 1
+MAGIC = b"LFPDEC01"
+ALIGN = 4096
+DEFAULT_MAX_GB = 4.0
+_CODE_DIGEST: list = []
+
+
+# ----------------------------------------------------------------------------- where
+def cache_dir() -> str | None:
+    """The folder of decoder entries, or None when caching is disabled (``LFPROC_NO_CACHE``)."""
+    if os.environ.get("LFPROC_NO_CACHE", "").strip().lower() not in ("", "0", "false", "no"):
+        return None
+    root = os.environ.get("LFPROC_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "lfproc")
+    return os.path.join(root, "decoders")
+
+
+def max_bytes() -> int:
+    """The cache's size bound in bytes (``LFPROC_CACHE_MAX_GB``, default 4 GB)."""
+    try:
+        gb = float(os.environ.get("LFPROC_CACHE_MAX_GB", DEFAULT_MAX_GB))
+    except ValueError:
+        gb = DEFAULT_MAX_GB
+    return int(max(0.0, gb) * 1e9)
+
+
+def entries(folder: str | None = None) -> list[str]:
+    """Paths of the cache's entries."""
+    folder = folder or cache_dir()
+    return sorted(glob.glob(os.path.join(glob.escape(folder), "*.lfdec"))) if folder else []
+
+
+def clear(folder: str | None = None) -> int:
+    """Remove every entry (and lock file); the number of entries removed."""
+    folder = folder or cache_dir()
+    removed = 0
+    for path in entries(folder):
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path)
+            removed += 1
+    for path in glob.glob(os.path.join(glob.escape(folder), "*.lock")) if folder else []:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path)
+    return removed
+
+
+# ----------------------------------------------------------------------------- key
+def file_digest(path: str) -> str:
+    """SHA-256 of a file's bytes, with those of a Lytro raw's metadata file (``NAME.txt``/``.json``) beside it."""
+    sha = hashlib.sha256()
+    stem, ext = os.path.splitext(os.path.abspath(path))
+    companions = []
+    if ext.lower() == ".raw":
+        folder = os.path.dirname(stem)
+        companions = sorted(os.path.join(folder, name) for name in os.listdir(folder)
+                            if os.path.splitext(name)[0] == os.path.basename(stem)
+                            and os.path.splitext(name)[1].lower() in (".txt", ".json"))
+    for name in (path, *companions):
+        with open(name, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 22), b""):
+                sha.update(block)
+        sha.update(b"\0")
+    return sha.hexdigest()
+
+
+def array_digest(array: np.ndarray, cfa: str = "none") -> str:
+    """SHA-256 of an in-memory image (its dtype, shape, CFA and bytes), for a white image not from a file."""
+    array = np.ascontiguousarray(array)
+    sha = hashlib.sha256(f"{array.dtype.str}{array.shape}{cfa}".encode())
+    sha.update(memoryview(array).cast("B"))
+    return sha.hexdigest()
+
+
+def code_digest() -> str:
+    """SHA-256 of the source of the code the prepared state comes from (decoding, reading, the grid)."""
+    if not _CODE_DIGEST:
+        here = os.path.dirname(os.path.abspath(__file__))
+        files = sorted(glob.glob(os.path.join(here, "decode", "*.py")) + glob.glob(os.path.join(here, "io", "*.py"))
+                       + [os.path.join(here, "grid.py"), os.path.abspath(__file__)])
+        sha = hashlib.sha256()
+        for name in files:
+            sha.update(os.path.relpath(name, here).encode() + b"\0")
+            with open(name, "rb") as fh:
+                sha.update(fh.read())
+        _CODE_DIGEST.append(sha.hexdigest())
+    return _CODE_DIGEST[0]
+
+
+def grid_identity(grid: LensGrid) -> dict:
+    """The grid's defining fields (what ``LensGrid.from_json_dict`` reads; the derived centres left out)."""
+    return {"grid": grid.kind, "pitch_px": grid.pitch_px, "rotation_deg": grid.rotation_deg,
+            "residual_rms_px": grid.residual_rms_px, "origin_xy_px": list(grid.origin_xy_px), "rows": grid.rows,
+            "cols": grid.cols, "deviation": None if grid.deviation is None else grid.deviation.to_json_dict()}
+
+
+def decoder_key(*, white: str, camera, grid: LensGrid, interpolation: str, demosaic_method: str,
+                dark: str | None = None, options: dict | None = None) -> str:
+    """The cache key of a decoder: a hex SHA-256 of everything its state depends on (module docstring).
+
+    ``white`` and ``dark`` are content digests (:func:`file_digest`, :func:`array_digest`, or a
+    description such as ``"flat 480x640 RGGB"`` for the flat white that stands in for none).
+    """
+    from . import __version__
+
+    parts = {"format": CACHE_FORMAT, "lfproc": __version__, "code": code_digest(), "white": white, "dark": dark,
+             "camera": camera.to_toml(), "grid": grid_identity(grid), "interpolation": interpolation,
+             "demosaic_method": demosaic_method, "options": options or {}}
+    return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()
+
+
+# ----------------------------------------------------------------------------- entries
+def _encode(decoder) -> tuple[dict, list]:
+    """The header fields and the (name, array, nonzero blocks) to store of a decoder, generically by field."""
+    fields, arrays = {}, []
+    for f in dataclasses.fields(decoder):
+        value = getattr(decoder, f.name)
+        if isinstance(value, np.ndarray):
+            blocks = _nonzero_blocks(value)
+            fields[f.name] = {"array": [value.dtype.str, list(value.shape)],
+                              "blocks": None if blocks is None else [list(b) for b in blocks]}
+            arrays.append((value, blocks))
+        elif isinstance(value, LensGrid):
+            fields[f.name] = {"grid": grid_identity(value)}
+        else:
+            fields[f.name] = {"value": list(value) if isinstance(value, tuple) else value, "tuple":
+                              isinstance(value, tuple)}
+    return fields, arrays
+
+
+def _nonzero_blocks(array: np.ndarray):
+    """For arrays of 3 or more dimensions, the ``(i, j)`` sub-arrays over the first two axes that are not all
+    0 (stored alone); None (stored whole) otherwise."""
+    if array.ndim < 3:
+        return None
+    return [(i, j) for i in range(array.shape[0]) for j in range(array.shape[1]) if array[i, j].any()]
+
+
+def store(path: str, key: str, decoder) -> None:
+    """Write a decoder's entry atomically."""
+    from .atomic import atomic_path
+
+    fields, arrays = _encode(decoder)
+    header = json.dumps({"format": CACHE_FORMAT, "key": key, "fields": fields}).encode()
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(MAGIC + struct.pack("<Q", len(header)) + header)
+            for array, blocks in arrays:
+                fh.write(b"\0" * (-fh.tell() % ALIGN))
+                parts = [array] if blocks is None else [array[i, j] for i, j in blocks]
+                for part in parts:
+                    fh.write(memoryview(np.ascontiguousarray(part)).cast("B"))
+
+
+def load(path: str, key: str, cls):
+    """The decoder of an entry, or None if it is missing, of another key or format, or unreadable."""
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(len(MAGIC)) != MAGIC:
+                return None
+            (size,) = struct.unpack("<Q", fh.read(8))
+            head = json.loads(fh.read(size))
+            if head.get("format") != CACHE_FORMAT or head.get("key") != key:
+                return None
+            values = {}
+            for name, spec in head["fields"].items():
+                if "grid" in spec:
+                    values[name] = LensGrid.from_json_dict(spec["grid"], source=path)
+                elif "value" in spec:
+                    values[name] = tuple(spec["value"]) if spec["tuple"] else spec["value"]
+                else:
+                    dtype, shape = spec["array"]
+                    fh.seek(fh.tell() + (-fh.tell() % ALIGN))
+                    values[name] = _read_array(fh, np.dtype(dtype), tuple(shape), spec["blocks"])
+            decoder = cls(**values)
+    except (OSError, ValueError, KeyError, TypeError, struct.error, LfprocError):
+        return None
+    with contextlib.suppress(OSError):
+        os.utime(path)        # recently used: pruned last
+    return decoder
+
+
+def _read_array(fh, dtype: np.dtype, shape: tuple, blocks) -> np.ndarray:
+    """Read an array stored whole or as nonzero blocks (the rest 0, never touched: no memory for it)."""
+    array = np.zeros(shape, dtype=dtype)
+    parts = [array] if blocks is None else [array[i, j] for i, j in blocks]
+    for part in parts:
+        view = memoryview(part).cast("B")
+        if fh.readinto(view) != view.nbytes:
+            raise ValueError("truncated cache entry")
+    return array
+
+
+def prune(folder: str, limit: int, keep: str | None = None) -> None:
+    """Remove the least recently used entries until the folder holds at most ``limit`` bytes (not ``keep``)."""
+    found = []
+    for path in entries(folder):
+        with contextlib.suppress(FileNotFoundError):
+            st = os.stat(path)
+            found.append((st.st_mtime, st.st_size, path))
+    total = sum(size for _, size, _ in found)
+    for _, size, path in sorted(found):
+        if total <= limit:
+            break
+        if path == keep:
+            continue
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path)
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path[:-len(".lfdec")] + ".lock")
+        total -= size
+
+
+@contextlib.contextmanager
+def _locked(path: str):
+    """An exclusive lock on ``path`` (created if needed) for the duration; no lock where the OS has none."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: concurrent writers stay correct (atomic rename)
+        yield
+        return
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)   # releases the lock
+
+
+def cached_decoder(key: str, build):
+    """The decoder of ``key`` from the cache, else ``build()`` stored there (one builder per key at a time).
+
+    Without a cache (``LFPROC_NO_CACHE``), or one that cannot be written, this is ``build()``.
+    """
+    from .decode import Decoder
+
+    folder = cache_dir()
+    if folder is None:
+        return build()
+    path = os.path.join(folder, key + ".lfdec")
+    found = load(path, key, Decoder)
+    if found is not None:
+        return found
+    try:
+        os.makedirs(folder, exist_ok=True)
+        lock = _locked(os.path.join(folder, key + ".lock"))
+        lock.__enter__()
+    except OSError as exc:
+        warnings.warn(f"decoder cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
+                      f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)", stacklevel=2)
+        return build()
+    try:
+        found = load(path, key, Decoder)   # another process may have derived it while we waited
+        if found is not None:
+            return found
+        decoder = build()
+        try:
+            store(path, key, decoder)
+            prune(folder, max_bytes(), keep=path)
+        except Exception as exc:  # noqa: BLE001 - a full or read-only disk must not fail the decode
+            warnings.warn(f"decoder cache {folder}: could not store an entry ({exc}); continuing without it",
+                          stacklevel=2)
+        return decoder
+    finally:
+        lock.__exit__(None, None, None)
+
+
+def main(argv=None) -> int:
+    """``python -m lfproc.decoder_cache [--clear]``: the cache's folder, entries and size; or empty it."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m lfproc.decoder_cache", description=main.__doc__)
+    parser.add_argument("--clear", action="store_true", help="remove every entry")
+    args = parser.parse_args(argv)
+    folder = cache_dir()
+    if folder is None:
+        print("decoder cache disabled (LFPROC_NO_CACHE)")
+        return 0
+    if args.clear:
+        print(f"{folder}: removed {clear(folder)} entries")
+        return 0
+    found = entries(folder)
+    size = sum(os.path.getsize(p) for p in found)
+    print(f"{folder}: {len(found)} entries, {size / 1e9:.2f} GB of at most {max_bytes() / 1e9:.2f} GB "
+          f"(LFPROC_CACHE_MAX_GB)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
