@@ -29,7 +29,7 @@ def register(sub) -> None:
 def add_render_options(p) -> None:
     """``--format``, ``--interpolation`` and ``--upsample`` of refocused slices (refocus and batch)."""
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
-    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
+    p.add_argument("--interpolation", default="cubic-sharp", choices=("nearest", "linear", "cubic", "cubic-sharp"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
                    help="render slices on an S times finer grid than the lenses (default 1)")

@@ -22,8 +22,11 @@ Interpolation (for positions between lenses; whole-lens positions read the lens 
     ``"nearest"``: the lens at ``floor(pos + 0.5)`` (halves round up). ``"linear"``: bilinear, two taps
     per axis. ``"cubic"``: separable cubic convolution of Keys with a = −0.5 — the Catmull-Rom spline —
     four taps per axis at ``floor(pos) − 1 … floor(pos) + 2``; taps beyond the array are clamped to its
-    edge. Whole-lens samples — every sample when ``a`` is an integer and ``upsample = 1`` — are a pure
-    gather: no weights, no multiplications, whatever ``interpolation`` says (nearest with ``upsample = 1``
+    edge. ``"cubic-sharp"``: the same with Keys' a = −0.9, which lifts the response between lenses: with
+    linear (and, less, Catmull-Rom) interpolation an interpolated slice is blurrier than a whole-lens one,
+    so the sharpest slice of a fine sweep snaps towards integer ``a``; cubic-sharp removes that pull for
+    natural textures (the commands' default; docs/microscope-imaging.md). Whole-lens samples — every
+    sample when ``a`` is an integer and ``upsample = 1`` — are a pure gather: no weights, no multiplications, whatever ``interpolation`` says (nearest with ``upsample = 1``
     is a gather too). A call whose slices are all gathers runs the gather kernel; integer slices that
     share a call with real ones take single unit-weight taps there, still without multiplications.
 Precision

@@ -13,7 +13,7 @@ from ..errors import LfprocError
 from ._kernels import _gather_band, _interpolated_band
 from ._plan import AxisPlan, axis_plan
 
-INTERPOLATIONS = ("nearest", "linear", "cubic")
+INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp")
 
 #: dtypes the kernels read directly; other real dtypes are converted (see the module docstring)
 NATIVE_DTYPES = (np.dtype(np.float32), np.dtype(np.float64), np.dtype(np.uint16))
@@ -43,8 +43,10 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
-    interpolation : {"nearest", "linear", "cubic"}
-        How positions between lenses are read (module docstring). Irrelevant for integer ``a`` with
+    interpolation : {"nearest", "linear", "cubic", "cubic-sharp"}
+        How positions between lenses are read (module docstring). ``"linear"`` (the default here) and
+        ``"nearest"`` make the sharpest slice of a sweep snap to integer ``a``; ``"cubic-sharp"`` (the
+        default of the commands) does not. Irrelevant for integer ``a`` with
         ``upsample = 1``, which is a pure gather.
     upsample : int, optional
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
