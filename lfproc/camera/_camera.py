@@ -10,6 +10,8 @@ import math
 import os
 from dataclasses import dataclass, field, replace
 
+from ..errors import LfprocError
+from ._microscope import Microscope
 from ._optics import image_distance_for_focus
 from ._validation import validate_camera
 
@@ -26,10 +28,10 @@ class Camera:
         Micro lens pitch p_m̂.
     mla_focal_length_mm : float
         Micro lens focal length f_s; the sensor sits f_s behind the MLA.
-    main_focal_length_mm : float
-        Main lens focal length f_U.
-    image_distance_mm : float
-        b_U, main lens (H2U) to MLA (H1s). Must be at least f_U.
+    main_focal_length_mm : float or None
+        Main lens focal length f_U (``None`` only for a microscope).
+    image_distance_mm : float or None
+        b_U, main lens (H2U) to MLA (H1s). Must be at least f_U (``None`` only for a microscope).
     mla_principal_plane_gap_mm, main_principal_plane_gap_mm : float
         Separations H1s–H2s and H1U–H2U (negative where the planes are interchanged).
     f_number : float or None
@@ -47,7 +49,10 @@ class Camera:
         shifts micro image centres outwards from their lenses (Hahne et al. 2018, PlenoptiSign's dA).
     micro_image_px : int or None
         Odd micro image size m̂ after resampling; ``None`` picks the largest odd integer not above
-        ``mla_pitch_mm / pixel_pitch_mm``. Always an ``int`` once constructed.
+        ``mla_pitch_mm / lenslet_pixel_pitch_mm`` (``pixel_pitch_mm`` unless a microscope has a relay). Always an ``int`` once constructed.
+    microscope : Microscope or None
+        The objective, tube lens and relay of a light-field microscope (the ``[microscope]`` table),
+        in place of a main lens; ``None`` for a photographic camera.
     name : str
         Optional label.
     source : str
@@ -60,8 +65,8 @@ class Camera:
     pixel_pitch_mm: float
     mla_pitch_mm: float
     mla_focal_length_mm: float
-    main_focal_length_mm: float
-    image_distance_mm: float
+    main_focal_length_mm: float | None = None
+    image_distance_mm: float | None = None
     mla_principal_plane_gap_mm: float = 0.0
     main_principal_plane_gap_mm: float = 0.0
     f_number: float | None = None
@@ -71,6 +76,7 @@ class Camera:
     white_level: float | None = None
     exit_pupil_distance_mm: float = math.inf
     micro_image_px: int | None = None
+    microscope: Microscope | None = None
     name: str = ""
     source: str = field(default="", compare=False, repr=False)
     provenance: tuple = field(default=(), compare=False, repr=False)
@@ -91,8 +97,29 @@ class Camera:
 
     @property
     def telecentric(self) -> bool:
-        """True when the exit pupil is at infinity (the 2014 paper's model)."""
+        """True when the exit pupil is at infinity (the 2014 paper's model; always for a microscope)."""
         return math.isinf(self.exit_pupil_distance_mm)
+
+    @property
+    def is_microscope(self) -> bool:
+        """True for a light-field microscope (a ``[microscope]`` table instead of ``[main_lens]``)."""
+        return self.microscope is not None
+
+    def require_main_lens(self, what: str) -> None:
+        """Raise `LfprocError` (one line) when ``what`` needs a main lens and this camera is a microscope."""
+        if self.microscope is not None:
+            raise LfprocError(f"{self.source or 'camera'}: {what} needs a main lens ([main_lens]); this camera "
+                              f"file describes a microscope ([microscope]), which has none")
+
+    @property
+    def relay_magnification(self) -> float:
+        """Lateral magnification from the lenslets' focal plane to the sensor (1 without a relay)."""
+        return 1.0 if self.microscope is None else float(self.microscope.relay_magnification)
+
+    @property
+    def lenslet_pixel_pitch_mm(self) -> float:
+        """The sensor pixel seen at the lenslets' focal plane: ``pixel_pitch_mm / relay_magnification``."""
+        return self.pixel_pitch_mm / self.relay_magnification
 
     @property
     def micro_image_scale(self) -> float:
@@ -128,13 +155,14 @@ class Camera:
     @property
     def sensor_to_main_lens_mm(self) -> float:
         """f_s + H1sH2s + b_U + H1UH2U: the constant path of Eqs. 21 and 31 (sensor to H1U)."""
+        self.require_main_lens("a distance from the sensor")
         return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
                 + self.main_principal_plane_gap_mm)
 
     @property
     def pitch_px(self) -> float:
-        """Micro lens pitch in physical sensor pixels (before resampling)."""
-        return self.mla_pitch_mm / self.pixel_pitch_mm
+        """Micro lens pitch in physical sensor pixels (before resampling; through the relay of a microscope)."""
+        return self.mla_pitch_mm / self.lenslet_pixel_pitch_mm
 
     def raw_levels(self, type_max: float) -> tuple[float, float]:
         """(black, white) for a file whose integer type saturates at ``type_max``.
@@ -153,6 +181,7 @@ class Camera:
 
         The provenance of b_U (or of a focus distance) no longer holds and is dropped.
         """
+        self.require_main_lens("a focus distance")
         stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
         return replace(self, image_distance_mm=image_distance_for_focus(
             self.main_focal_length_mm, focus_distance_mm,

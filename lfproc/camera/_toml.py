@@ -7,6 +7,8 @@
     [mla]        pitch_mm, focal_length_mm, principal_plane_gap_mm, grid
     [main_lens]  focal_length_mm, principal_plane_gap_mm,
                  image_distance_mm | focus_distance_mm, f_number, exit_pupil_distance_mm
+    [microscope] objective_magnification, numerical_aperture, immersion_index, tube_lens_focal_length_mm,
+                 relay_magnification, wavelength_nm, aplanatic        (instead of [main_lens])
     [decode]     micro_image_px
     [provenance] "table.key" = "where the value came from"   (optional, issue 11)
 """
@@ -18,16 +20,18 @@ import os
 
 from ..errors import LfprocError
 from ..tomlfile import parse_toml, read_toml
+from ._microscope import MICROSCOPE_KEYS, Microscope
 from ._optics import image_distance_for_focus
 from ._validation import require_positive
 
 #: every key a camera file may hold, per table (anything else is a typo and refused)
 KNOWN_KEYS = {
-    "": {"name", "sensor", "mla", "main_lens", "decode", "provenance"},
+    "": {"name", "sensor", "mla", "main_lens", "microscope", "decode", "provenance"},
     "sensor": {"pixel_pitch_mm", "cfa", "black_level", "white_level"},
     "mla": {"pitch_mm", "focal_length_mm", "principal_plane_gap_mm", "grid"},
     "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number",
                   "exit_pupil_distance_mm"},
+    "microscope": set(MICROSCOPE_KEYS),
     "decode": {"micro_image_px"},
 }
 
@@ -45,8 +49,15 @@ def parse_camera_text(text: str, source: str) -> dict:
 def camera_fields(data: dict, source: str = "camera") -> dict:
     """Keyword arguments of :class:`Camera` from the parsed tables; every problem raises `LfprocError`."""
     reader = _TableReader(data, source)
-    sensor, mla, main, decode = (reader.table(t, required=t != "decode") for t in
-                                 ("sensor", "mla", "main_lens", "decode"))
+    if "main_lens" in data and "microscope" in data:
+        raise LfprocError(f"{source}: gives both [main_lens] and [microscope]; keep [microscope] for a light-field "
+                          f"microscope, [main_lens] for a camera")
+    sensor, mla, decode = (reader.table(t, required=t != "decode") for t in ("sensor", "mla", "decode"))
+    if "microscope" not in data and "main_lens" not in data:
+        raise LfprocError(f"{source}: missing table [main_lens] (or [microscope] for a light-field microscope); "
+                          f"see the camera file format in the README")
+    scope = reader.table("microscope") if "microscope" in data else None
+    main = reader.table("main_lens") if scope is None else {}
     for table, known in KNOWN_KEYS.items():
         given = data if not table else data.get(table, {})
         unknown = sorted(set(given) - known) if isinstance(given, dict) else []
@@ -54,10 +65,41 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
             where = f"[{table}]" if table else "the top level"
             raise LfprocError(f"{source}: unknown key {unknown[0]!r} in {where}; the keys there are "
                               f"{', '.join(sorted(known))}")
-    f_u = reader.number(main, "main_lens", "focal_length_mm")
-    main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
     f_s = reader.number(mla, "mla", "focal_length_mm")
     mla_gap = reader.number(mla, "mla", "principal_plane_gap_mm", default=0.0)
+    optics = (_main_lens(reader, main, f_s + mla_gap) if scope is None
+              else dict(microscope=_microscope(reader, scope)))
+    micro = decode.get("micro_image_px") if decode else None
+    if micro is not None and (isinstance(micro, bool) or not isinstance(micro, int)):
+        if isinstance(micro, float) and micro.is_integer():
+            micro = int(micro)
+        else:
+            raise LfprocError(f"{source}: decode.micro_image_px must be an odd integer, got {micro!r}")
+    name = data.get("name", "")
+    if not isinstance(name, str):
+        raise LfprocError(f"{source}: name must be a string, got {name!r}")
+    return dict(
+        pixel_pitch_mm=reader.number(sensor, "sensor", "pixel_pitch_mm"),
+        mla_pitch_mm=reader.number(mla, "mla", "pitch_mm"),
+        mla_focal_length_mm=f_s,
+        mla_principal_plane_gap_mm=mla_gap,
+        **optics,
+        grid=reader.string(mla, "mla", "grid", "rectangular"),
+        cfa=reader.string(sensor, "sensor", "cfa", "none"),
+        black_level=reader.number(sensor, "sensor", "black_level", default=0.0),
+        white_level=(reader.number(sensor, "sensor", "white_level") if "white_level" in sensor else None),
+        micro_image_px=micro,
+        name=name,
+        provenance=parse_provenance(data.get("provenance", {}), source),
+        source=source,
+    )
+
+
+def _main_lens(reader: "_TableReader", main: dict, mla_path_mm: float) -> dict:
+    """The ``Camera`` fields of a ``[main_lens]`` table; ``mla_path_mm`` = f_s + H1sH2s."""
+    source = reader.source
+    f_u = reader.number(main, "main_lens", "focal_length_mm")
+    main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
     has_b, has_focus = "image_distance_mm" in main, "focus_distance_mm" in main
     if has_b and has_focus:
         raise LfprocError(f"{source}: [main_lens] gives both image_distance_mm and focus_distance_mm; keep one")
@@ -68,39 +110,34 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
     else:
         focus = reader.number(main, "main_lens", "focus_distance_mm", allow_inf=True)
         require_positive(f_u, "main_lens.focal_length_mm", source)
-        b_u = image_distance_for_focus(f_u, focus, f_s + mla_gap + main_gap, source)
-    micro = decode.get("micro_image_px") if decode else None
-    if micro is not None and (isinstance(micro, bool) or not isinstance(micro, int)):
-        if isinstance(micro, float) and micro.is_integer():
-            micro = int(micro)
-        else:
-            raise LfprocError(f"{source}: decode.micro_image_px must be an odd integer, got {micro!r}")
+        b_u = image_distance_for_focus(f_u, focus, mla_path_mm + main_gap, source)
     f_number = main.get("f_number")
     if f_number is not None:
         f_number = reader.number(main, "main_lens", "f_number")
-    name = data.get("name", "")
-    if not isinstance(name, str):
-        raise LfprocError(f"{source}: name must be a string, got {name!r}")
-    return dict(
-        pixel_pitch_mm=reader.number(sensor, "sensor", "pixel_pitch_mm"),
-        mla_pitch_mm=reader.number(mla, "mla", "pitch_mm"),
-        mla_focal_length_mm=f_s,
-        main_focal_length_mm=f_u,
-        image_distance_mm=b_u,
-        mla_principal_plane_gap_mm=mla_gap,
-        main_principal_plane_gap_mm=main_gap,
-        f_number=f_number,
-        grid=reader.string(mla, "mla", "grid", "rectangular"),
-        cfa=reader.string(sensor, "sensor", "cfa", "none"),
-        black_level=reader.number(sensor, "sensor", "black_level", default=0.0),
-        white_level=(reader.number(sensor, "sensor", "white_level") if "white_level" in sensor else None),
-        exit_pupil_distance_mm=reader.number(main, "main_lens", "exit_pupil_distance_mm", default=math.inf,
-                                             allow_inf=True),
-        micro_image_px=micro,
-        name=name,
-        provenance=parse_provenance(data.get("provenance", {}), source),
-        source=source,
-    )
+    return dict(main_focal_length_mm=f_u, image_distance_mm=b_u, main_principal_plane_gap_mm=main_gap,
+                f_number=f_number,
+                exit_pupil_distance_mm=reader.number(main, "main_lens", "exit_pupil_distance_mm", default=math.inf,
+                                                     allow_inf=True))
+
+
+def _microscope(reader: "_TableReader", table: dict) -> Microscope:
+    """The ``[microscope]`` table as a :class:`Microscope` (values are checked by ``Microscope.validate``)."""
+    def number(key, default=None):
+        if default is None and key not in table:
+            raise LfprocError(f"{reader.source}: missing microscope.{key}; add it to [microscope]")
+        return reader.number(table, "microscope", key, default=default)
+
+    aplanatic = table.get("aplanatic")
+    if aplanatic is not None and not isinstance(aplanatic, bool):
+        raise LfprocError(f"{reader.source}: microscope.aplanatic must be true or false, got {aplanatic!r}")
+    return Microscope(
+        objective_magnification=number("objective_magnification"),
+        numerical_aperture=number("numerical_aperture"),
+        immersion_index=number("immersion_index"),
+        tube_lens_focal_length_mm=number("tube_lens_focal_length_mm"),
+        relay_magnification=number("relay_magnification", 1.0),
+        wavelength_nm=number("wavelength_nm") if "wavelength_nm" in table else None,
+        aplanatic=aplanatic)
 
 
 def parse_provenance(table, source: str) -> tuple[tuple[str, str], ...]:
@@ -138,19 +175,33 @@ def camera_to_toml(camera, include_provenance: bool = True) -> str:
     if camera.white_level is not None:
         lines.append(f"white_level = {float(camera.white_level)!r}")
     lines += ["[mla]", f"pitch_mm = {camera.mla_pitch_mm!r}", f"focal_length_mm = {camera.mla_focal_length_mm!r}",
-              f"principal_plane_gap_mm = {camera.mla_principal_plane_gap_mm!r}", f"grid = {_toml_str(camera.grid)}",
-              "[main_lens]", f"focal_length_mm = {camera.main_focal_length_mm!r}",
-              f"principal_plane_gap_mm = {camera.main_principal_plane_gap_mm!r}",
-              f"image_distance_mm = {camera.image_distance_mm!r}"]
-    if camera.f_number is not None:
-        lines.append(f"f_number = {camera.f_number!r}")
-    if not camera.telecentric:
-        lines.append(f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}")
+              f"principal_plane_gap_mm = {camera.mla_principal_plane_gap_mm!r}", f"grid = {_toml_str(camera.grid)}"]
+    if camera.microscope is not None:
+        lines += _microscope_lines(camera.microscope)
+    else:
+        lines += ["[main_lens]", f"focal_length_mm = {camera.main_focal_length_mm!r}",
+                  f"principal_plane_gap_mm = {camera.main_principal_plane_gap_mm!r}",
+                  f"image_distance_mm = {camera.image_distance_mm!r}"]
+        if camera.f_number is not None:
+            lines.append(f"f_number = {camera.f_number!r}")
+        if not camera.telecentric:
+            lines.append(f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}")
     lines += ["[decode]", f"micro_image_px = {camera.m_hat}"]
     if include_provenance and camera.provenance:
         lines.append("[provenance]")
         lines += [f"{_toml_str(key)} = {_toml_str(text)}" for key, text in camera.provenance]
     return "\n".join(lines) + "\n"
+
+
+def _microscope_lines(scope: Microscope) -> list[str]:
+    lines = ["[microscope]"]
+    for key in MICROSCOPE_KEYS:
+        value = getattr(scope, key)
+        if isinstance(value, bool):
+            lines.append(f"{key} = {'true' if value else 'false'}")
+        elif value is not None:
+            lines.append(f"{key} = {float(value)!r}")
+    return lines
 
 
 class _TableReader:

@@ -27,10 +27,18 @@ def validate_camera(camera) -> int:
     ``micro_image_px`` = None picks the largest odd integer not above ``mla_pitch_mm / pixel_pitch_mm``.
     """
     where = camera.source or "camera"
-    for key in ("pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm", "main_focal_length_mm"):
+    for key in ("pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm"):
         require_positive(getattr(camera, key), key, where)
-    for key in ("image_distance_mm", "mla_principal_plane_gap_mm", "main_principal_plane_gap_mm", "black_level"):
+    for key in ("mla_principal_plane_gap_mm", "main_principal_plane_gap_mm", "black_level"):
         require_finite(getattr(camera, key), key, where)
+    if camera.microscope is not None:
+        _validate_microscope(camera, where)
+    else:
+        if camera.main_focal_length_mm is None or camera.image_distance_mm is None:
+            raise LfprocError(f"{where}: a camera needs a main lens (main_lens.focal_length_mm and "
+                              f"image_distance_mm) or a [microscope] table; add one")
+        require_positive(camera.main_focal_length_mm, "main_focal_length_mm", where)
+        require_finite(camera.image_distance_mm, "image_distance_mm", where)
     if camera.white_level is not None:
         require_finite(camera.white_level, "white_level", where)
     d_a = camera.exit_pupil_distance_mm
@@ -39,7 +47,7 @@ def validate_camera(camera) -> int:
                           f"got {d_a!r}")
     if camera.f_number is not None:
         require_positive(camera.f_number, "f_number", where)
-    if camera.image_distance_mm < camera.main_focal_length_mm:
+    if camera.microscope is None and camera.image_distance_mm < camera.main_focal_length_mm:
         raise LfprocError(
             f"{where}: main_lens.image_distance_mm = {camera.image_distance_mm} is below the main lens focal length "
             f"{camera.main_focal_length_mm}, so the main lens would focus beyond infinity; "
@@ -51,17 +59,29 @@ def validate_camera(camera) -> int:
     if camera.white_level is not None and camera.white_level <= camera.black_level:
         raise LfprocError(f"{where}: white_level {camera.white_level} must exceed black_level {camera.black_level}")
     _validate_provenance(camera.provenance, where)
-    ratio = camera.mla_pitch_mm / camera.pixel_pitch_mm
+    ratio = camera.mla_pitch_mm / camera.lenslet_pixel_pitch_mm
     if camera.micro_image_px is None:
         if ratio < 1.0 - ODD_TOLERANCE:
             raise LfprocError(f"{where}: the micro lens pitch {camera.mla_pitch_mm} mm is smaller than one pixel "
-                              f"({camera.pixel_pitch_mm} mm); check the units of both pitches")
+                              f"({camera.lenslet_pixel_pitch_mm} mm); check the units of both pitches")
         return largest_odd_at_most(ratio)
     m = camera.micro_image_px
     if isinstance(m, bool) or not isinstance(m, int) or m < 1 or m % 2 == 0:
         raise LfprocError(f"{where}: decode.micro_image_px must be an odd integer >= 1, got {m!r}; "
                           f"try {largest_odd_at_most(max(ratio, 1.0))}")
     return m
+
+
+def _validate_microscope(camera, where: str) -> None:
+    """A microscope has no main lens: no f_U, b_U, f-number or exit pupil may be set beside it."""
+    from ._microscope import Microscope
+    if not isinstance(camera.microscope, Microscope):
+        raise LfprocError(f"{where}: microscope must be a Microscope, got {camera.microscope!r}")
+    if (camera.main_focal_length_mm is not None or camera.image_distance_mm is not None
+            or camera.f_number is not None or camera.main_principal_plane_gap_mm != 0.0
+            or not math.isinf(camera.exit_pupil_distance_mm)):
+        raise LfprocError(f"{where}: a microscope camera has no main lens; give [microscope] or [main_lens], not both")
+    camera.microscope.validate(where)
 
 
 def _validate_provenance(provenance, where: str) -> None:

@@ -1,0 +1,94 @@
+"""The main optics of a light-field microscope: an infinity-corrected objective and its tube lens.
+
+The camera file's ``[microscope]`` table (ARCHITECTURE.md, "Microscope camera file") replaces
+``[main_lens]``. The objective (focal length f_obj = f_tube / M) and the tube lens form an afocal,
+doubly telecentric relay: the aperture stop sits in the objective's back focal plane, which is the
+tube lens's front focal plane, so every micro image is centred under its own lenslet (the paper's
+telecentric case) and the native object plane is imaged onto the micro lens array with lateral
+magnification M and axial magnification M²/n (n the immersion index).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import LfprocError
+
+#: camera-file key of each Microscope field (error messages)
+MICROSCOPE_KEYS = ("objective_magnification", "numerical_aperture", "immersion_index",
+                   "tube_lens_focal_length_mm", "relay_magnification", "wavelength_nm", "aplanatic")
+
+
+@dataclass(frozen=True)
+class Microscope:
+    """Objective, tube lens and relay of a light-field microscope (Levoy et al., SIGGRAPH 2006).
+
+    Parameters
+    ----------
+    objective_magnification : float
+        M, the objective's nominal lateral magnification with its tube lens.
+    numerical_aperture : float
+        NA = n·sin θ_max of the objective; must be below ``immersion_index``.
+    immersion_index : float
+        n, the refractive index between sample and objective (1.0 air, 1.33 water, 1.515 oil).
+    tube_lens_focal_length_mm : float
+        f_tube; the objective's focal length is f_tube / M.
+    relay_magnification : float
+        Lateral magnification from the lenslets' focal plane to the sensor (1 without a relay): the
+        pixel at the lenslet focal plane is ``pixel_pitch_mm / relay_magnification``.
+    wavelength_nm : float or None
+        λ for the diffraction term of the depth of field; ``None`` uses 550 nm.
+    aplanatic : bool or None
+        Refocus with per-view shifts from the sine condition (True), paraxial shifts a·(c − k)
+        (False), or decide from the camera (None, the default; see ``lfproc.geometry``).
+    """
+
+    objective_magnification: float
+    numerical_aperture: float
+    immersion_index: float = 1.0
+    tube_lens_focal_length_mm: float = 200.0
+    relay_magnification: float = 1.0
+    wavelength_nm: float | None = None
+    aplanatic: bool | None = None
+
+    def validate(self, where: str) -> None:
+        """Raise `LfprocError` with one line naming the ``microscope.`` key for an impossible value."""
+        for key in ("objective_magnification", "numerical_aperture", "immersion_index",
+                    "tube_lens_focal_length_mm", "relay_magnification"):
+            _positive(getattr(self, key), key, where)
+        if self.wavelength_nm is not None:
+            _positive(self.wavelength_nm, "wavelength_nm", where)
+        if self.immersion_index < 1.0:
+            raise LfprocError(f"{where}: microscope.immersion_index must be at least 1 (air), "
+                              f"got {self.immersion_index!r}")
+        if self.numerical_aperture >= self.immersion_index:
+            raise LfprocError(f"{where}: microscope.numerical_aperture {self.numerical_aperture!r} must be below "
+                              f"microscope.immersion_index {self.immersion_index!r} (NA = n·sin θ); check both")
+        if self.aplanatic is not None and not isinstance(self.aplanatic, bool):
+            raise LfprocError(f"{where}: microscope.aplanatic must be true or false, got {self.aplanatic!r}")
+
+    @property
+    def objective_focal_length_mm(self) -> float:
+        """f_obj = f_tube / M."""
+        return self.tube_lens_focal_length_mm / self.objective_magnification
+
+    @property
+    def axial_magnification(self) -> float:
+        """M² / n: an object-space depth step dz moves the image behind the tube lens by dz·M²/n."""
+        return self.objective_magnification ** 2 / self.immersion_index
+
+    @property
+    def image_numerical_aperture(self) -> float:
+        """NA / M, the sine of the marginal ray's angle at the micro lens array (Abbe sine condition)."""
+        return self.numerical_aperture / self.objective_magnification
+
+    @property
+    def wavelength_mm(self) -> float:
+        """λ in millimetres (550 nm where the camera file gives none)."""
+        return (550.0 if self.wavelength_nm is None else self.wavelength_nm) * 1e-6
+
+
+def _positive(value, key: str, where: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise LfprocError(f"{where}: microscope.{key} must be a finite positive number, got {value!r}")

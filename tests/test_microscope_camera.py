@@ -1,0 +1,129 @@
+"""The [microscope] camera file (ARCHITECTURE.md "Microscope camera file"): parsing, validation, derived values."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+from lfproc import LfprocError
+from lfproc.camera import Camera
+
+SAMPLES = Path(__file__).resolve().parents[1] / "lfproc" / "samples" / "cameras"
+
+CONTRACT = """name = "lfm-20x"
+[sensor]
+pixel_pitch_mm = 0.0065
+[mla]
+pitch_mm = 0.125
+focal_length_mm = 2.433
+grid = "rectangular"
+[microscope]
+objective_magnification = 20.0
+numerical_aperture = 0.5
+immersion_index = 1.33
+tube_lens_focal_length_mm = 180.0
+relay_magnification = 1.4286
+wavelength_nm = 510
+"""
+
+
+def _cam(text):
+    return Camera.from_toml_string(text, source="scope.toml")
+
+
+def test_contract_example_parses_with_the_relay():
+    cam = _cam(CONTRACT)
+    assert cam.is_microscope and cam.telecentric
+    scope = cam.microscope
+    assert (scope.objective_magnification, scope.numerical_aperture, scope.immersion_index) == (20.0, 0.5, 1.33)
+    # the pixel at the lenslet focal plane is 6.5 um / 1.4286 = 4.55 um: 125 / 4.55 = 27.47 px per lens
+    assert cam.lenslet_pixel_pitch_mm == pytest.approx(0.0065 / 1.4286, rel=1e-15)
+    assert cam.pitch_px == pytest.approx(0.125 * 1.4286 / 0.0065, rel=1e-12)
+    assert cam.m_hat == 27                       # the largest odd integer not above 27.47
+    assert cam.effective_pixel_pitch_mm == pytest.approx(0.125 / 27, rel=1e-15)
+    assert scope.objective_focal_length_mm == pytest.approx(9.0)
+    assert scope.axial_magnification == pytest.approx(400 / 1.33)
+    assert scope.wavelength_mm == pytest.approx(510e-6)
+
+
+def test_sample_cameras_parse_and_round_trip():
+    for name in ("lfm-20x.toml", "lfm-60x-water.toml"):
+        cam = Camera.from_toml(SAMPLES / name)
+        assert cam.is_microscope
+        again = Camera.from_toml_string(cam.to_toml())
+        assert again == cam and again.microscope == cam.microscope
+    assert Camera.from_toml(SAMPLES / "lfm-20x.toml") == _cam(CONTRACT)
+
+
+def test_relay_defaults_to_one_and_wavelength_to_none():
+    text = CONTRACT.replace("relay_magnification = 1.4286\n", "").replace("wavelength_nm = 510\n", "")
+    cam = _cam(text)
+    assert cam.relay_magnification == 1.0 and cam.microscope.wavelength_nm is None
+    assert cam.m_hat == 19                       # 125 / 6.5 = 19.23
+    assert cam.microscope.wavelength_mm == pytest.approx(550e-6)
+
+
+@pytest.mark.parametrize("edit, mention", [
+    (("numerical_aperture = 0.5", "numerical_aperture = 1.4"), "numerical_aperture"),
+    (("numerical_aperture = 0.5", "numerical_aperture = 1.33"), "immersion_index"),
+    (("numerical_aperture = 0.5", "numerical_aperture = -0.5"), "microscope.numerical_aperture"),
+    (("objective_magnification = 20.0", "objective_magnification = 0"), "microscope.objective_magnification"),
+    (("immersion_index = 1.33", "immersion_index = 0.9"), "microscope.immersion_index"),
+    (("tube_lens_focal_length_mm = 180.0", "tube_lens_focal_length_mm = -180.0"), "tube_lens_focal_length_mm"),
+    (("relay_magnification = 1.4286", "relay_magnification = 0"), "microscope.relay_magnification"),
+    (("wavelength_nm = 510", "wavelength_nm = -1"), "microscope.wavelength_nm"),
+    (("wavelength_nm = 510", "wavelength_nm = \"green\""), "microscope.wavelength_nm"),
+    (("wavelength_nm = 510", "wavelength_nm = nan"), "microscope.wavelength_nm"),
+    (("numerical_aperture = 0.5\n", ""), "missing microscope.numerical_aperture"),
+    (("objective_magnification = 20.0\n", ""), "missing microscope.objective_magnification"),
+    (("immersion_index = 1.33\n", ""), "missing microscope.immersion_index"),
+    (("tube_lens_focal_length_mm = 180.0\n", ""), "missing microscope.tube_lens_focal_length_mm"),
+    (("wavelength_nm = 510", "wavelenght_nm = 510"), "unknown key 'wavelenght_nm' in [microscope]"),
+    (("wavelength_nm = 510", "wavelength_nm = 510\naplanatic = \"yes\""), "microscope.aplanatic"),
+])
+def test_bad_microscope_values_are_one_line_errors(edit, mention):
+    with pytest.raises(LfprocError) as info:
+        _cam(CONTRACT.replace(*edit))
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("scope.toml:") and mention in message, message
+
+
+def test_both_tables_or_neither_is_refused():
+    both = CONTRACT + "[main_lens]\nfocal_length_mm = 100.0\nimage_distance_mm = 100.0\n"
+    with pytest.raises(LfprocError, match=r"both \[main_lens\] and \[microscope\]"):
+        _cam(both)
+    neither = CONTRACT.split("[microscope]")[0]
+    with pytest.raises(LfprocError, match=r"missing table \[main_lens\] \(or \[microscope\]"):
+        _cam(neither)
+
+
+def test_microscope_that_is_not_a_table_is_refused():
+    text = 'microscope = 3\n' + CONTRACT.split("[microscope]")[0]
+    with pytest.raises(LfprocError, match=r"'microscope' must be a table \[microscope\]"):
+        _cam(text)
+
+
+def test_constructor_refuses_a_main_lens_beside_a_microscope():
+    cam = _cam(CONTRACT)
+    with pytest.raises(LfprocError, match="not both"):
+        Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm, 100.0, 100.0,
+               microscope=cam.microscope)
+    with pytest.raises(LfprocError, match="needs a main lens"):
+        Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm)
+
+
+def test_main_lens_quantities_refuse_on_a_microscope():
+    cam = _cam(CONTRACT)
+    with pytest.raises(LfprocError, match=r"needs a main lens \(\[main_lens\]\).*microscope"):
+        cam.sensor_to_main_lens_mm
+    with pytest.raises(LfprocError, match="needs a main lens"):
+        cam.with_focus_distance(1000.0)
+
+
+def test_aplanatic_switch_parses():
+    on = _cam(CONTRACT + "aplanatic = true\n")
+    off = _cam(CONTRACT + "aplanatic = false\n")
+    assert on.microscope.aplanatic is True and off.microscope.aplanatic is False
+    assert _cam(CONTRACT).microscope.aplanatic is None
+    assert Camera.from_toml_string(on.to_toml()).microscope.aplanatic is True
+    assert math.isinf(on.exit_pupil_distance_mm)
