@@ -23,6 +23,11 @@ def register(sub) -> None:
     add_slice_options(p).required = True
     add_output_folder_option(p)
     add_render_options(p)
+    p.add_argument("--stack", choices=("imagej", "ome"),
+                   help="also write all slices of a capture as one z-stack file, STEM_stack.tif (imagej: an ImageJ "
+                        "hyperstack) or STEM_stack.ome.tif (ome: OME-TIFF), with the physical x/y/z spacing in µm "
+                        "for a microscope (Fiji and napari open it to scale) and each slice's a and distance "
+                        "for a photographic camera")
     p.set_defaults(func=run)
 
 
@@ -41,7 +46,7 @@ def check_render_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..outputs import write_slices
+    from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack, write_slices
     from ..pipeline import unique_stems
     from ..refocus import refocus
 
@@ -77,6 +82,10 @@ def run(args) -> int:
         describe_once(key, lf.camera, values)
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
                                args.format)
+        if args.stack:
+            write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,
+                              slice_metadata(os.path.abspath(path), lf.camera, values), kind=args.stack,
+                              lens_um=lateral_um_per_lens(lf.camera), upsample=args.upsample)
         progress.update(len(values))
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 

@@ -8,7 +8,8 @@ enlarged to at least 512 px on the long side (:func:`upscale`) and labelled in m
 
 Modules: ``_names`` (file names), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
 and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
-``_colours`` (the depth colour scale), ``_view_set`` (what ``lfproc views`` writes). Pillow and
+``_colours`` (the depth colour scale), ``_view_set`` (what ``lfproc views`` writes), ``_stack`` (a focal
+stack as one ImageJ or OME-TIFF file with its physical spacing). Pillow and
 OpenImageIO load only when something is written.
 """
 
@@ -18,6 +19,7 @@ from ._names import FORMATS, slice_name, slice_names, view_name
 from ._previews import (display_frames, write_gif_frames, write_mosaic_preview, write_png_preview, write_slice_gif,
                         write_view_gif)
 from ._products import masked_views, slice_metadata, write_slices, write_view_mosaic, write_views
+from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, write_focal_stack
 from ._tone import ToneMap
 from ._view_set import write_view_set
 
@@ -25,4 +27,4 @@ __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata"
            "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX", "UPSCALE_METHODS", "upscale",
            "upscale_factor", "add_label", "metres", "slice_label", "display_frames", "write_gif_frames",
            "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview", "DEPTH_COLOURS",
-           "colour_scale", "write_view_set"]
+           "colour_scale", "write_view_set", "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack"]
