@@ -106,6 +106,18 @@ class LightField:
     def effective_pixel_pitch_mm(self) -> float | None:
         return None if self.camera is None else self.camera.effective_pixel_pitch_mm
 
+    @property
+    def refocus_slopes(self):
+        """Per-view shift table (σ_y, σ_x) for :func:`lfproc.refocus`, or ``None`` for Eq. 9's a·(c − k).
+
+        Only a microscope camera whose refocusing follows the sine condition has one
+        (:func:`lfproc.geometry.refocus_slopes`); its m̂ must match the views.
+        """
+        if self.camera is None or self.camera.microscope is None or self.camera.m_hat != self.m_hat:
+            return None
+        from .geometry import refocus_slopes     # numpy only: stays light
+        return refocus_slopes(self.camera)
+
     # ------------------------------------------------------------------ file format
     def save(self, path: str | os.PathLike) -> None:
         """Write the light field atomically in the format of the module docstring."""

@@ -7,14 +7,20 @@ paper's image-side telecentric model, extended to a finite exit pupil (Hahne et 
 Private modules: ``_slices`` (distance, DOF and inverse, Eqs. 13–31), ``_planning`` (slice planning,
 uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), ``_triangulation``
 (baseline, tilt and distance of a disparity), ``_exit_pupil`` (micro image drift),
-``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂).
+``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂),
+``_transfer`` (the main optics as a paraxial ray transfer: thick main lens or objective + tube lens),
+``_microscope`` (a light-field microscope's slices in µm, view angles, aplanatic per-view shifts).
 """
 
 from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
+from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
+                          na_views, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
+                          views_inside_na, z_per_a_um)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._ray_model import RayModel
 from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
 from ._slices import SliceGeometry, infinity_parameter, refocus_parameter, slice_distance_mm, slice_geometry
+from ._transfer import RayTransfer, main_optics_transfer
 from ._triangulation import Triangulation, triangulate
 from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, view_positions_mm, view_slopes,
                      view_tilts_deg, views_inside_aperture)
@@ -24,7 +30,10 @@ __all__ = [
     "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
     "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
     "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
-    "Triangulation", "triangulate",
+    "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
+    "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
+    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
+    "z_per_a_um",
     "ViewGeometry", "baseline_mm", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
     "view_tilts_deg", "views_inside_aperture",
 ]

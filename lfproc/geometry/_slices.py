@@ -56,6 +56,11 @@ from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
 
+def _require_main_lens(camera, what: str) -> None:
+    if getattr(camera, "microscope", None) is not None:
+        camera.require_main_lens(what)
+
+
 def _slope_step(camera: Camera) -> float:
     """δ = p_p / f_s with the sample pitch p_p (Eq. 13 for Δu = 1): the micro image pitch over m̂."""
     return camera.sample_pitch_mm / camera.mla_focal_length_mm
@@ -90,9 +95,12 @@ def _equivalent_parameter(camera: Camera, shift, spread):
     return shift / (1.0 + (shift - spread) * kappa_ratio)
 
 
-def _dof_pairs(camera: Camera, a):
-    """((A₋, C₋), (A₊, C₊)): the border-ray pairs bounding slice a on its near and far side."""
-    c = camera.center_index
+def _dof_pairs(camera: Camera, a, center=None):
+    """((A₋, C₋), (A₊, C₊)): the border-ray pairs bounding slice a on its near and far side.
+
+    ``center`` replaces c = (m̂ − 1)/2 where fewer views carry light (a microscope's NA).
+    """
+    c = camera.center_index if center is None else center
     if c == 0:  # m̂ = 1: a single pixel per lens; both borders of the one pixel bound the DOF
         minus_one = np.full_like(a, -1.0)
         return (minus_one, minus_one), (minus_one, minus_one)
@@ -126,6 +134,7 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
     float or ndarray
         Distance in mm; ``inf`` where the chief rays are parallel or diverge.
     """
+    _require_main_lens(camera, "a slice distance from the sensor")
     d = _distance_at(camera, a)
     return float(d) if d.ndim == 0 else d
 
@@ -140,16 +149,37 @@ class SliceGeometry:
     distance_mm : d_a, Eq. 21
     near_mm, far_mm : d_a− and d_a+, Eq. 31
     dof_mm : D_a = d_a+ − d_a−, Eq. 23 (``inf`` when the far limit is at infinity)
+    z_um, z_near_um, z_far_um, dof_um : for a microscope camera (then the ``_mm`` fields are ``None``):
+        object-space depth from the native object plane, positive towards the objective, its DOF
+        limits nearer to and farther from the objective, and the DOF (:mod:`._microscope`)
     """
 
     a: np.ndarray
-    distance_mm: np.ndarray
-    near_mm: np.ndarray
-    far_mm: np.ndarray
-    dof_mm: np.ndarray
+    distance_mm: np.ndarray | None
+    near_mm: np.ndarray | None
+    far_mm: np.ndarray | None
+    dof_mm: np.ndarray | None
+    z_um: np.ndarray | None = None
+    z_near_um: np.ndarray | None = None
+    z_far_um: np.ndarray | None = None
+    dof_um: np.ndarray | None = None
+
+    @property
+    def microscope(self) -> bool:
+        """True for slices in µm of a microscope (``z_um``…), False for distances in mm from the sensor."""
+        return self.z_um is not None
 
     def records(self) -> list[dict]:
-        """One dict per slice with the contract's JSON keys; infinity as ``math.inf``."""
+        """One dict per slice with the contract's JSON keys; infinity as ``math.inf``.
+
+        A camera's slices: ``a, distance_mm, near_mm, far_mm, dof_mm``; a microscope's: ``a, z_um,
+        z_near_um, z_far_um, dof_um``.
+        """
+        if self.microscope:
+            cols = [np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in
+                    (self.a, self.z_um, self.z_near_um, self.z_far_um, self.dof_um)]
+            return [dict(a=float(a), z_um=float(z), z_near_um=float(n), z_far_um=float(f), dof_um=float(w))
+                    for a, z, n, f, w in zip(*cols)]
         cols = [np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in
                 (self.a, self.distance_mm, self.near_mm, self.far_mm, self.dof_mm)]
         return [dict(a=float(a), distance_mm=float(d), near_mm=float(n), far_mm=float(f), dof_mm=float(w))
@@ -171,7 +201,11 @@ def slice_geometry(camera: Camera, a) -> SliceGeometry:
         ``near_mm <= distance_mm <= far_mm`` always holds; limits are ``inf`` where the bounding
         rays do not meet in front of the camera. Limits beyond the focus distance use the border
         rays that bound the beams there (see the module docstring), so the DOF never collapses.
+        For a microscope camera the ``_um`` fields instead (:func:`~._microscope.microscope_slices`).
     """
+    if getattr(camera, "microscope", None) is not None:
+        from ._microscope import microscope_slices
+        return microscope_slices(camera, a)
     a_arr = np.asarray(a, dtype=np.float64)
     d, d_sign = _pair_distance(camera, a_arr, a_arr)
     near_pair, far_pair = _dof_pairs(camera, a_arr)
@@ -197,6 +231,7 @@ def slice_geometry(camera: Camera, a) -> SliceGeometry:
 
 def infinity_parameter(camera: Camera) -> float:
     """a_∞ = −δ·ε/(p_m·(1 − κε)): the refocus parameter of the slice focused at infinity (0 when b_U = f_U)."""
+    _require_main_lens(camera, "the slice at infinity")
     eps = camera.image_distance_mm - camera.main_focal_length_mm
     return -_slope_step(camera) * eps / (camera.mla_pitch_mm * (1.0 - pupil_curvature(camera) * eps))
 
@@ -212,6 +247,7 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     LfprocError
         For a distance at or behind the main lens (d ≤ L), or NaN.
     """
+    _require_main_lens(camera, "a distance in mm (give depths of a microscope in um, --z-range)")
     d = np.asarray(distance_mm, dtype=np.float64)
     inside = camera.sensor_to_main_lens_mm
     if np.any(np.isnan(d)) or np.any(d <= inside):

@@ -71,15 +71,21 @@ class AxisPlan:
         return bool(np.all(self.ntaps == 1) and np.all(self.weights[..., 0] == 1.0))
 
 
-def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str) -> AxisPlan:
-    """Sampling plan of one axis of length ``n`` for slices ``slopes`` of an m̂ = ``m`` light field."""
+def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str, factors=None) -> AxisPlan:
+    """Sampling plan of one axis of length ``n`` for slices ``slopes`` of an m̂ = ``m`` light field.
+
+    View index v of slice a is read at ``a·(c − v)`` lenses (Eq. 9, centred), or at ``a·factors[v]``
+    where a per-view multiplier table ``factors`` (length m) is given (e.g. the sine condition's shifts
+    of a microscope view, :func:`lfproc.geometry.refocus_slopes`).
+    """
     s = upsample
     c = (m - 1) // 2
     a = np.asarray(slopes, dtype=np.float64)[:, None, None]
     v = np.arange(m)[None, :, None]
+    step = (c - v) if factors is None else np.asarray(factors, dtype=np.float64).reshape(1, m, 1)
     r = np.arange(s)[None, None, :]
     with np.errstate(invalid="ignore", over="ignore"):     # |a| near 1e308 gives ±inf: outside
-        offset = snap(r / s + a * (c - v))
+        offset = snap(r / s + a * step)
     q_len = np.where(r == 0, n, n - 1)                       # outputs per phase: P = (n − 1)·s + 1
     lo_f = np.maximum(0.0, np.ceil(-offset))
     hi_f = np.minimum(q_len - 1.0, np.floor(n - 1.0 - offset))

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import LfprocError
 from ._kernels import _gather_band, _interpolated_band
+from ._per_view import refocus_per_view
 from ._plan import AxisPlan, axis_plan
 
 INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp")
@@ -32,7 +33,7 @@ MIN_BAND_ROWS = 8
 
 
 # ----------------------------------------------------------------------------- public entry point
-def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarray:
+def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts=None) -> np.ndarray:
     """Refocused slice(s) of a light field by centred shift-and-sum (Eq. 9).
 
     Parameters
@@ -52,6 +53,12 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
         position (py/s, px/s). ``1`` (default) is the lens grid itself. The output of the call (all K
         slices) may take at most :data:`MAX_OUTPUT_BYTES` (16 GiB).
+    view_shifts : (σ_y, σ_x) or None, optional
+        A per-view shift table, two ``(m̂, m̂)`` arrays: view (ky, kx) of slice ``a`` is read at
+        ``(py/s + a·σ_y[ky, kx], px/s + a·σ_x[ky, kx])`` instead of ``a·(c − ky), a·(c − kx)``. ``None``
+        (default) takes the light field's own table (``LightField.refocus_slopes``: the sine
+        condition's shifts of a high-NA microscope, :func:`lfproc.geometry.refocus_slopes`), and Eq. 9
+        where it has none — every photographic light field.
 
     Returns
     -------
@@ -71,6 +78,11 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1) -> np.ndarr
     upsample = _upsample(upsample)
     m, _, ny, nx, channels = views.shape
     _check_output_size(len(slopes), ny, nx, channels, upsample)
+    table = _shift_table(lf, view_shifts, m)
+    if table is not None:
+        out = refocus_per_view(views, slopes, table, interpolation, upsample, _view_mask(lf, m))
+        _check_finite(out, slopes, views)
+        return out[0] if scalar else out
     plan_y = axis_plan(slopes, m, ny, upsample, interpolation)
     plan_x = axis_plan(slopes, m, nx, upsample, interpolation)
     out = _render(views, plan_y, plan_x, upsample)
@@ -110,6 +122,34 @@ def _masked_mean_factor(mask: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, ny
     every = plan_y.count[:, :, None] * plan_x.count[:, None, :]
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(marked > 0, every / marked, 0.0).astype(np.float32)
+
+
+def _shift_table(lf, view_shifts, m: int):
+    """The per-view shift table to use: ``view_shifts``, else the light field's own, else ``None`` (Eq. 9)."""
+    table = getattr(lf, "refocus_slopes", None) if view_shifts is None else view_shifts
+    if table is None:
+        return None
+    try:
+        sigma_y, sigma_x = (np.asarray(t, dtype=np.float64) for t in table)
+    except (TypeError, ValueError):
+        raise LfprocError("refocus: view_shifts must be two (m, m) arrays of per-view shift multipliers") from None
+    if sigma_y.shape != (m, m) or sigma_x.shape != (m, m) or not (np.isfinite(sigma_y).all()
+                                                                  and np.isfinite(sigma_x).all()):
+        raise LfprocError(f"refocus: view_shifts must be two finite ({m}, {m}) arrays (one per view), "
+                          f"got shapes {sigma_y.shape} and {sigma_x.shape}")
+    return sigma_y, sigma_x
+
+
+def _view_mask(lf, m: int):
+    mask = getattr(lf, "view_mask", None)
+    return None if mask is None else np.asarray(mask, dtype=bool).reshape(m, m)
+
+
+def _check_finite(out: np.ndarray, slopes, views: np.ndarray) -> None:
+    bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
+    if bad.any():
+        raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={slopes[int(np.argmax(bad))]:g}; "
+                          "replace them (e.g. numpy.nan_to_num) before refocusing")
 
 
 # ----------------------------------------------------------------------------- input validation

@@ -1,0 +1,220 @@
+"""Slices and views of a light-field microscope in object space: micrometres from the native object plane.
+
+The ray model of :mod:`._slices` with the microscope's transfer (:mod:`._transfer`): a ray pair (A, C)
+meeting w = A·p_m/δ = A·m̂·f_s behind the MLA (δ = p_p/f_s, p_p = p_m/m̂) is the object point
+s = n·w/M² in front of the native object plane, so slice a sits at
+
+    z = a·m̂·f_s·n / M²          (f_s in µm: z in µm; the relay does not enter, m̂ counts the
+                                  resampled samples per lens, each p_m/m̂ wide at the lenslet focus)
+
+positive towards the objective (a > 0 refocuses nearer the objective, as nearer the camera in the
+paper). The lateral sampling is one lens, p_m/M in the object (Levoy et al., "Light Field Microscopy",
+SIGGRAPH 2006, Sec. 3: lateral resolution = lenslet pitch / M).
+
+Depth of field: the paper's border-ray pairs (Eqs. 23–31) with the views the objective fills, i.e.
+those whose image-side ray sine is at most NA/M (c_NA views each side of the centre), plus the wave
+term λ·n/NA² of the microscope's DOF, D_tot = λ·n/NA² + n·e/(M·NA) (Levoy et al. 2006, Eq. 1,
+after Inoué). For a lenslet f-number matched to the objective the geometric part tends to n·p_m/(M·NA),
+Levoy's second term with e = p_m, and the number of slices with disjoint DOF over |a| ≤ 1 is the
+number of views across the NA (Levoy's N_u resolvable depths).
+
+Aplanatic refocusing. An objective obeys the Abbe sine condition, n·sin θ = M·sin θ'. View (ky, kx)
+samples the image-side direction (u_x, u_y, f_s) with u = (k − c)·p_p, so in the object its ray has
+direction sines (α, β) = M·(u_x, u_y)/(n·ρ), ρ = |(u_x, u_y, f_s)|, and cosine γ. A plane at depth z
+displaces that ray laterally by z·(α, β)/γ, i.e. by M·z·(α, β)/(γ·p_m) lenses at the MLA. Written as
+a·g·(c − k) with the z(a) above, the per-view multiplier is g = f_s/(ρ·γ) ≥ 1 (g = 1 paraxially):
+with these shifts slice a is exactly the plane z(a). Paraxial shifts a·(c − k) instead focus view k at
+z(a)/g_k; their least-squares depth is z(a)·Σw·g/Σw·g² (w = |k − c|², the views inside the NA).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LfprocError
+from ._transfer import main_optics_transfer
+
+UM_PER_MM = 1000.0
+
+
+def _scope(camera):
+    scope = getattr(camera, "microscope", None)
+    if scope is None:
+        raise LfprocError(f"{getattr(camera, 'source', '') or 'camera'}: micrometre depths need a microscope camera "
+                          f"([microscope] table); this camera has a main lens")
+    return scope
+
+
+def z_per_a_um(camera) -> float:
+    """dz/da = m̂·f_s·n/M² in µm, through the microscope's ray transfer (exact for the paraxial map)."""
+    _scope(camera)
+    w_per_a = camera.mla_pitch_mm * camera.mla_focal_length_mm / camera.sample_pitch_mm   # = m̂·f_s
+    return float(main_optics_transfer(camera).object_offset_mm(w_per_a)) * UM_PER_MM
+
+
+def lateral_sampling_um(camera) -> float:
+    """Object-space spacing of the lenses, p_m/M in µm (Levoy et al. 2006: lateral resolution)."""
+    return camera.mla_pitch_mm / _scope(camera).objective_magnification * UM_PER_MM
+
+
+def image_sines(camera):
+    """(u_x, u_y per view offset i) → image-side direction sines of the views along one axis, i = −c…c."""
+    c = camera.center_index
+    u = np.arange(-c, c + 1) * camera.sample_pitch_mm
+    return u / np.hypot(u, camera.mla_focal_length_mm)
+
+
+def na_views(camera) -> int:
+    """c_NA: the largest view offset |i| whose image-side ray sine is within the objective's NA/M (≤ c)."""
+    scope = _scope(camera)
+    sines = image_sines(camera)[camera.center_index:]
+    inside = np.nonzero(sines <= scope.image_numerical_aperture * (1.0 + 1e-12))[0]
+    return int(inside[-1])
+
+
+def _view_grid(camera):
+    """(u_x, u_y, ρ) on the (m̂, m̂) view grid: image-side offsets under the lens and ρ = |(u_x, u_y, f_s)|."""
+    c = camera.center_index
+    u = np.arange(-c, c + 1) * camera.sample_pitch_mm
+    ux, uy = np.meshgrid(u, u)
+    return ux, uy, np.sqrt(ux * ux + uy * uy + camera.mla_focal_length_mm ** 2)
+
+
+def views_inside_na(camera) -> np.ndarray:
+    """Boolean (m̂, m̂): views whose image-side ray sine is within NA/M (the objective's aperture)."""
+    ux, uy, rho = _view_grid(camera)
+    limit = _scope(camera).image_numerical_aperture
+    return (ux * ux + uy * uy) <= (limit * rho) ** 2 * (1.0 + 1e-12)
+
+
+def _view_directions(camera):
+    """(α, β, γ, ρ) on the (m̂, m̂) view grid: object-space direction sines, cosine, and |(u, f_s)|.
+
+    Views outside the objective's NA carry no light; their sines are clipped to the NA so γ stays real.
+    """
+    scope = _scope(camera)
+    ux, uy, rho = _view_grid(camera)
+    scale = scope.objective_magnification / (scope.immersion_index * rho)
+    alpha, beta = ux * scale, uy * scale
+    radial = np.hypot(alpha, beta)
+    limit = scope.numerical_aperture / scope.immersion_index
+    clip = np.where(radial > limit, limit / np.where(radial > 0, radial, 1.0), 1.0)
+    alpha, beta = alpha * clip, beta * clip
+    gamma = np.sqrt(1.0 - alpha * alpha - beta * beta)
+    return alpha, beta, gamma, rho
+
+
+def aplanatic_gain(camera) -> np.ndarray:
+    """g = f_s/(ρ·γ) per view (m̂, m̂): the sine condition's shift of view k over the paraxial a·(c − k)."""
+    _, _, gamma, rho = _view_directions(camera)
+    return camera.mla_focal_length_mm / (rho * gamma)
+
+
+def paraxial_depth_error(camera) -> float:
+    """Relative error 1 − Σw·g/Σw·g² of the paraxial map (least squares over the views inside the NA)."""
+    g = aplanatic_gain(camera)
+    ux, uy, _ = _view_grid(camera)
+    w = (ux * ux + uy * uy) * views_inside_na(camera)
+    if not w.any():
+        return 0.0
+    return float(1.0 - (w * g).sum() / (w * g * g).sum())
+
+
+def uses_aplanatic(camera) -> bool:
+    """Whether refocusing uses the sine condition's shifts: the camera file's ``aplanatic``, else automatic.
+
+    Automatic: on where the paraxial map misses by more than a slice's DOF within the N_u resolvable
+    depths (|a| ≤ 1, Levoy et al. 2006), i.e. where paraxial_depth_error · |z(1)| > dof(1).
+    """
+    scope = _scope(camera)
+    if scope.aplanatic is not None:
+        return bool(scope.aplanatic)
+    return paraxial_depth_error(camera) * z_per_a_um(camera) > float(microscope_slices(camera, 1.0).dof_um)
+
+
+def refocus_slopes(camera, aplanatic: bool | None = None):
+    """Per-view shift multipliers (σ_y, σ_x), each (m̂, m̂): view (ky, kx) moves a·σ lenses in slice a.
+
+    Paraxially σ = (c − ky, c − kx) (Eq. 9, centred); aplanatic σ = g·(c − k) (module docstring).
+    ``aplanatic=None`` follows :func:`uses_aplanatic`. Returns ``None`` for a photographic camera or a
+    paraxial microscope, meaning the refocus kernel's own a·(c − k).
+    """
+    if getattr(camera, "microscope", None) is None:
+        return None
+    if not (uses_aplanatic(camera) if aplanatic is None else aplanatic):
+        return None
+    c = camera.center_index
+    base = (c - np.arange(camera.m_hat)).astype(np.float64)
+    g = aplanatic_gain(camera)
+    return g * base[:, None], g * base[None, :]
+
+
+def _limit_parameters(camera, a):
+    """(A_near, A_far): the paper's border-ray pairs (telecentric, a_eq = A) with c = c_NA views."""
+    from ._slices import _dof_pairs
+    (a_near, _), (a_far, _) = _dof_pairs(camera, a, center=max(na_views(camera), 1))
+    return a_near, a_far
+
+
+def microscope_slices(camera, a):
+    """z, DOF limits and DOF of slices ``a`` in µm (a :class:`~._slices.SliceGeometry` with the ``_um`` fields).
+
+    ``z_near_um`` is the limit nearer the objective (the larger z), ``z_far_um`` the one farther from
+    it; ``dof_um = z_near_um − z_far_um`` = geometric DOF + λ·n/NA², the wave term split evenly.
+    """
+    from ._slices import SliceGeometry
+    scope = _scope(camera)
+    a_arr = np.asarray(a, dtype=np.float64)
+    zeta = z_per_a_um(camera)
+    a_near, a_far = _limit_parameters(camera, a_arr)
+    wave = scope.wavelength_mm * UM_PER_MM * scope.immersion_index / scope.numerical_aperture ** 2
+    z = zeta * a_arr
+    upper = np.maximum(zeta * np.maximum(a_near, a_far), z) + 0.5 * wave
+    lower = np.minimum(zeta * np.minimum(a_near, a_far), z) - 0.5 * wave
+    dof = upper - lower
+    if a_arr.ndim == 0:
+        z, upper, lower, dof = float(z), float(upper), float(lower), float(dof)
+    none = None
+    return SliceGeometry(float(a_arr) if a_arr.ndim == 0 else a_arr, none, none, none, none,
+                         z_um=z, z_near_um=upper, z_far_um=lower, dof_um=dof)
+
+
+def refocus_parameter_z(camera, z_um) -> np.ndarray | float:
+    """The ``a`` of the slice at ``z_um`` (µm from the native object plane, positive towards the objective)."""
+    z = np.asarray(z_um, dtype=np.float64)
+    if not np.all(np.isfinite(z)):
+        raise LfprocError(f"depth {z_um} um is not a finite number of micrometres")
+    a = z / z_per_a_um(camera)
+    return float(a) if a.ndim == 0 else a
+
+
+@dataclass(frozen=True, eq=False)
+class MicroscopeViews:
+    """Views of a microscope along one axis: offsets i = −c…c, object-space angle θ_i (°), inside the NA.
+
+    The views are orthographic (the microscope is object-side telecentric): view i looks along θ_i,
+    sin θ_i = M·sin θ'_i / n (Abbe sine condition), θ'_i the image-side angle atan(i·p_p/f_s).
+    """
+
+    i: np.ndarray
+    angle_deg: np.ndarray
+    inside_na: np.ndarray
+    lateral_sampling_um: float
+
+    def records(self) -> list[dict]:
+        return [dict(i=int(i), angle_deg=(float(t) if math.isfinite(t) else None), inside_na=bool(k))
+                for i, t, k in zip(self.i, self.angle_deg, self.inside_na)]
+
+
+def microscope_views(camera) -> MicroscopeViews:
+    """Object-space angles of the views (sine condition) and which lie inside the objective's NA."""
+    scope = _scope(camera)
+    c = camera.center_index
+    sines = -scope.objective_magnification * image_sines(camera) / scope.immersion_index   # sign of m_i = −i·p_p/f_s
+    with np.errstate(invalid="ignore"):
+        angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
+    inside = np.abs(np.arange(-c, c + 1)) <= na_views(camera)
+    return MicroscopeViews(np.arange(-c, c + 1), angle, inside, lateral_sampling_um(camera))

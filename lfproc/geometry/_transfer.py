@@ -1,0 +1,94 @@
+"""The main optics as a paraxial ray transfer (ABCD): where an image-side meeting point lies in object space.
+
+Every slice and DOF limit of the ray model is a pair of chief rays that meet at a distance w behind the
+micro lens array (w = A·p_m/N for the pair (A, C) of :mod:`._slices`, positive towards the sensor).
+Which object point that is depends only on the optics in front of the MLA, written as the transfer
+matrix S (reduced angles n·u, det S = 1) from an object-side reference plane to the MLA plane. The
+object point conjugate to the image point lies at s along the axis from the reference plane (s > 0
+in the direction of the light, towards the optics), where the total matrix T(w)·S·T(−s/n) images,
+i.e. its B element vanishes:
+
+    s = n·(B + w·D) / (A + w·C).
+
+Two instances:
+
+* the paper's thick main lens (f_U, principal planes H1U/H2U, b_U from H2U to the MLA), reference
+  plane H1U: S = T(b_U)·L(f_U), so s = −f_U·(b_U + w)/(b_U + w − f_U), the thin-lens equation. The
+  slice code evaluates it in Newton's form x = f_U²/(ε + w) (:func:`._slices._pair_distance`), which
+  is the same number without cancellation at infinity; the tests check the two agree.
+* a light-field microscope (Levoy et al. 2006): object plane in immersion n, objective f_obj = f_tube/M,
+  aperture stop in its back focal plane = the tube lens's front focal plane, MLA in the tube lens's
+  back focal plane: S = T(f_tube)·L(f_tube)·T(f_obj + f_tube)·L(f_obj)·T(f_obj) = [[−M, 0], [0, −1/M]],
+  afocal (C = 0) and imaging (B = 0), so s = n·w/M²: lateral magnification −M, axial M²/n.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class RayTransfer:
+    """A paraxial ray transfer [[A, B], [C, D]] (reduced angles) from an object-side plane to the MLA.
+
+    Attributes
+    ----------
+    A, B, C, D : float
+        The matrix elements (lengths in mm).
+    index : float
+        Refractive index n on the object side (1 in air, the immersion index of a microscope).
+    """
+
+    A: float
+    B: float
+    C: float
+    D: float
+    index: float = 1.0
+
+    def __matmul__(self, other: "RayTransfer") -> "RayTransfer":
+        """``self @ other``: first ``other``, then ``self`` (keeps the object side's index of ``other``)."""
+        return RayTransfer(self.A * other.A + self.B * other.C, self.A * other.B + self.B * other.D,
+                           self.C * other.A + self.D * other.C, self.C * other.B + self.D * other.D, other.index)
+
+    def object_offset_mm(self, w_mm):
+        """s = n·(B + w·D)/(A + w·C): the object point conjugate to the image point w behind the MLA.
+
+        s is measured from the reference plane in the direction of the light (towards the optics);
+        ``inf`` where the conjugate is at infinity (A + w·C = 0).
+        """
+        w = np.asarray(w_mm, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = self.index * (self.B + w * self.D) / (self.A + w * self.C)
+        s = np.where(np.isfinite(w), s, self.index * self.D / self.C if self.C else np.inf)
+        return float(s) if s.ndim == 0 else s
+
+    @property
+    def lateral_magnification(self) -> float:
+        """A: the image height at the MLA per object height (for an imaging transfer, B = 0)."""
+        return self.A
+
+
+def gap(length_mm: float) -> RayTransfer:
+    """T(t): free propagation over a reduced length t = physical length / n."""
+    return RayTransfer(1.0, float(length_mm), 0.0, 1.0)
+
+
+def lens(focal_length_mm: float) -> RayTransfer:
+    """L(f): a thin lens (or a thick one between its principal planes) of focal length f."""
+    return RayTransfer(1.0, 0.0, -1.0 / float(focal_length_mm), 1.0)
+
+
+def main_optics_transfer(camera) -> RayTransfer:
+    """S for ``camera``: the main lens from H1U to the MLA, or a microscope from the native object plane.
+
+    The microscope's transfer is built from its lenses (objective, stop, tube lens), not written as
+    [[−M, 0], [0, −1/M]], so that the afocal, imaging result is a property the tests check.
+    """
+    scope = getattr(camera, "microscope", None)
+    if scope is None:
+        return gap(camera.image_distance_mm) @ lens(camera.main_focal_length_mm)
+    f_obj, f_tube = scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm
+    s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
+    return RayTransfer(s.A, s.B, s.C, s.D, float(scope.immersion_index))
