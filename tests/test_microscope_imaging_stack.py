@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 import tifffile
 
+import lfproc
+
 from lfproc import Camera, LightField
 from lfproc.outputs import lateral_um_per_lens, write_focal_stack
 
@@ -101,3 +103,28 @@ def _ome_description(xml):
     import xml.etree.ElementTree as ET
     ns = {"ome": "http://www.openmicroscopy.org/Schemas/OME/2016-06"}
     return ET.fromstring(xml).find(".//ome:Image/ome:Description", ns).text
+
+
+def test_microscope_stack_is_to_scale(tmp_path):
+    """A microscope's slices (their sidecar records): x/y spacing p_m/M/upsample, z spacing = the z_um step."""
+    from lfproc import geometry
+    from lfproc.outputs import slice_metadata
+
+    camera = Camera.from_toml(LFM_20X)
+    m = camera.m_hat
+    views = np.random.default_rng(2).random((m, m, 10, 11, 1)).astype(np.float32)
+    a = [0.1, -0.1, 0.0]
+    stack = lfproc.refocus(views, a, upsample=2)
+    path = write_focal_stack(str(tmp_path / "lfm_stack.tif"), stack, slice_metadata("lfm", camera, a),
+                             kind="imagej", lens_um=lateral_um_per_lens(camera), upsample=2)
+    with tifffile.TiffFile(path) as tif:
+        meta = tif.imagej_metadata
+        x_res = tif.pages[0].tags["XResolution"].value
+        assert tif.series[0].shape == (3, 19, 21)
+        assert np.array_equal(tif.asarray(), stack[[1, 2, 0], :, :, 0])
+    z_step = 0.1 * camera.mla_focal_length_mm * 1000 * m * 1.33 / 20.0 ** 2      # contract: a·m̂·f_s·n/M²
+    assert meta["unit"] == "micron"
+    assert meta["spacing"] == pytest.approx(z_step, rel=1e-9)
+    assert meta["spacing"] == pytest.approx(geometry.microscope_slices(camera, 0.1).z_um, rel=1e-9)
+    assert x_res[1] / x_res[0] == pytest.approx(125.0 / 20.0 / 2, rel=1e-6)
+    assert [s["z_um"] for s in json.loads(meta["Info"])["slices"]] == pytest.approx([-z_step, 0.0, z_step])

@@ -35,11 +35,12 @@ EVEN_TOLERANCE = 1e-6
 
 
 def lateral_um_per_lens(camera) -> float | None:
-    """Object-space size of one lens in µm for a microscope (pitch / M), ``None`` for a photographic camera."""
-    scope = getattr(camera, "microscope", None)
-    if scope is None:
+    """Object-space size of one lens in µm for a microscope (:func:`lfproc.geometry.lateral_sampling_um`,
+    pitch / M), ``None`` for a photographic camera."""
+    if getattr(camera, "microscope", None) is None:
         return None
-    return camera.mla_pitch_mm * 1000.0 / scope.objective_magnification
+    from .. import geometry
+    return geometry.lateral_sampling_um(camera)
 
 
 def stack_path(outdir: str, stem: str, kind: str) -> str:
