@@ -45,17 +45,26 @@ def aperture_mask(lf: LightField) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ViewpointGeometry:
-    """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x]."""
+    """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x].
+
+    A microscope's views are orthographic: they carry their object-space angles ``angle_deg``
+    (sine condition, :func:`lfproc.geometry.microscope_views`) and whether they lie inside the NA,
+    instead of positions, tilts and baselines (then ``None``).
+    """
 
     view: tuple            # (ky, kx)
     offset: tuple          # (iy, ix) = (ky − c, kx − c)
-    position_mm: tuple     # (F_iy, F_ix), Eq. 17
-    tilt_deg: tuple        # (Φ_iy, Φ_ix), Eq. 33
-    baseline_to_center_mm: float   # |F_i − F_0| in the focal plane, Eq. 34 in 2-D
-    baseline_to_neighbour_mm: float  # ΔB_1, Eq. 34 with g = 1
+    position_mm: tuple | None     # (F_iy, F_ix), Eq. 17
+    tilt_deg: tuple | None        # (Φ_iy, Φ_ix), Eq. 33
+    baseline_to_center_mm: float | None   # |F_i − F_0| in the focal plane, Eq. 34 in 2-D
+    baseline_to_neighbour_mm: float | None  # ΔB_1, Eq. 34 with g = 1
+    angle_deg: tuple | None = None  # microscope: (θ_iy, θ_ix) in the object
+    inside_na: bool | None = None   # microscope: the view lies inside the objective's NA
 
     def metadata(self) -> dict:
-        """The contract's sidecar fields (plus the baselines)."""
+        """The contract's sidecar fields (plus the baselines); a microscope view's angles instead."""
+        if self.angle_deg is not None:
+            return {"view": list(self.view), "angle_deg": list(self.angle_deg), "inside_na": self.inside_na}
         return {"view": list(self.view), "position_mm": list(self.position_mm), "tilt_deg": list(self.tilt_deg),
                 "baseline_to_center_mm": self.baseline_to_center_mm,
                 "baseline_to_neighbour_mm": self.baseline_to_neighbour_mm}
@@ -63,9 +72,16 @@ class ViewpointGeometry:
 
 def viewpoint_geometry(camera) -> list[list[ViewpointGeometry]]:
     """Virtual camera of every view as an m̂ × m̂ nested list indexed ``[ky][kx]``."""
+    offsets = geometry.view_offsets(camera)
+    if getattr(camera, "microscope", None) is not None:
+        angles = geometry.microscope_views(camera).angle_deg
+        inside = geometry.views_inside_na(camera)
+        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), None, None, None, None,
+                                   angle_deg=(_finite(angles[ky]), _finite(angles[kx])),
+                                   inside_na=bool(inside[ky, kx]))
+                 for kx, ix in enumerate(offsets)] for ky, iy in enumerate(offsets)]
     positions = geometry.view_positions_mm(camera)
     tilts = geometry.view_tilts_deg(camera)
-    offsets = geometry.view_offsets(camera)
     neighbour = geometry.baseline_mm(camera, 1)
     table = []
     for ky, iy in enumerate(offsets):
@@ -77,6 +93,10 @@ def viewpoint_geometry(camera) -> list[list[ViewpointGeometry]]:
                 float(neighbour)))
         table.append(row)
     return table
+
+
+def _finite(value) -> float | None:
+    return float(value) if math.isfinite(value) else None
 
 
 def mosaic(views: np.ndarray, gap: int = 0) -> np.ndarray:

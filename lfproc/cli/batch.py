@@ -63,8 +63,9 @@ def run(args) -> int:
     for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
-    if args.a is None and args.depth_range is None and args.at is None and not args.views:
-        raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM and/or --views")
+    if args.a is None and args.depth_range is None and args.at is None and args.z_range is None and not args.views:
+        raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM, --z-range Z0:Z1 "
+                          "and/or --views")
     if (args.mosaic or args.gif or args.inside_aperture) and not args.views:
         raise LfprocError("--mosaic, --gif and --inside-aperture shape the views: add --views")
     if args.workers is not None and args.workers < 1:
@@ -85,9 +86,9 @@ def run(args) -> int:
             raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
     if args.views:
         check_view_options(args, camera)
-    if args.a is not None or args.depth_range is not None or args.at is not None:
+    if args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None:
         a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices))
+                                          max_slices=args.max_slices, z_range=args.z_range))
     else:
         a_values = ()
     require_output_folder(args.outdir)

@@ -81,6 +81,10 @@ def add_slice_options(p) -> None:
     which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
                        help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
     which.add_argument("--at", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance (mm)")
+    which.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+                       help="microscope cameras: the fewest slices whose depths of field cover Z0..Z1 micrometres "
+                            "from the native object plane (positive towards the objective); with STEP an evenly "
+                            "spaced z-stack")
     add_slice_planning_options(p)
     return which
 
@@ -104,8 +108,9 @@ def check_slice_options(args) -> None:
 
 
 def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
-                     integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES) -> list[float]:
-    """The refocus parameters one of --a, --depth-range or --at asks for.
+                     integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES,
+                     z_range: str | None = None) -> list[float]:
+    """The refocus parameters one of --a, --depth-range, --at or --z-range (microscopes, µm) asks for.
 
     Every list is checked here, before any capture is read: no more than ``max_slices`` slices, no
     duplicate a (two slices would write the same file).
@@ -113,8 +118,16 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     from .. import geometry
     from ..outputs import slice_names
 
+    microscope = getattr(camera, "microscope", None) is not None
+    if microscope and (depth_range is not None or at_mm is not None):
+        raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native "
+                          f"object plane; use --z-range Z0:Z1[:STEP] instead of --depth-range/--at")
     if a_list is not None:
         values = parse_number_list(a_list, what)
+    elif z_range is not None:
+        from .geometry import z_range_parameters
+        values = [float(a) for a in z_range_parameters(camera, z_range)]
+        what = "--z-range"
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)
         plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
@@ -123,13 +136,13 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
         if not values:
             raise LfprocError(f"--depth-range {depth_range}: no slice can be planned ({plan.uncovered[0][2]})")
     elif at_mm is None:
-        raise LfprocError("give one of --a, --depth-range or --at")
+        raise LfprocError("give one of --a, --depth-range, --at or --z-range")
     elif not math.isfinite(at_mm):
         raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
     else:
         values = [float(geometry.refocus_parameter(camera, at_mm))]
     if len(values) > max_slices:
-        raise LfprocError(f"{what if a_list is not None else '--depth-range'} asks for {len(values)} slices, more "
+        raise LfprocError(f"{what if a_list is not None or z_range is not None else '--depth-range'} asks for {len(values)} slices, more "
                           f"than --max-slices {max_slices}; use a coarser list, or raise --max-slices")
     slice_names("check", values)   # duplicates raise here, not after the first capture was decoded
     return values
@@ -144,6 +157,11 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
     out = out or sys.stdout
     geo = geometry.slice_geometry(camera, a_values)
     print(f"{len(a_values)} slice(s):", file=out)
+    if geo.microscope:
+        for r in geo.records():
+            print(f"  a={r['a']:+.4f}  z = {r['z_um']:.2f} um  in focus [{r['z_far_um']:.2f}, {r['z_near_um']:.2f}] um",
+                  file=out)
+        return
     for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
     if depth_range is None:
@@ -162,7 +180,7 @@ def _mm(value: float) -> str:
 
 
 #: options whose value may start with '-' (a negative number or range): argparse would take it for an option
-NEGATIVE_VALUE_OPTIONS = ("--a", "--refocus", "--disparity", "--gap")
+NEGATIVE_VALUE_OPTIONS = ("--a", "--refocus", "--disparity", "--gap", "--z-range")
 
 
 def join_negative_values(argv: list[str]) -> list[str]:

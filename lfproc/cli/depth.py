@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 
 from .capture_loop import (
@@ -28,6 +29,10 @@ def register(sub) -> None:
     p.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
                    help="search only these distances from the sensor (FAR may be inf); default: from infinity to "
                         "a = 3 nearer, narrowed to what the scene occupies")
+    p.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+                   help="microscope cameras: search only these depths, micrometres from the native object plane "
+                        "(positive towards the objective), with STEP the sweep step in um; default: the N_u "
+                        "resolvable depths, |a| <= 1")
     p.add_argument("--min-confidence", type=float, default=None, metavar="C",
                    help="estimates less confident than C (0-1) are written as NaN (default 0.1)")
     p.add_argument("--no-ply", action="store_true", help="do not write the point cloud")
@@ -42,14 +47,41 @@ def check_depth_options(args, camera):
     from ..errors import LfprocError
 
     depth_range = parse_depth_range(args.depth_range) if args.depth_range is not None else None
+    if args.z_range is not None and depth_range is not None:
+        raise LfprocError("give --depth-range (mm, cameras) or --z-range (um, microscopes), not both")
     if camera.center_index < 1:
         raise LfprocError(f"{camera.source or 'camera'}: depth needs micro images of 3 px or more "
                           f"(decode.micro_image_px >= 3)")
-    search_range_a(camera, depth_range)   # a range this camera cannot focus fails here
+    if args.z_range is None:
+        search_range_a(camera, depth_range)   # a range this camera cannot focus fails here
     min_confidence = MIN_CONFIDENCE if args.min_confidence is None else args.min_confidence
     if not 0.0 <= min_confidence <= 1.0:
         raise LfprocError(f"--min-confidence must be in [0, 1], got {min_confidence}")
-    return depth_range, min_confidence
+    return depth_range, min_confidence, z_sweep(args, camera)
+
+
+def z_sweep(args, camera) -> dict:
+    """``--z-range Z0:Z1[:STEP]`` as the depth sweep's ``a_range`` (and ``step``), checked against ``camera``."""
+    from .. import geometry
+    from ..errors import LfprocError
+    if args.z_range is None:
+        return {}
+    if not camera.is_microscope:
+        raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
+                          f"([microscope]); use --depth-range NEAR_MM:FAR_MM")
+    try:
+        values = [float(v) for v in args.z_range.split(":")]
+    except ValueError:
+        values = []
+    if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values) or values[0] == values[1] or (
+            len(values) == 3 and values[2] <= 0):
+        raise LfprocError(f"--z-range: {args.z_range!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres with Z0 != Z1 "
+                          f"and STEP > 0, e.g. -50:50 or -50:50:2")
+    zeta = geometry.z_per_a_um(camera)
+    out = {"a_range": (min(values[:2]) / zeta, max(values[:2]) / zeta)}
+    if len(values) == 3:
+        out["step"] = values[2] / zeta
+    return out
 
 
 def run(args) -> int:
@@ -59,15 +91,15 @@ def run(args) -> int:
     require_output_folder(args.outdir)
     stems = unique_stems(args.raw)
     camera = input_camera(args, args.raw)
-    depth_range, min_confidence = check_depth_options(args, camera)
+    depth_range, min_confidence, sweep = check_depth_options(args, camera)
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
         lf = inputs.load(path)
-        check_depth_options(args, lf.camera)
+        sweep = check_depth_options(args, lf.camera)[2]
         written = write_depth_outputs(args.outdir, stems[path], lf, source=os.path.abspath(path), camera=lf.camera,
                                       depth_range_mm=depth_range, point_cloud=not args.no_ply,
-                                      min_confidence=min_confidence)
+                                      min_confidence=min_confidence, **sweep)
         depth_map = written.pop("depth_map")
         progress.update(1)
         print(f"{path}: {summary_line(depth_map)} -> {args.outdir}/{stems[path]}_depth*.*, "

@@ -17,8 +17,12 @@ def register(sub) -> None:
                                    "those disparities between views G apart. Negative lists work with or without "
                                    "'=': --a -1:1 or --a=-1:1.")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
-    p.add_argument("--a", default="0:5", metavar="LIST",
+    p.add_argument("--a", default=None, metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
+    p.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+                   help="microscope cameras: the fewest slices whose depths of field cover Z0..Z1 micrometres from "
+                        "the native object plane (positive towards the objective), or with STEP an evenly spaced "
+                        "stack")
     p.add_argument("--disparity", metavar="LIST",
                    help="triangulate points seen with these disparities (view pixels, i.e. lenses, signed as "
                         "PlenoptiSign's dx) between views --gap apart")
@@ -37,12 +41,19 @@ def run(args) -> int:
     from ..errors import LfprocError
 
     camera = Camera.from_toml(args.camera)
-    a_values = parse_number_list(args.a, "--a")
+    if args.a is not None and args.z_range is not None:
+        raise LfprocError("give --a or --z-range, not both")
+    if args.z_range is not None:
+        a_values = [float(a) for a in z_range_parameters(camera, args.z_range)]
+    else:
+        a_values = parse_number_list("0:5" if args.a is None else args.a, "--a")
     if not (args.wavelength_nm > 0 and math.isfinite(args.wavelength_nm)):
         raise LfprocError(f"--wavelength-nm must be a positive number, got {args.wavelength_nm}")
     if args.gap == 0:
         raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
+    if camera.is_microscope:
+        return _run_microscope(args, camera, a_values, disparities)
     slices = geometry.slice_geometry(camera, a_values)
     views = geometry.view_geometry(camera)
     check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
@@ -56,6 +67,84 @@ def run(args) -> int:
         return 0
     sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera, tri))
     return 0
+
+
+def _run_microscope(args, camera, a_values, disparities) -> int:
+    """A light-field microscope: slices in µm from the native object plane, views by object-space angle."""
+    from .. import geometry
+    from ..errors import LfprocError
+    if disparities is not None:
+        raise LfprocError(f"{args.camera}: --disparity triangulates through a main lens; a microscope's depth per "
+                          f"disparity is z_per_a_um per lens of shift (see --json)")
+    if args.plot:
+        raise LfprocError(f"{args.camera}: --plot draws distances from a main lens; not available for a microscope")
+    slices = geometry.slice_geometry(camera, a_values)
+    views = geometry.microscope_views(camera)
+    if args.json:
+        print(dumps_strict(microscope_report(camera, slices, views)))
+        return 0
+    sys.stdout.write(format_microscope_table(camera, slices, views, args.camera))
+    return 0
+
+
+def microscope_summary(camera) -> dict:
+    """The derived numbers of a microscope camera (JSON-ready)."""
+    from .. import geometry
+    scope = camera.microscope
+    return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
+                pitch_px=camera.pitch_px, telecentric=True, objective_magnification=scope.objective_magnification,
+                numerical_aperture=scope.numerical_aperture, immersion_index=scope.immersion_index,
+                objective_focal_length_mm=scope.objective_focal_length_mm,
+                axial_magnification=scope.axial_magnification, z_per_a_um=geometry.z_per_a_um(camera),
+                lateral_sampling_um=geometry.lateral_sampling_um(camera), na_views=geometry.na_views(camera),
+                paraxial_depth_error=geometry.paraxial_depth_error(camera),
+                aplanatic=geometry.uses_aplanatic(camera), wavelength_nm=scope.wavelength_mm * 1e6)
+
+
+def microscope_report(camera, slices, views) -> dict:
+    """``slices`` (a, z_um, z_near_um, z_far_um, dof_um), ``views`` (i, angle_deg, inside_na) and the camera."""
+    return {"slices": slices.records(), "views": views.records(),
+            "lateral_sampling_um": views.lateral_sampling_um, "camera": microscope_summary(camera),
+            "provenance": dict(camera.provenance)}
+
+
+def format_microscope_table(camera, slices, views, path) -> str:
+    s = microscope_summary(camera)
+    out = [f"microscope {camera.name or path}: {s['objective_magnification']:g}x/{s['numerical_aperture']:g} "
+           f"(n = {s['immersion_index']:g}), m = {camera.m_hat} samples per lens "
+           f"({camera.pitch_px:.3f} sensor px), {s['lateral_sampling_um']:.4g} um per lens in the object, "
+           f"{s['z_per_a_um']:.4g} um per unit of a",
+           f"refocusing: {'aplanatic (sine condition)' if s['aplanatic'] else 'paraxial'} per-view shifts; the "
+           f"paraxial map is off by {100 * s['paraxial_depth_error']:.1f} % of z "
+           f"(wave DOF term at {s['wavelength_nm']:.0f} nm)",
+           "depths from the native object plane [um], positive towards the objective",
+           f"{'a':>8} {'z_far':>11} {'z':>11} {'z_near':>11} {'DOF':>11}"]
+    for r in slices.records():
+        out.append(f"{r['a']:>8g} {r['z_far_um']:>11.3f} {r['z_um']:>11.3f} {r['z_near_um']:>11.3f} "
+                   f"{r['dof_um']:>11.3f}")
+    out += ["", f"views: orthographic, object-space angle (sine condition); {s['na_views']} views either side of "
+                f"the centre lie inside the NA", f"{'i':>5} {'angle [deg]':>12} {'inside NA':>10}"]
+    for r in views.records():
+        angle = "-" if r["angle_deg"] is None else f"{r['angle_deg']:.3f}"
+        out.append(f"{r['i']:>5d} {angle:>12} {'yes' if r['inside_na'] else 'no':>10}")
+    return "\n".join(out) + "\n"
+
+
+def z_range_parameters(camera, text: str):
+    """The ``a`` of ``--z-range Z0:Z1[:STEP]`` (µm): the fewest covering slices, or an evenly spaced stack."""
+    from .. import geometry
+    from ..errors import LfprocError
+    if not camera.is_microscope:
+        raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
+                          f"([microscope]); use --depth-range NEAR_MM:FAR_MM for a camera")
+    parts = text.split(":")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) not in (2, 3):
+        raise LfprocError(f"--z-range: {text!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres, e.g. -50:50 or -50:50:2")
+    return geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
 
 
 def camera_summary(camera) -> dict:

@@ -61,7 +61,7 @@ def run(args) -> int:
         key = camera.to_toml()
         if key not in plans:
             plans[key] = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices)
+                                          max_slices=args.max_slices, z_range=args.z_range)
         return key, plans[key]
 
     def describe_once(key, camera, values):
@@ -105,11 +105,14 @@ def check_view_coverage(camera, a_values, lens_shape, source: str) -> None:
     beyond = [a for a, f in zip(a_values, reached) if f < MIN_OVERLAPPING_VIEWS]
     if beyond:
         limit = max_usable_a(m, lens_shape)
-        near, far = (float(d) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
+        if camera.is_microscope:
+            near, far = (f"{z:.4g} um" for z in geometry.slice_geometry(camera, [limit, -limit]).z_um)
+        else:
+            near, far = (_mm(float(d)) for d in geometry.slice_distance_mm(camera, [limit, -limit]))
         share = float(overlapping_view_fraction(beyond[0], m, lens_shape))
         raise LfprocError(f"{source}: at a={beyond[0]:g} only {100 * share:.0f} % of the {m}x{m} views reach this "
                           f"{ny}x{nx}-lens capture (the others shift off it); refocus within |a| < {limit:.3g}, i.e. "
-                          f"from {_mm(near)} (a=+{limit:.3g}) to {_mm(far)} (a=-{limit:.3g})")
+                          f"from {near} (a=+{limit:.3g}) to {far} (a=-{limit:.3g})")
     share = full_view_fraction(a_values, m, lens_shape)
     thin = [a for a, f in zip(a_values, share) if f < 0.5]
     if thin:

@@ -48,10 +48,10 @@ def run(args) -> int:
         make_server(".", args.port).server_close()  # the port is free: checked before any work
     stems = unique_stems(args.raw)
     camera = input_camera(args, args.raw)
-    chosen = args.a is not None or args.depth_range is not None or args.at is not None
+    chosen = args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None
     if chosen:  # every list is checked before any capture is read
         slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                         max_slices=args.max_slices)
+                         max_slices=args.max_slices, z_range=args.z_range)
     inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
     several = len(args.raw) > 1
     options = PageOptions(min_long_side=args.display_size, upscale=args.upscale)
@@ -62,7 +62,7 @@ def run(args) -> int:
         a_values = None
         if chosen:
             a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                        max_slices=args.max_slices)
+                                        max_slices=args.max_slices, z_range=args.z_range)
             check_view_coverage(lf.camera, a_values, lf.lens_shape, path)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
         setup = inputs.setup

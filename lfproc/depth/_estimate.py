@@ -43,7 +43,7 @@ class DepthMap:
 
     Attributes
     ----------
-    distance_mm : ndarray (Ny, Nx) float32
+    distance_mm : ndarray (Ny, Nx) float32, or None for a microscope
         Distance from the sensor (Eq. 21) of the surface seen at each lens; NaN = unknown, ``inf`` =
         at infinity.
     confidence : ndarray (Ny, Nx) float32
@@ -59,12 +59,15 @@ class DepthMap:
         The refocus parameters of the sweep.
     timings_s : dict
         Seconds spent per step.
+    z_um, z_near_um, z_far_um : ndarray (Ny, Nx) float32, or None
+        A microscope's depth from the native object plane (positive towards the objective) and its
+        bounds, in µm; NaN = unknown. Then ``distance_mm``, ``near_mm`` and ``far_mm`` are ``None``.
     """
 
-    distance_mm: np.ndarray
+    distance_mm: np.ndarray | None
     confidence: np.ndarray
-    near_mm: np.ndarray
-    far_mm: np.ndarray
+    near_mm: np.ndarray | None
+    far_mm: np.ndarray | None
     a: np.ndarray
     allfocus: np.ndarray
     method: str = METHOD
@@ -72,6 +75,19 @@ class DepthMap:
     view_step: int = 1
     view_reach: int = 0
     timings_s: dict = field(default_factory=dict)
+    z_um: np.ndarray | None = None
+    z_near_um: np.ndarray | None = None
+    z_far_um: np.ndarray | None = None
+
+    @property
+    def microscope(self) -> bool:
+        """True for a microscope's depth map (µm from the native object plane)."""
+        return self.z_um is not None
+
+    @property
+    def depth(self) -> np.ndarray:
+        """The depth image written to ``STEM_depth.tif``: ``z_um`` for a microscope, else ``distance_mm``."""
+        return self.z_um if self.microscope else self.distance_mm
 
     def metadata(self) -> dict:
         """Fields shared by every output of this depth map."""
@@ -182,7 +198,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         raise LfprocError(f"view_step must be an integer from 1 to {reach}, got {view_step}")
     mask = getattr(lf, "view_mask", None)
     weight = delivered_views(views) if mask is None else np.array(mask, dtype=bool)
-    if camera.f_number is not None:
+    if camera.f_number is not None or camera.is_microscope:   # a microscope's aperture: its NA
         weight &= geometry.views_inside_aperture(camera)
     if not weight[c, c]:
         raise LfprocError("the central view of this light field is dark (0 everywhere): nothing to estimate "
@@ -223,7 +239,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     sharp = allfocus(views, minimum.a, c, interpolation)
     timings["all-in-focus"] = time.perf_counter() - t0
 
-    f32 = lambda x: np.asarray(x, dtype=np.float32)
+    f32 = lambda x: None if x is None else np.asarray(x, dtype=np.float32)
     return DepthMap(distance_mm=f32(metric.distance_mm), confidence=f32(conf), near_mm=f32(metric.near_mm),
                     far_mm=f32(metric.far_mm), a=f32(a_known), allfocus=sharp, a_searched=a_values,
-                    view_step=view_step, view_reach=reach, timings_s=timings)
+                    view_step=view_step, view_reach=reach, timings_s=timings, z_um=f32(metric.z_um),
+                    z_near_um=f32(metric.z_near_um), z_far_um=f32(metric.z_far_um))

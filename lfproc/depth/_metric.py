@@ -6,6 +6,12 @@ both the slice's own depth of field (the camera cannot tell depths inside it apa
 the cost (how far ``a`` could be off): near = min(d_a−, d(a_high)), far = max(d_a+, d(a_low)).
 Parameters beyond the slice at infinity (a < a_∞) mean infinity, never the "macro" distances that the
 paraxial formula gives far below a_∞.
+
+A microscope's estimates are depths z in µm from the native object plane (positive towards the
+objective, :func:`lfproc.geometry.microscope_slices`), bounded the same way: z_near = max(z_near(a),
+z(a_high)), z_far = min(z_far(a), z(a_low)). The sweep refocuses paraxially; for a camera that
+refocuses by the sine condition (:func:`lfproc.geometry.uses_aplanatic`) its ``a`` is first mapped to
+the depth sharp in that paraxial slice, a/(1 + e) (:func:`lfproc.geometry.paraxial_depth_error`).
 """
 
 from __future__ import annotations
@@ -17,11 +23,18 @@ import numpy as np
 
 @dataclass(frozen=True, eq=False)
 class MetricDepth:
-    """Per lens, in mm from the sensor: the distance and its bounds (NaN where ``a`` is NaN)."""
+    """Per lens, in mm from the sensor: the distance and its bounds (NaN where ``a`` is NaN).
 
-    distance_mm: np.ndarray
-    near_mm: np.ndarray
-    far_mm: np.ndarray
+    For a microscope the ``_mm`` fields are ``None`` and ``z_um``, ``z_near_um``, ``z_far_um`` hold the
+    depth from the native object plane and its bounds in µm.
+    """
+
+    distance_mm: np.ndarray | None
+    near_mm: np.ndarray | None
+    far_mm: np.ndarray | None
+    z_um: np.ndarray | None = None
+    z_near_um: np.ndarray | None = None
+    z_far_um: np.ndarray | None = None
 
 
 def _distance(camera, a: np.ndarray) -> np.ndarray:
@@ -44,9 +57,26 @@ def metric_depth(camera, a: np.ndarray, a_low: np.ndarray, a_high: np.ndarray) -
     a = np.asarray(a, dtype=np.float64)
     known = np.isfinite(a)
     a_safe = np.where(known, a, 0.0)
+    if getattr(camera, "microscope", None) is not None:
+        return _microscope_depth(camera, a, a_safe, known, a_low, a_high)
     distance = _distance(camera, a_safe)
     dof = geometry.slice_geometry(camera, np.maximum(a_safe, geometry.infinity_parameter(camera)))
     near = np.minimum(np.asarray(dof.near_mm), _distance(camera, np.where(known, a_high, 0.0)))
     far = np.maximum(np.asarray(dof.far_mm), _distance(camera, np.where(known, a_low, 0.0)))
     nan = np.float64(np.nan)
     return MetricDepth(np.where(known, distance, nan), np.where(known, near, nan), np.where(known, far, nan))
+
+
+def _microscope_depth(camera, a, a_safe, known, a_low, a_high) -> MetricDepth:
+    from .. import geometry
+
+    zeta = geometry.z_per_a_um(camera)
+    if geometry.uses_aplanatic(camera):   # the sweep's paraxial slices overstate depth by 1 + e
+        a_safe, a_low, a_high = (np.asarray(x, dtype=np.float64) / (1.0 + geometry.paraxial_depth_error(camera))
+                                 for x in (a_safe, a_low, a_high))
+    geo = geometry.slice_geometry(camera, a_safe)
+    upper = np.maximum(geo.z_near_um, zeta * np.where(known, a_high, 0.0))
+    lower = np.minimum(geo.z_far_um, zeta * np.where(known, a_low, 0.0))
+    nan = np.float64(np.nan)
+    return MetricDepth(None, None, None, np.where(known, zeta * a_safe, nan), np.where(known, upper, nan),
+                       np.where(known, lower, nan))

@@ -64,11 +64,16 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     common = dict(source=source, camera=camera.name if camera is not None else None, **depth_map.metadata())
     if depth_range_mm is not None:
         common["depth_range_mm"] = [float(v) for v in depth_range_mm]
-    known = np.isfinite(depth_map.distance_mm) | np.isinf(depth_map.distance_mm)
+    known = ~np.isnan(depth_map.depth)
     paths = {}
-    meta = dict(common, unit="mm", content="distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
-                known_fraction=float(known.mean()) if known.size else 0.0)
-    paths["depth"] = _write_float(os.path.join(outdir, stem + DEPTH), depth_map.distance_mm, meta)
+    if depth_map.microscope:
+        meta = dict(common, unit="um", content="depth from the native object plane, positive towards the objective "
+                    "(z_um of the sharpest slice); NaN = unknown", known_fraction=float(known.mean()) if known.size
+                    else 0.0, lateral_sampling_um=_lateral_sampling_um(camera))
+    else:
+        meta = dict(common, unit="mm", content="distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
+                    known_fraction=float(known.mean()) if known.size else 0.0)
+    paths["depth"] = _write_float(os.path.join(outdir, stem + DEPTH), depth_map.depth, meta)
     meta = dict(common, unit="1", content="confidence of the depth, 0 (nothing known) to 1")
     paths["confidence"] = _write_float(os.path.join(outdir, stem + CONFIDENCE), depth_map.confidence, meta)
     meta = dict(common, unit="linear radiance", content="all-in-focus image: each lens from the slice sharp at its depth")
@@ -76,12 +81,15 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     write_image(path, depth_map.allfocus, meta, "tiff")
     write_sidecar(path, meta)
     paths["allfocus"] = path
-    meta = dict(common, unit="m", content="colour-mapped depth (red near, blue far, grey unknown), legend in metres")
+    meta = dict(common, unit="um" if depth_map.microscope else "m",
+                content=("colour-mapped depth (red nearest the objective, blue farthest, grey unknown), legend in um"
+                         if depth_map.microscope else
+                         "colour-mapped depth (red near, blue far, grey unknown), legend in metres"))
     path = os.path.join(outdir, stem + PREVIEW)
-    write_preview(path, depth_map.distance_mm)
+    write_preview(path, depth_map.distance_mm, depth_map.z_um)
     write_sidecar(path, meta)
     paths["preview"] = path
-    if point_cloud and camera is not None:
+    if point_cloud and camera is not None and not depth_map.microscope:
         points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.distance_mm, depth_map.allfocus)
         path = os.path.join(outdir, stem + POINTS)
         meta = dict(common, unit="mm", content="x, y: object-space position from the optical axis; z: distance from "
@@ -93,8 +101,21 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     return paths
 
 
+def _lateral_sampling_um(camera) -> float | None:
+    from .. import geometry
+    return None if camera is None else geometry.lateral_sampling_um(camera)
+
+
 def summary_line(depth_map) -> str:
-    """One line for a terminal: how much is known and the range of the known distances (metres)."""
+    """One line for a terminal: how much is known and the range of the known distances (metres; µm for a
+    microscope)."""
+    if depth_map.microscope:
+        z = depth_map.z_um
+        text = f"depth known at {np.isfinite(z).mean():.0%} of {z.size} lenses"
+        if np.isfinite(z).any():
+            lo, hi = (float(v) for v in np.percentile(z[np.isfinite(z)], [1, 99]))
+            text += f", z {lo:.4g} to {hi:.4g} um from the native object plane (1st to 99th percentile)"
+        return text
     distance = depth_map.distance_mm
     known = ~np.isnan(distance)
     text = f"depth known at {known.mean():.0%} of {distance.size} lenses"

@@ -64,17 +64,40 @@ def _label(distance_mm: float) -> str:
     return f"{metres:.3g} m"
 
 
-def preview_image(distance_mm: np.ndarray) -> np.ndarray:
-    """uint8 RGB ``(H, W, 3)``: the enlarged colour-mapped depth map with a legend on its right."""
-    from PIL import Image, ImageDraw, ImageFont
-
+def _distance_scale(distance_mm: np.ndarray):
+    """(t per lens, [(t, label)] ticks, title): inverse distance, 1 at the nearest shown distance."""
     near, far = display_range_mm(distance_mm)
     inv_near, inv_far = 1.0 / near, (0.0 if math.isinf(far) else 1.0 / far)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (1.0 / distance_mm - inv_far) / (inv_near - inv_far)
+    ticks = [((0.0 if math.isinf(d) else 1.0 / d) - inv_far, _label(d)) for d in [near, far] + _nice_ticks(near, far)]
+    return t, [(v / (inv_near - inv_far), label) for v, label in ticks], "distance"
+
+
+def _z_scale(z_um: np.ndarray):
+    """(t per lens, ticks, title) of a microscope's depth in µm: linear in z, 1 nearest the objective."""
+    known = z_um[np.isfinite(z_um)]
+    lo, hi = (float(v) for v in np.percentile(known, [1, 99])) if known.size else (-1.0, 1.0)
+    if hi <= lo:
+        lo, hi = lo - 1.0, hi + 1.0
+    t = (z_um - lo) / (hi - lo)
+    ticks = [((z - lo) / (hi - lo), f"{z:.4g} um") for z in [hi, lo] + list(np.linspace(lo, hi, 5)[1:-1])]
+    return t, ticks, "z (um)"
+
+
+def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> np.ndarray:
+    """uint8 RGB ``(H, W, 3)``: the enlarged colour-mapped depth map with a legend on its right.
+
+    ``z_um`` (a microscope's depth from the native object plane) instead of ``distance_mm``: colour
+    linear in z, red nearest the objective, legend in µm.
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    values = distance_mm if z_um is None else z_um
+    t, ticks, title = _distance_scale(distance_mm) if z_um is None else _z_scale(z_um)
     rgb = colour_map(np.nan_to_num(t))
-    rgb[np.isnan(distance_mm)] = UNKNOWN_RGB
-    ny, nx = distance_mm.shape
+    rgb[np.isnan(values)] = UNKNOWN_RGB
+    ny, nx = values.shape
     scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
     body = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
     height = max(body.shape[0], 160)
@@ -87,21 +110,20 @@ def preview_image(distance_mm: np.ndarray) -> np.ndarray:
     canvas.paste(Image.fromarray(colour_map(bar_t)), (x0, y0))
     draw = ImageDraw.Draw(canvas)
     font = ImageFont.load_default()
-    draw.text((x0, margin - 8), "distance", fill=(0, 0, 0), font=font)
+    draw.text((x0, margin - 8), title, fill=(0, 0, 0), font=font)
     drawn: list[int] = []
-    for tick in [near, far] + _nice_ticks(near, far):   # the ends first, then round values between
-        inv = 0.0 if math.isinf(tick) else 1.0 / tick
-        y = y0 + round((1.0 - (inv - inv_far) / (inv_near - inv_far)) * (bar_h - 1))
+    for position, label in ticks:   # the ends first, then round values between
+        y = y0 + round((1.0 - position) * (bar_h - 1))
         if any(abs(y - other) < 14 for other in drawn):
             continue
         drawn.append(y)
         draw.line([(x0 + bar_w, y), (x0 + bar_w + 4, y)], fill=(0, 0, 0))
-        draw.text((x0 + bar_w + 6, y - 5), _label(tick), fill=(0, 0, 0), font=font)
+        draw.text((x0 + bar_w + 6, y - 5), label, fill=(0, 0, 0), font=font)
     draw.text((x0, y0 + bar_h + 2), "grey: unknown", fill=(80, 80, 80), font=font)
     return np.asarray(canvas)
 
 
-def write_preview(path: str, distance_mm: np.ndarray) -> None:
+def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> None:
     """Write :func:`preview_image` as an 8-bit PNG, atomically."""
     from PIL import Image
 
@@ -110,6 +132,6 @@ def write_preview(path: str, distance_mm: np.ndarray) -> None:
 
     try:
         with atomic_path(path, suffix=".png") as tmp:
-            Image.fromarray(preview_image(distance_mm)).save(tmp, format="PNG")
+            Image.fromarray(preview_image(distance_mm, z_um)).save(tmp, format="PNG")
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write ({exc.strerror or exc}); check the folder and permissions") from None

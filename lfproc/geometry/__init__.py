@@ -14,7 +14,7 @@ uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), 
 
 from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
 from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
-                          na_views, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
+                          na_views, plan_z_range, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
                           views_inside_na, z_per_a_um)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._ray_model import RayModel
@@ -32,7 +32,7 @@ __all__ = [
     "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
     "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
     "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
-    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
+    "plan_z_range",    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
     "z_per_a_um",
     "ViewGeometry", "baseline_mm", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
     "view_tilts_deg", "views_inside_aperture",

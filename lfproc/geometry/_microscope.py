@@ -24,7 +24,9 @@ direction sines (α, β) = M·(u_x, u_y)/(n·ρ), ρ = |(u_x, u_y, f_s)|, and co
 displaces that ray laterally by z·(α, β)/γ, i.e. by M·z·(α, β)/(γ·p_m) lenses at the MLA. Written as
 a·g·(c − k) with the z(a) above, the per-view multiplier is g = f_s/(ρ·γ) ≥ 1 (g = 1 paraxially):
 with these shifts slice a is exactly the plane z(a). Paraxial shifts a·(c − k) instead focus view k at
-z(a)/g_k; their least-squares depth is z(a)·Σw·g/Σw·g² (w = |k − c|², the views inside the NA).
+z(a)/g_k: a point at depth z is sharpest (least squares over the views inside the NA, weights
+w = |k − c|², as the spread across the views behind a lens) in the paraxial slice a = (z/z(1))·Σw·g/Σw,
+so the paraxial tag z(a) overstates its depth by the fraction e = Σw·g/Σw − 1.
 """
 
 from __future__ import annotations
@@ -114,20 +116,21 @@ def aplanatic_gain(camera) -> np.ndarray:
 
 
 def paraxial_depth_error(camera) -> float:
-    """Relative error 1 − Σw·g/Σw·g² of the paraxial map (least squares over the views inside the NA)."""
+    """e = Σw·g/Σw − 1: the fraction by which a paraxial slice's z overstates the depth sharp in it (docstring)."""
     g = aplanatic_gain(camera)
     ux, uy, _ = _view_grid(camera)
     w = (ux * ux + uy * uy) * views_inside_na(camera)
     if not w.any():
         return 0.0
-    return float(1.0 - (w * g).sum() / (w * g * g).sum())
+    return float((w * g).sum() / w.sum() - 1.0)
 
 
 def uses_aplanatic(camera) -> bool:
     """Whether refocusing uses the sine condition's shifts: the camera file's ``aplanatic``, else automatic.
 
     Automatic: on where the paraxial map misses by more than a slice's DOF within the N_u resolvable
-    depths (|a| ≤ 1, Levoy et al. 2006), i.e. where paraxial_depth_error · |z(1)| > dof(1).
+    depths (|a| ≤ 1, Levoy et al. 2006): a point at z(1) is sharpest in the paraxial slice tagged
+    z(1)·(1 + e), on where e·z(1) > dof(1).
     """
     scope = _scope(camera)
     if scope.aplanatic is not None:
@@ -218,3 +221,48 @@ def microscope_views(camera) -> MicroscopeViews:
         angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
     inside = np.abs(np.arange(-c, c + 1)) <= na_views(camera)
     return MicroscopeViews(np.arange(-c, c + 1), angle, inside, lateral_sampling_um(camera))
+
+
+def _a_for_lower_limit(camera, lower_um: float) -> float:
+    """The ``a`` whose lower DOF limit (``z_far_um``) is ``lower_um``: inverts :func:`microscope_slices`.
+
+    The far border-ray pair is A = (2ac − 1)/(2c + 1) where A ≥ 0 and (2ac − 1)/(2c − 1) below
+    (c = c_NA, :func:`._slices._dof_pairs`), and z_far = z(A) − λn/(2NA²).
+    """
+    scope = _scope(camera)
+    c = max(na_views(camera), 1)
+    wave = scope.wavelength_mm * UM_PER_MM * scope.immersion_index / scope.numerical_aperture ** 2
+    big_a = (lower_um + 0.5 * wave) / z_per_a_um(camera)
+    return (big_a * (2 * c + 1) + 1.0) / (2 * c) if big_a >= 0 else (big_a * (2 * c - 1) + 1.0) / (2 * c)
+
+
+def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = None,
+                 max_slices: int = 10000) -> np.ndarray:
+    """Slices for a depth range of a microscope, in µm from the native object plane (``--z-range``).
+
+    Without ``step_um``: the fewest slices whose DOF intervals [z_far, z_near] together cover
+    [z0, z1] (greedy from the far end, as :func:`plan_slices` for ``--depth-range``; neighbours overlap
+    by 1e-9 relative against rounding). With ``step_um``: slices at z0, z0 + step, … up to z1 (an
+    evenly spaced z-stack). Returns increasing ``a``.
+    """
+    lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise LfprocError(f"--z-range {z0_um}:{z1_um} must be finite micrometres, e.g. -50:50")
+    zeta = z_per_a_um(camera)
+    if step_um is not None:
+        if not (math.isfinite(step_um) and step_um > 0):
+            raise LfprocError(f"--z-range step must be a positive number of micrometres, got {step_um}")
+        count = int(math.floor((hi - lo) / step_um + 1e-9)) + 1
+        if count > max_slices:
+            raise LfprocError(f"--z-range {z0_um}:{z1_um}:{step_um} asks for {count} slices, more than {max_slices}; "
+                              f"use a larger STEP")
+        return (lo + step_um * np.arange(count)) / zeta
+    slices, edge = [], lo
+    while True:
+        a = _a_for_lower_limit(camera, edge - 1e-9 * max(1.0, abs(edge)))
+        slices.append(a)
+        edge = float(microscope_slices(camera, a).z_near_um)
+        if edge >= hi:
+            return np.array(slices)
+        if len(slices) >= max_slices:
+            raise LfprocError(f"--z-range {z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")

@@ -11,8 +11,16 @@ from ._exit_pupil import pupil_curvature
 from ._slices import _slope_step
 
 
+def _virtual_cameras(camera: Camera) -> None:
+    """Refuse a microscope: its views are orthographic, with object-space angles instead of virtual cameras."""
+    if getattr(camera, "microscope", None) is not None:
+        camera.require_main_lens("virtual camera positions, tilts and baselines (a microscope's views are "
+                                 "orthographic: see their object-space angles, lfproc.geometry.microscope_views)")
+
+
 def _pupil_factor(camera: Camera) -> float:
     """1 − ε/d_A: the virtual cameras spread by 1/(1 − ε/d_A) with a finite exit pupil (exactly 1.0 telecentric)."""
+    _virtual_cameras(camera)
     return 1.0 - pupil_curvature(camera) * (camera.image_distance_mm - camera.main_focal_length_mm)
 
 
@@ -34,6 +42,7 @@ def view_positions_mm(camera: Camera, i=None) -> np.ndarray:
     With a finite exit pupil the centres lie in the entrance pupil plane
     (:func:`~lfproc.geometry.virtual_camera_plane_mm`) at m_i·f_U/(1 − ε/d_A) (Hahne et al. 2018).
     """
+    _virtual_cameras(camera)
     return view_slopes(camera, i) * camera.main_focal_length_mm / _pupil_factor(camera)
 
 
@@ -44,6 +53,7 @@ def view_tilts_deg(camera: Camera, i=None) -> np.ndarray:
     paper's Table 4 prints the opposite sign for the same magnitudes). The axis is the view's ray
     through the lens on the optical axis, so a finite exit pupil leaves the tilt unchanged.
     """
+    _virtual_cameras(camera)
     eps = camera.image_distance_mm - camera.main_focal_length_mm
     tilt = np.degrees(np.arctan(view_slopes(camera, i) * eps / camera.main_focal_length_mm))
     return tilt + 0.0  # no negative zeros (b_U = f_U gives -0.0 for i > 0)
@@ -51,6 +61,7 @@ def view_tilts_deg(camera: Camera, i=None) -> np.ndarray:
 
 def baseline_mm(camera: Camera, gap=1) -> np.ndarray | float:
     """Baseline ΔB_g = |F_i − F_(i+g)| = g·p_p·f_U/f_s between views g apart (Eq. 34; ÷ |1 − ε/d_A| with d_A)."""
+    _virtual_cameras(camera)
     b = np.abs(np.asarray(gap, dtype=np.float64)) * _slope_step(camera) * camera.main_focal_length_mm
     b = b / abs(_pupil_factor(camera))
     return float(b) if b.ndim == 0 else b
@@ -79,11 +90,16 @@ def view_geometry(camera: Camera) -> ViewGeometry:
 def views_inside_aperture(camera: Camera) -> np.ndarray:
     """Boolean mask ``(m̂, m̂)`` of views whose virtual centre lies inside the main lens aperture.
 
+    For a microscope: the views inside the objective's NA (:func:`~._microscope.views_inside_na`).
+
     The virtual centre of view (ky, kx) sits at (F_iy, F_ix) in the entrance pupil (the front focal
     plane for an image-side telecentric main lens), whose diameter is f_U / N. Views outside it see
     no light (the dark corners of every micro image). Without ``f_number`` every view is kept.
     """
     m = camera.m_hat
+    if getattr(camera, "microscope", None) is not None:    # the aperture of a microscope is its NA
+        from ._microscope import views_inside_na
+        return views_inside_na(camera)
     if camera.f_number is None:
         return np.ones((m, m), dtype=bool)
     pos = view_positions_mm(camera)

@@ -80,8 +80,13 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
     labels = None
     if camera is not None and a_values is not None:
         geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64))
-        labels = [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
-                                                              np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
+        if geo.microscope:
+            labels = [f"z {r['z_um']:+.1f} um | DOF {r['z_far_um']:+.1f} - {r['z_near_um']:+.1f} um"
+                      for r in geo.records()]
+        else:
+            labels = [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
+                                                                  np.atleast_1d(geo.near_mm),
+                                                                  np.atleast_1d(geo.far_mm))]
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
     if len(frames) > 2:
         frames = frames + frames[-2:0:-1]
@@ -98,7 +103,10 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
     walk = circular_walk(views.shape[0], mask=mask)
     frames = np.stack([views[k] for k in walk])
     labels = None
-    if camera is not None:
+    if camera is not None and camera.is_microscope:
+        angles = geometry.microscope_views(camera).angle_deg
+        labels = [f"view [{ky}, {kx}] | {np.hypot(angles[ky], angles[kx]):.1f} deg in the object" for ky, kx in walk]
+    elif camera is not None:
         positions = geometry.view_positions_mm(camera)
         labels = [f"view [{ky}, {kx}] | {np.hypot(positions[ky], positions[kx]):.2f} mm from the centre"
                   for ky, kx in walk]

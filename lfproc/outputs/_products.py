@@ -81,10 +81,14 @@ def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.nda
     """
     from ..io import write_image, write_sidecar
 
-    meta = {"source": source, "layout": "block (ky, kx) holds view [ky, kx]", "views_per_side": int(views.shape[0]),
-            "baseline_mm": geometry.baseline_mm(camera, 1)}
+    meta = {"source": source, "layout": "block (ky, kx) holds view [ky, kx]", "views_per_side": int(views.shape[0])}
+    if camera.is_microscope:
+        meta["lateral_sampling_um"] = geometry.lateral_sampling_um(camera)
+    else:
+        meta["baseline_mm"] = geometry.baseline_mm(camera, 1)
     if keep is not None:
-        meta["blacked_out"] = "views outside the main lens aperture are 0"
+        meta["blacked_out"] = ("views outside the objective's NA are 0" if camera.is_microscope else
+                               "views outside the main lens aperture are 0")
     path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")
     write_image(path, mosaic(masked_views(views, keep)), meta, fmt)
     listed = [vg.metadata() for row in viewpoint_geometry(camera) for vg in row
