@@ -128,3 +128,24 @@ def test_microscope_stack_is_to_scale(tmp_path):
     assert meta["spacing"] == pytest.approx(geometry.microscope_slices(camera, 0.1).z_um, rel=1e-9)
     assert x_res[1] / x_res[0] == pytest.approx(125.0 / 20.0 / 2, rel=1e-6)
     assert [s["z_um"] for s in json.loads(meta["Info"])["slices"]] == pytest.approx([-z_step, 0.0, z_step])
+
+
+def test_refocus_command_writes_a_microscope_stack(tmp_path):
+    """``lfproc refocus --stack ome`` on a microscope light field: OME-TIFF with µm sizes and per-plane z."""
+    camera = Camera.from_toml(LFM_20X)
+    m = camera.m_hat
+    views = np.random.default_rng(3).random((m, m, 10, 11, 1)).astype(np.float32)
+    LightField.from_views(views, camera).save(tmp_path / "lfm.lfp.npz")
+    proc = run_cli("refocus", tmp_path / "lfm.lfp.npz", "--a", "0,0.05,0.1", "--stack", "ome", "-o", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr
+    import xml.etree.ElementTree as ET
+    ns = {"ome": "http://www.openmicroscopy.org/Schemas/OME/2016-06"}
+    with tifffile.TiffFile(tmp_path / "out" / "lfm_stack.ome.tif") as tif:
+        pixels = ET.fromstring(tif.ome_metadata).find(".//ome:Pixels", ns)
+        assert tif.series[0].shape == (3, 10, 11)
+    sidecars = sorted((json.loads(p.read_text()) for p in (tmp_path / "out").glob("lfm_a*.json")),
+                      key=lambda r: r["a"])
+    z = [r["z_um"] for r in sidecars]
+    assert float(pixels.get("PhysicalSizeX")) == pytest.approx(6.25)
+    assert float(pixels.get("PhysicalSizeZ")) == pytest.approx(z[1] - z[0], rel=1e-9)
+    assert [float(p.get("PositionZ")) for p in pixels.findall("ome:Plane", ns)] == pytest.approx(z)
