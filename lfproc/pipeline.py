@@ -84,7 +84,7 @@ def calibrate_white(white, camera: Camera) -> LensGrid:
                          source=white.source)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
-                              exit_pupil_warning(white.source, pupil, camera.exit_pupil_distance_mm))):
+                              exit_pupil_warning(white.source, pupil, camera))):
         warnings.warn(line.replace(": warning: ", ": ", 1), stacklevel=2)
     return estimate.grid
 
