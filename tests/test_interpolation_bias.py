@@ -17,31 +17,9 @@ import pytest
 
 import lfproc
 from lfproc.cli import build_parser
+from lfproc.simulate import plane_views
 
 SWEEP_HALF, SWEEP_STEP = 0.03, 0.001
-
-
-def plane_views(m, n, a0, seed, oversample=4, band=None):
-    """``(m, m, n, n, 1)`` float32 views of a plane at refocus parameter ``a0``, periodic over n lenses
-    (``band``: no frequency at or above that many cycles per lens on either axis)."""
-    rng = np.random.default_rng(seed)
-    size = n * oversample
-    f = np.fft.fftfreq(size, d=1.0 / oversample)            # cycles per lens
-    fy, fx = f[:, None], f[None, :]
-    radius = np.hypot(fy, fx)
-    radius[0, 0] = 1.0
-    spectrum = radius ** -1.0 * np.exp(2j * np.pi * rng.random((size, size)))   # power ∝ 1/f²
-    spectrum[0, 0] = 0.0
-    spectrum *= np.sinc(fy) * np.sinc(fx)                    # integrated over the lens (box of one pitch)
-    if band is not None:
-        spectrum *= (np.abs(fy) < band) & (np.abs(fx) < band)
-    c = (m - 1) // 2
-    views = np.empty((m, m, n, n, 1), np.float32)
-    for ky in range(m):
-        for kx in range(m):
-            shift = np.exp(-2j * np.pi * a0 * (fy * (c - ky) + fx * (c - kx)))
-            views[ky, kx, :, :, 0] = np.fft.ifft2(spectrum * shift).real[::oversample, ::oversample]
-    return views
 
 
 def sharpness(stack, a_values, m):

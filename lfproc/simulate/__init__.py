@@ -10,11 +10,13 @@ Private modules, one concern each: ``_textures`` (plane textures), ``_scene`` (p
 as flat arrays), ``_kernels`` (numba ray tracing), ``_render`` (the public render functions),
 ``_ground_truth`` (what the central view sees), ``_sensor`` (mosaic, noise, DN), ``_checks``
 (argument validators), ``_microscope`` (light-field microscope renders: beads and sheets at known depths
-through an aplanatic objective, numpy).
+through an aplanatic objective, numpy), ``_plane_views`` (exact light fields of a textured plane at a
+fractional a: the interpolation-bias ground truth).
 """
 
 from ._microscope import (Bead, MicroscopeScene, Sheet, lens_of_point, render_microscope_sensor,
                           render_microscope_views)
+from ._plane_views import plane_views
 from ._render import SimulatedCapture, render, render_ideal_views, render_radiance, render_white
 from ._scene import Plane, Scene
 from ._scene_file import RenderOptions, SceneFile, load_scene_file, parse_scene_dict
@@ -28,6 +30,7 @@ __all__ = [
                         "MicroscopeScene",
                         "Sheet",
                         "lens_of_point",
+                        "plane_views",
                         "render_microscope_sensor",
                         "render_microscope_views",
                         "KIND_CHECKER",
