@@ -211,3 +211,99 @@ def _interpolated_band(views, channels, s, first_y, ntaps_y, w_y, lo_y, hi_y,
                             dst[i] += wy * x_sum[i]
     _normalise(acc, count_y, count_x, channels, row0, out)
 
+
+
+@numba.njit(cache=True, nogil=True)
+def _add_row_taps(dst, src, channels, n, f, nt, w, lo, hi):
+    """``dst[q] += Σ_t w[t]·src[clamp(q + f + t)]`` for outputs q = lo … hi of one source row (upsample 1):
+    the clamped ends one sample at a time, the interior as contiguous slices (vectorised)."""
+    qa = max(lo, -f)
+    qb = min(hi, n - nt - f)
+    if qa > qb:
+        _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, lo, hi)
+        return
+    _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, lo, qa - 1)
+    _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, qb + 1, hi)
+    e0 = qa * channels
+    e1 = (qb + 1) * channels
+    off = f * channels
+    d = dst[e0:e1]
+    s0 = src[e0 + off:e1 + off]
+    w0 = w[0]
+    if nt == 1:
+        for i in range(d.shape[0]):
+            d[i] += w0 * s0[i]
+    elif nt == 2:
+        s1 = src[e0 + off + channels:e1 + off + channels]
+        w1 = w[1]
+        for i in range(d.shape[0]):
+            d[i] += w0 * s0[i] + w1 * s1[i]
+    else:
+        s1 = src[e0 + off + channels:e1 + off + channels]
+        s2 = src[e0 + off + 2 * channels:e1 + off + 2 * channels]
+        s3 = src[e0 + off + 3 * channels:e1 + off + 3 * channels]
+        w1 = w[1]
+        w2 = w[2]
+        w3 = w[3]
+        for i in range(d.shape[0]):
+            d[i] += w0 * s0[i] + w1 * s1[i] + w2 * s2[i] + w3 * s3[i]
+
+
+@numba.njit(cache=True, nogil=True)
+def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
+                            first_x, ntaps_x, w_x, lo_x, hi_x, count_y, count_x, row0, row1, part_kind, out):
+    """Output rows ``row0 … row1 − 1`` of every slice at ``upsample = 1`` with fractional positions: the
+    plans' phase-0 arrays (``first_*``, ``ntaps_*``, ``lo_*``, ``hi_*`` (K, m); ``w_*`` (K, m, 4)).
+
+    Loop order as in the gather kernel: for a view row ky, each view's source row is loaded once and
+    x-resampled into the per-slice partial sums ``xs[k, sy]`` of every slice that reads it (the row stays
+    in L1 across the slices, and each slice's shift of it is one contiguous, vectorised loop); then
+    every output row adds its y-taps' weighted partial sums. The same sums, weights and order of
+    additions per slice as :func:`_interpolated_band` with ``s = 1``, which serves upsampled slices.
+    """
+    m = views.shape[0]
+    src_rows = views.shape[2]
+    src_cols = views.shape[3] // channels
+    n_slices, _, row_len = out.shape
+    acc = np.zeros((n_slices, row1 - row0, row_len))
+    need_lo = np.empty(n_slices, dtype=np.int64)
+    need_hi = np.empty(n_slices, dtype=np.int64)
+    for ky in range(m):
+        # the (clamped) source rows each slice reads for this band and view row
+        sy_lo = src_rows
+        sy_hi = -1
+        for k in range(n_slices):
+            j0 = max(row0, lo_y[k, ky])
+            j1 = min(row1 - 1, hi_y[k, ky])
+            if j0 > j1:
+                need_lo[k] = src_rows
+                need_hi[k] = -1
+                continue
+            need_lo[k] = min(max(j0 + first_y[k, ky], 0), src_rows - 1)
+            need_hi[k] = min(max(j1 + first_y[k, ky] + ntaps_y[k, ky] - 1, 0), src_rows - 1)
+            sy_lo = min(sy_lo, need_lo[k])
+            sy_hi = max(sy_hi, need_hi[k])
+        if sy_lo > sy_hi:
+            continue
+        xs = np.zeros((n_slices, sy_hi - sy_lo + 1, row_len), dtype=part_kind.dtype)
+        for kx in range(m):
+            for sy in range(sy_lo, sy_hi + 1):
+                src = views[ky, kx, sy]
+                for k in range(n_slices):
+                    if sy < need_lo[k] or sy > need_hi[k] or lo_x[k, kx] > hi_x[k, kx]:
+                        continue
+                    _add_row_taps(xs[k, sy - sy_lo], src, channels, src_cols, first_x[k, kx], ntaps_x[k, kx],
+                                  w_x[k, kx], lo_x[k, kx], hi_x[k, kx])
+        for k in range(n_slices):
+            for jy in range(max(row0, lo_y[k, ky]), min(row1 - 1, hi_y[k, ky]) + 1):
+                dst = acc[k, jy - row0]
+                for t in range(ntaps_y[k, ky]):
+                    sy = min(max(jy + first_y[k, ky] + t, 0), src_rows - 1)
+                    x_sum = xs[k, sy - sy_lo]
+                    wy = w_y[k, ky, t]
+                    if wy == 1.0:
+                        _add_into(dst, x_sum)
+                    else:
+                        for i in range(row_len):
+                            dst[i] += wy * x_sum[i]
+    _normalise(acc, count_y, count_x, channels, row0, out)
