@@ -33,7 +33,7 @@ PHOTOGRAPHIC = (0.1, 0.25, 0.5, 0.75, 0.9, 1.1, 1.25, 1.5, 1.75, 1.9)
 MICROSCOPE = (-0.05, 0.01, 0.025, 0.05, 0.1, 0.2)
 
 
-def sharpest_error(views, a0, interpolation, half=0.03, step=0.001):
+def sharpest_error(views, a0, interpolation, half=0.1, step=0.001):
     import lfproc
 
     m = views.shape[0]
