@@ -214,39 +214,51 @@ def _interpolated_band(views, channels, s, first_y, ntaps_y, w_y, lo_y, hi_y,
 
 
 @numba.njit(cache=True, nogil=True)
-def _add_row_taps(dst, src, channels, n, f, nt, w, lo, hi):
-    """``dst[q] += Σ_t w[t]·src[clamp(q + f + t)]`` for outputs q = lo … hi of one source row (upsample 1):
-    the clamped ends one sample at a time, the interior as contiguous slices (vectorised)."""
+def _add_rows_taps(xs, view, sy0, sy1, sy_base, channels, n, f, nt, w, lo, hi):
+    """``xs[sy − sy_base, q] += Σ_t w[t]·view[sy, clamp(q + f + t)]`` for outputs q = lo … hi of the source
+    rows ``sy0 … sy1`` of one view (upsample 1): the clamped ends one sample at a time, the interior as
+    one loop nest over rows and contiguous columns (vectorised), so the per-call work is done once per
+    view and slice rather than once per row."""
     qa = max(lo, -f)
     qb = min(hi, n - nt - f)
     if qa > qb:
-        _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, lo, hi)
+        for sy in range(sy0, sy1 + 1):
+            _add_taps_clamped(xs[sy - sy_base], view[sy], channels, 1, 0, n, f, nt, w, lo, hi)
         return
-    _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, lo, qa - 1)
-    _add_taps_clamped(dst, src, channels, 1, 0, n, f, nt, w, qb + 1, hi)
+    if lo < qa or qb < hi:
+        for sy in range(sy0, sy1 + 1):
+            _add_taps_clamped(xs[sy - sy_base], view[sy], channels, 1, 0, n, f, nt, w, lo, qa - 1)
+            _add_taps_clamped(xs[sy - sy_base], view[sy], channels, 1, 0, n, f, nt, w, qb + 1, hi)
     e0 = qa * channels
     e1 = (qb + 1) * channels
     off = f * channels
-    d = dst[e0:e1]
-    s0 = src[e0 + off:e1 + off]
     w0 = w[0]
     if nt == 1:
-        for i in range(d.shape[0]):
-            d[i] += w0 * s0[i]
+        for sy in range(sy0, sy1 + 1):
+            d = xs[sy - sy_base, e0:e1]
+            s0 = view[sy, e0 + off:e1 + off]
+            for i in range(d.shape[0]):
+                d[i] += w0 * s0[i]
     elif nt == 2:
-        s1 = src[e0 + off + channels:e1 + off + channels]
         w1 = w[1]
-        for i in range(d.shape[0]):
-            d[i] += w0 * s0[i] + w1 * s1[i]
+        for sy in range(sy0, sy1 + 1):
+            d = xs[sy - sy_base, e0:e1]
+            s0 = view[sy, e0 + off:e1 + off]
+            s1 = view[sy, e0 + off + channels:e1 + off + channels]
+            for i in range(d.shape[0]):
+                d[i] += w0 * s0[i] + w1 * s1[i]
     else:
-        s1 = src[e0 + off + channels:e1 + off + channels]
-        s2 = src[e0 + off + 2 * channels:e1 + off + 2 * channels]
-        s3 = src[e0 + off + 3 * channels:e1 + off + 3 * channels]
         w1 = w[1]
         w2 = w[2]
         w3 = w[3]
-        for i in range(d.shape[0]):
-            d[i] += w0 * s0[i] + w1 * s1[i] + w2 * s2[i] + w3 * s3[i]
+        for sy in range(sy0, sy1 + 1):
+            d = xs[sy - sy_base, e0:e1]
+            s0 = view[sy, e0 + off:e1 + off]
+            s1 = view[sy, e0 + off + channels:e1 + off + channels]
+            s2 = view[sy, e0 + off + 2 * channels:e1 + off + 2 * channels]
+            s3 = view[sy, e0 + off + 3 * channels:e1 + off + 3 * channels]
+            for i in range(d.shape[0]):
+                d[i] += w0 * s0[i] + w1 * s1[i] + w2 * s2[i] + w3 * s3[i]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -255,10 +267,9 @@ def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
     """Output rows ``row0 … row1 − 1`` of every slice at ``upsample = 1`` with fractional positions: the
     plans' phase-0 arrays (``first_*``, ``ntaps_*``, ``lo_*``, ``hi_*`` (K, m); ``w_*`` (K, m, 4)).
 
-    Loop order as in the gather kernel: for a view row ky, each view's source row is loaded once and
-    x-resampled into the per-slice partial sums ``xs[k, sy]`` of every slice that reads it (the row stays
-    in L1 across the slices, and each slice's shift of it is one contiguous, vectorised loop); then
-    every output row adds its y-taps' weighted partial sums. The same sums, weights and order of
+    For a view row ky, each view (a few tens of KB, cache-resident) is x-resampled into the per-slice
+    partial sums ``xs[k, sy]`` of every slice, all the rows that slice reads at once
+    (:func:`_add_rows_taps`); then every output row adds its y-taps' weighted partial sums. The same sums, weights and order of
     additions per slice as :func:`_interpolated_band` with ``s = 1``, which serves upsampled slices.
     """
     m = views.shape[0]
@@ -287,13 +298,14 @@ def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
             continue
         xs = np.zeros((n_slices, sy_hi - sy_lo + 1, row_len), dtype=part_kind.dtype)
         for kx in range(m):
-            for sy in range(sy_lo, sy_hi + 1):
-                src = views[ky, kx, sy]
-                for k in range(n_slices):
-                    if sy < need_lo[k] or sy > need_hi[k] or lo_x[k, kx] > hi_x[k, kx]:
-                        continue
-                    _add_row_taps(xs[k, sy - sy_lo], src, channels, src_cols, first_x[k, kx], ntaps_x[k, kx],
-                                  w_x[k, kx], lo_x[k, kx], hi_x[k, kx])
+            view = views[ky, kx]
+            for k in range(n_slices):
+                lo = lo_x[k, kx]
+                hi = hi_x[k, kx]
+                if lo > hi or need_lo[k] > need_hi[k]:
+                    continue
+                _add_rows_taps(xs[k], view, need_lo[k], need_hi[k], sy_lo, channels, src_cols, first_x[k, kx],
+                               ntaps_x[k, kx], w_x[k, kx], lo, hi)
         for k in range(n_slices):
             for jy in range(max(row0, lo_y[k, ky]), min(row1 - 1, hi_y[k, ky]) + 1):
                 dst = acc[k, jy - row0]
