@@ -12,7 +12,7 @@ For each interpolation (nearest, linear, cubic = Catmull-Rom, cubic-sharp = Keys
   float32), seconds per slice and as a ratio to the floor of one read of the views
   (``views.sum(axis=(0, 1))``), measured in the same run; integer slices (a pure gather) for reference.
 
-Usage: ``python scripts/bench_interpolation.py [--repeats N] [--small] [--exponents 2,1.5,3]``.
+Usage: ``python scripts/bench_interpolation.py [--repeats N] [--small] [--exponents 2,1.5,3] [--speed-only]``.
 Timings on a shared machine: read the ratios.
 """
 
@@ -89,8 +89,9 @@ def main(argv=None):
     parser.add_argument("--small", action="store_true")
     parser.add_argument("--exponents", default="2")
     parser.add_argument("--json", metavar="PATH")
+    parser.add_argument("--speed-only", action="store_true", help="leave out the bias tables")
     args = parser.parse_args(argv)
-    result = {"bias": {e: bias_table(float(e)) for e in args.exponents.split(",")},
+    result = {"bias": {} if args.speed_only else {e: bias_table(float(e)) for e in args.exponents.split(",")},
               "speed": speed_table(args.repeats, args.small), "load_average": os.getloadavg()[0]}
     for exponent, rows in result["bias"].items():
         print(f"worst |sharpest a - true a|, texture power ~ 1/f^{exponent}:")
