@@ -197,3 +197,21 @@ def test_main_lens_functions_refuse_a_microscope():
             call()
     with pytest.raises(LfprocError, match="microscope camera"):
         g.z_per_a_um(Camera.from_toml(SAMPLES / "paper-f100.toml"))
+
+
+def test_the_relay_enters_only_through_m_hat():
+    # the relay images the lenslet focal plane onto the sensor: a 1.4286x relay in front of 6.5 µm pixels
+    # samples like 4.55 µm pixels at the lenslet focus without one
+    relay = _scope_camera(pixel=0.0065, relay=1.4286)
+    direct = _scope_camera(pixel=0.0065 / 1.4286, relay=1.0)
+    assert relay.m_hat == direct.m_hat == 27
+    assert relay.pitch_px == pytest.approx(direct.pitch_px, rel=1e-12)
+    a = np.array([-0.3, 0.05, 0.2])
+    assert np.allclose(g.slice_geometry(relay, a).z_um, g.slice_geometry(direct, a).z_um, rtol=1e-12)
+    # a stronger relay gives more samples per lens; each view step is then a finer angle, so one unit of
+    # a (one lens of shift per view step) is a proportionally larger depth: z(1) ∝ m̂
+    strong = _scope_camera(pixel=0.0065, relay=2.6)
+    assert strong.m_hat == 49
+    assert g.z_per_a_um(strong) / g.z_per_a_um(relay) == pytest.approx(49 / 27, rel=1e-12)
+    # while the depth of a view's one-sample parallax (z(1)/m̂ per lens shift of one sample) stays the same
+    assert g.z_per_a_um(strong) / strong.m_hat == pytest.approx(g.z_per_a_um(relay) / relay.m_hat, rel=1e-12)

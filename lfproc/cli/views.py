@@ -27,14 +27,15 @@ def add_view_options(p) -> None:
     p.add_argument("--mosaic", action="store_true", help="also one image tiling all views")
     p.add_argument("--gif", action="store_true", help="also an animation walking the views along a circle")
     p.add_argument("--inside-aperture", action="store_true",
-                   help="only the views inside the main lens aperture (needs main_lens.f_number); the mosaic "
+                   help="only the views inside the main lens aperture (needs main_lens.f_number; a microscope's: "
+                        "its NA); the mosaic "
                         "shows the others black")
 
 
 def check_view_options(args, camera) -> None:
     from ..errors import LfprocError
 
-    if args.inside_aperture and camera.f_number is None:
+    if args.inside_aperture and camera.f_number is None and not camera.is_microscope:   # a microscope: its NA
         raise LfprocError(f"{camera.source or 'camera'}: --inside-aperture needs main_lens.f_number in the camera "
                           f"file")
 

@@ -9,12 +9,12 @@ s = n·w/M² in front of the native object plane, so slice a sits at
 
 positive towards the objective (a > 0 refocuses nearer the objective, as nearer the camera in the
 paper). The lateral sampling is one lens, p_m/M in the object (Levoy et al., "Light Field Microscopy",
-SIGGRAPH 2006, Sec. 3: lateral resolution = lenslet pitch / M).
+SIGGRAPH 2006: the lateral resolution is the lenslet pitch over M).
 
 Depth of field: the paper's border-ray pairs (Eqs. 23–31) with the views the objective fills, i.e.
 those whose image-side ray sine is at most NA/M (c_NA views each side of the centre), plus the wave
-term λ·n/NA² of the microscope's DOF, D_tot = λ·n/NA² + n·e/(M·NA) (Levoy et al. 2006, Eq. 1,
-after Inoué). For a lenslet f-number matched to the objective the geometric part tends to n·p_m/(M·NA),
+term λ·n/NA² of the microscope's DOF, D_tot = λ·n/NA² + n·e/(M·NA) (Levoy et al. 2006, after
+Inoué and Spring). For a lenslet f-number matched to the objective the geometric part tends to n·p_m/(M·NA),
 Levoy's second term with e = p_m, and the number of slices with disjoint DOF over |a| ≤ 1 is the
 number of views across the NA (Levoy's N_u resolvable depths).
 

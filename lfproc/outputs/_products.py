@@ -16,8 +16,16 @@ from ._names import FORMATS, slice_names, view_name
 
 
 def slice_metadata(source: str, camera, a_values) -> list[dict]:
-    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm."""
-    return [dict(source=source, **rec) for rec in geometry.slice_geometry(camera, np.asarray(a_values)).records()]
+    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm.
+
+    A microscope's: source, a, z_um, z_near_um, z_far_um, dof_um, and ``refocus_shifts`` ("aplanatic"
+    where :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial").
+    """
+    records = [dict(source=source, **rec) for rec in geometry.slice_geometry(camera, np.asarray(a_values)).records()]
+    if getattr(camera, "microscope", None) is not None:
+        shifts = "aplanatic" if geometry.uses_aplanatic(camera) else "paraxial"
+        records = [dict(rec, refocus_shifts=shifts) for rec in records]
+    return records
 
 
 def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: np.ndarray,

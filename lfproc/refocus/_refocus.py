@@ -80,7 +80,7 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     _check_output_size(len(slopes), ny, nx, channels, upsample)
     table = _shift_table(lf, view_shifts, m)
     if table is not None:
-        out = refocus_per_view(views, slopes, table, interpolation, upsample, _view_mask(lf, m))
+        out = refocus_per_view(views, slopes, table, interpolation, upsample, _view_mask(lf, m), _thread_count())
         _check_finite(out, slopes, views)
         return out[0] if scalar else out
     plan_y = axis_plan(slopes, m, ny, upsample, interpolation)

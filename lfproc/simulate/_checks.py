@@ -63,6 +63,8 @@ def _check_levels(low, high) -> None:
 
 
 def _require_f_number(camera: Camera) -> None:
+    if getattr(camera, "microscope", None) is not None:
+        camera.require_main_lens("this renderer (a main lens with its stop and planes at distances from the sensor)")
     if camera.f_number is None:
         raise LfprocError(f"{camera.source or 'camera'}: rendering needs the aperture stop; add "
                           f"main_lens.f_number to the camera")

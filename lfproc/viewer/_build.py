@@ -92,11 +92,13 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         "views": views,
         "depth": _depth_record(camera, focus, a_far, a_near),
         "camera": camera_summary(camera),
+        "unit": "um" if camera.is_microscope else "mm",
         "calibration": calibration or {},
         "index_href": index_href,
     }
     write_json_atomic(os.path.join(outdir, "geometry.json"), data)
-    maps = {"slice_index": encode_array(slice_index), "distance_mm": encode_array(focus.distance_mm),
+    maps = {"slice_index": encode_array(slice_index),
+            ("z_um" if camera.is_microscope else "distance_mm"): encode_array(focus.distance_mm),
             "confidence": encode_array(np.round(focus.confidence * 255).astype(np.uint8))}
     page = os.path.join(outdir, "index.html")
     write_text_atomic(page, render_page(data, maps))
@@ -113,6 +115,13 @@ def _view_records(camera, stem: str, extension: str, view_mask=None) -> dict:
         keep = keep & np.asarray(view_mask, dtype=bool)
     items = [dict(vg.metadata(), image=f"views/{view_name(stem, *vg.view)}{extension}")
              for row in viewpoint_geometry(camera) for vg in row if keep[vg.view]]
+    if camera.is_microscope:   # orthographic views, placed by their object-space angles
+        scope = camera.microscope
+        angles = geometry.microscope_views(camera).angle_deg
+        c = camera.center_index
+        return {"m_hat": camera.m_hat, "center": c, "lateral_sampling_um": geometry.lateral_sampling_um(camera),
+                "aperture_radius_deg": math.degrees(math.asin(scope.numerical_aperture / scope.immersion_index)),
+                "angle_step_deg": abs(float(angles[c + 1] - angles[c])) if c else 1.0, "items": items}
     return {"m_hat": camera.m_hat, "center": camera.center_index, "baseline_mm": geometry.baseline_mm(camera, 1),
             "aperture_radius_mm": (camera.main_focal_length_mm / (2 * camera.f_number)) if camera.f_number else None,
             "items": items}
@@ -125,6 +134,10 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
     ticks = []
     for t in np.linspace(0.0, 1.0, 5):
         a = a_far + t * (a_near - a_far)
+        if camera.is_microscope:
+            z = float(a * geometry.z_per_a_um(camera))
+            ticks.append({"t": float(t), "z_um": z, "label": f"{z:.3g} um"})
+            continue
         distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
         ticks.append({"t": float(t), "distance_mm": distance, "label": metres(distance)})
     searched = f" over {len(focus.sweep_a)} slices (a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})" \
@@ -136,6 +149,8 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
 
 def camera_summary(camera) -> list[list[str]]:
     """(label, value) rows describing the camera for people."""
+    if camera.is_microscope:
+        return _microscope_summary(camera)
     focus_mm = geometry.slice_distance_mm(camera, 0.0)
     rows = [
         ("camera", camera.name or "(unnamed)"),
@@ -150,6 +165,22 @@ def camera_summary(camera) -> list[list[str]]:
     ]
     exit_pupil = getattr(camera, "exit_pupil_distance_mm", math.inf)
     rows.append(("exit pupil", "telecentric (at infinity)" if not math.isfinite(exit_pupil) else f"{exit_pupil:g} mm"))
+    return [list(r) for r in rows]
+
+
+def _microscope_summary(camera) -> list[list[str]]:
+    scope = camera.microscope
+    rows = [
+        ("camera", camera.name or "(unnamed)"),
+        ("objective", f"{scope.objective_magnification:g}x / NA {scope.numerical_aperture:g}, immersion n = "
+                      f"{scope.immersion_index:g}, tube lens {scope.tube_lens_focal_length_mm:g} mm"),
+        ("focused at (a = 0)", "the native object plane (z = 0 µm)"),
+        ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, "
+                         f"f = {camera.mla_focal_length_mm:g} mm"),
+        ("lateral sampling", f"{geometry.lateral_sampling_um(camera):.4g} µm per lens in the sample"),
+        ("depth per unit of a", f"{geometry.z_per_a_um(camera):.4g} µm"),
+        ("refocusing", "aplanatic (sine condition)" if geometry.uses_aplanatic(camera) else "paraxial"),
+    ]
     return [list(r) for r in rows]
 
 
@@ -182,7 +213,11 @@ def page_entry(outdir: str, page_dir: str) -> dict:
         data = json.load(fh)
     relative = os.path.relpath(page_dir, outdir).replace(os.sep, "/")
     middle = data["slices"][len(data["slices"]) // 2]
-    distances = [math.inf if s["distance_mm"] is None else s["distance_mm"] for s in data["slices"]]
-    span = f"{metres(min(distances))} to {metres(max(distances))}"
+    if data.get("unit") == "um":
+        depths = [s["z_um"] for s in data["slices"]]
+        span = f"{min(depths):.3g} to {max(depths):.3g} um"
+    else:
+        distances = [math.inf if s["distance_mm"] is None else s["distance_mm"] for s in data["slices"]]
+        span = f"{metres(min(distances))} to {metres(max(distances))}"
     return {"stem": data["stem"], "href": f"{relative}/index.html", "thumbnail": f"{relative}/{middle['image']}",
             "source": data["source"], "slices": len(data["slices"]), "range": span}

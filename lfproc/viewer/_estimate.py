@@ -26,7 +26,8 @@ class FocusDepth:
     Attributes
     ----------
     a : refined refocus parameter where each lens is sharpest
-    distance_mm : its distance from the sensor (Eq. 21), ``inf`` at or beyond infinity's ``a``
+    distance_mm : its distance from the sensor (Eq. 21), ``inf`` at or beyond infinity's ``a``; for a
+        microscope its depth z in µm from the native object plane (``lfproc.depth``'s ``z_um``)
     confidence : 0 (no sharpness peak: flat or noisy) to 1 (a clear peak)
     sweep_a : the refocus parameters of the sweep
     method : how the depths were found
@@ -54,6 +55,8 @@ def sweep_range(camera, lens_shape, a_values=None) -> tuple[float, float]:
         margin = 0.5 / c
         return float(np.min(a_values)) - margin, float(np.max(a_values)) + margin
     reach = min(lens_shape) / (3.0 * c)  # |a|·c lenses of shift at the outer views: a third of the image
+    if getattr(camera, "microscope", None) is not None:   # the N_u resolvable depths, |a| <= 1
+        return -min(1.0, reach), min(1.0, reach)
     a_inf = geometry.infinity_parameter(camera)
     lo = max(a_inf, -reach)
     return lo, max(lo, min(a_inf + DEFAULT_SPAN_A, reach))
@@ -70,7 +73,7 @@ def estimate_depth(lf, a_values=None, depth_map=None) -> FocusDepth:
         depth_map = depth(lf, a_range=(lo, hi))
     known = np.isfinite(depth_map.a)
     return FocusDepth(np.where(known, depth_map.a, np.nan).astype(np.float32),
-                      np.where(known, depth_map.distance_mm, np.nan).astype(np.float32),
+                      np.where(known, depth_map.depth, np.nan).astype(np.float32),
                       np.where(known, depth_map.confidence, 0.0).astype(np.float32),
                       np.asarray(depth_map.a_searched, dtype=np.float64), "lfproc.depth: " + str(depth_map.method),
                       min_confidence=0.0)  # lfproc.depth marks what it does not know as NaN itself

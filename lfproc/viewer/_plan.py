@@ -23,6 +23,15 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
     a_lo, a_hi = (float(v) for v in np.percentile(a, [2, 98]))
     c = max(camera.center_index, 1)  # widened by half a DOF, about (1 + |a|)/(2c) in a, against estimate errors
     a_lo, a_hi = a_lo - (1 + abs(a_lo)) / (2 * c), a_hi + (1 + abs(a_hi)) / (2 * c)
+    if getattr(camera, "microscope", None) is not None:   # µm from the native plane, as --z-range
+        zeta = geometry.z_per_a_um(camera)
+        try:
+            planned = geometry.plan_z_range(camera, a_lo * zeta, a_hi * zeta, max_slices=4 * max_slices)
+        except LfprocError:   # more than 4x the page's slices: even steps in a
+            planned = np.linspace(a_lo, a_hi, max_slices)
+        if len(planned) > max_slices:
+            planned = np.linspace(planned[0], planned[-1], max_slices)
+        return np.asarray(planned, dtype=np.float64)
     a_inf = geometry.infinity_parameter(camera)
     far = math.inf if a_lo <= a_inf else geometry.slice_distance_mm(camera, a_lo)
     near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
@@ -41,6 +50,9 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES) -> np.ndarray:
 def slice_intervals_a(camera, a_values) -> np.ndarray:
     """``(K, 2)``: each slice's DOF as an interval of ``a`` (far limit's a, near limit's a; Eq. 31 inverted)."""
     geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)))
+    if geo.microscope:   # z is linear in a
+        zeta = geometry.z_per_a_um(camera)
+        return np.stack([geo.z_far_um / zeta, geo.z_near_um / zeta], axis=1)
     a_inf = geometry.infinity_parameter(camera)
     far_a = [a_inf if not math.isfinite(f) else geometry.refocus_parameter(camera, f) for f in geo.far_mm]
     near_a = [geometry.refocus_parameter(camera, n) for n in geo.near_mm]

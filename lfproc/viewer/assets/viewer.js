@@ -11,7 +11,8 @@
     for (var i = 0; i < text.length; i++) { bytes[i] = text.charCodeAt(i); }
     return entry.dtype === "uint8" ? bytes : new Float32Array(bytes.buffer);
   }
-  var sliceIndex = decode(maps.slice_index), distance = decode(maps.distance_mm),
+  var micro = data.unit === "um";  // a light-field microscope: depths in µm from the native object plane
+  var sliceIndex = decode(maps.slice_index), distance = decode(micro ? maps.z_um : maps.distance_mm),
       confidence = decode(maps.confidence);
   var ny = data.lens_shape[0], nx = data.lens_shape[1];
   var slices = data.slices, views = data.views.items, centre = data.views.center;
@@ -22,6 +23,16 @@
     if (Math.abs(v) >= 100) { return v.toFixed(0) + " m"; }
     return (Math.abs(v) >= 1 ? v.toPrecision(3) : v.toFixed(3)) + " m";
   }
+
+  function depthText(v) {  // metres from the sensor, or µm from a microscope's native object plane
+    if (!micro) { return metres(v); }
+    return (v === null || v === undefined || !isFinite(v)) ? "unknown" : v.toFixed(2) + " µm";
+  }
+  function at(s) { return micro ? s.z_um : s.distance_mm; }
+  function nearOf(s) { return micro ? s.z_near_um : s.near_mm; }
+  function farOf(s) { return micro ? s.z_far_um : s.far_mm; }
+  function dofOf(s) { return micro ? s.dof_um : s.dof_mm; }
+  function posOf(v) { return micro ? v.angle_deg : v.position_mm; }
 
   // ---------------------------------------------------------------- layout
   var photo = $("photo"), depth = $("depth"), slider = $("slider"), marker = $("marker");
@@ -50,9 +61,9 @@
     photo.dataset.shown = "slice " + k;
     slider.value = String(k);
     $("mode").textContent = "Refocused slice " + (k + 1) + " of " + slices.length + " (a = " + s.a.toFixed(3) + ")";
-    $("slice-readout").textContent = "This slice is focused at " + metres(s.distance_mm) + "; sharp from " +
-      metres(s.near_mm) + " to " + metres(s.far_mm) + " (depth of field " +
-      (isFinite(s.dof_mm) && s.dof_mm !== null ? metres(s.dof_mm) : "infinite") + ").";
+    $("slice-readout").textContent = "This slice is focused at " + depthText(at(s)) + "; sharp from " +
+      depthText(nearOf(s)) + " to " + depthText(farOf(s)) + " (depth of field " +
+      (isFinite(dofOf(s)) && dofOf(s) !== null ? depthText(dofOf(s)) : "infinite") + ").";
     drawAperture();
   }
 
@@ -77,6 +88,12 @@
     photo.src = v.image;
     photo.dataset.shown = "view " + v.view[0] + "," + v.view[1];
     $("mode").textContent = "Viewpoint [" + v.view[0] + ", " + v.view[1] + "] (a view: sharp at every depth)";
+    if (micro) {
+      $("view-readout").textContent = "View [" + v.view[0] + ", " + v.view[1] + "]: looks into the sample at " +
+        v.angle_deg[1].toFixed(2) + "°, " + v.angle_deg[0].toFixed(2) + "° (x, y; sine condition), orthographic.";
+      drawAperture();
+      return;
+    }
     var p = v.position_mm;
     $("view-readout").textContent = "View [" + v.view[0] + ", " + v.view[1] + "]: virtual camera at x = " +
       p[1].toFixed(3) + " mm, y = " + p[0].toFixed(3) + " mm in the main lens focal plane, " +
@@ -103,10 +120,10 @@
     showSlice(k);
     var s = slices[k];
     out.appendChild(document.createTextNode("Here: "));
-    var b = document.createElement("b"); b.id = "here-distance"; b.textContent = metres(d); out.appendChild(b);
-    out.appendChild(document.createTextNode(" from the sensor" + (c < data.depth.min_confidence ?
-      " (low confidence: little texture here)" : "") + ". Sharpest slice: " + metres(s.distance_mm) +
-      ", in focus from " + metres(s.near_mm) + " to " + metres(s.far_mm) + "."));
+    var b = document.createElement("b"); b.id = "here-distance"; b.textContent = depthText(d); out.appendChild(b);
+    out.appendChild(document.createTextNode((micro ? " from the native object plane" : " from the sensor") +
+      (c < data.depth.min_confidence ? " (low confidence: little texture here)" : "") + ". Sharpest slice: " +
+      depthText(at(s)) + ", in focus from " + depthText(nearOf(s)) + " to " + depthText(farOf(s)) + "."));
     out.dataset.distanceMm = isFinite(d) ? String(d) : "inf";
     out.dataset.slice = String(k);
   }
@@ -159,7 +176,7 @@
   slices.forEach(function (s, k) {
     if (k % every !== 0 && k !== slices.length - 1) { return; }
     var span = document.createElement("span");
-    span.textContent = metres(s.distance_mm);
+    span.textContent = depthText(at(s));
     span.style.left = (slices.length > 1 ? k / (slices.length - 1) * 100 : 50) + "%";
     labels.appendChild(span);
   });
@@ -167,8 +184,8 @@
   // ---------------------------------------------------------------- the views in the aperture, with the baseline
   var svgNS = "http://www.w3.org/2000/svg";  // an XML namespace name, not a network request
   function drawAperture() {
-    var svg = $("aperture"), radius = data.views.aperture_radius_mm, reach = 0;
-    views.forEach(function (v) { reach = Math.max(reach, Math.abs(v.position_mm[0]), Math.abs(v.position_mm[1])); });
+    var svg = $("aperture"), radius = micro ? data.views.aperture_radius_deg : data.views.aperture_radius_mm, reach = 0;
+    views.forEach(function (v) { reach = Math.max(reach, Math.abs(posOf(v)[0]), Math.abs(posOf(v)[1])); });
     var scale = 1 / Math.max(radius || 0, reach * 1.05, 1e-9);
     svg.innerHTML = "";
     if (radius) {
@@ -176,15 +193,16 @@
       stop.setAttribute("class", "stop"); stop.setAttribute("r", String(radius * scale));
       svg.appendChild(stop);
     }
-    var dot = 0.45 * data.views.baseline_mm * scale;
+    var dot = 0.45 * (micro ? data.views.angle_step_deg : data.views.baseline_mm) * scale;
     views.forEach(function (v) {
       var c = document.createElementNS(svgNS, "circle");
       c.setAttribute("class", "view" + (state.mode === "view" && state.view === v ? " current" : ""));
-      c.setAttribute("cx", String(v.position_mm[1] * scale)); c.setAttribute("cy", String(v.position_mm[0] * scale));
+      c.setAttribute("cx", String(posOf(v)[1] * scale)); c.setAttribute("cy", String(posOf(v)[0] * scale));
       c.setAttribute("r", String(dot));
       c.addEventListener("click", function () { showView(v); });
       var title = document.createElementNS(svgNS, "title");
-      title.textContent = "view [" + v.view + "], " + v.baseline_to_center_mm.toFixed(3) + " mm from the centre";
+      title.textContent = "view [" + v.view + "], " + (micro ? posOf(v).map(function (x) { return x.toFixed(1); })
+        .join("°, ") + "° in the sample" : v.baseline_to_center_mm.toFixed(3) + " mm from the centre");
       c.appendChild(title);
       svg.appendChild(c);
     });
@@ -195,11 +213,12 @@
   $("legend-bar").style.background = "linear-gradient(to right, " + colours.join(", ") + ")";
   data.depth.ticks.forEach(function (t) {
     var span = document.createElement("span");
-    span.textContent = metres(t.distance_mm);
+    span.textContent = depthText(micro ? t.z_um : t.distance_mm);
     span.style.left = (t.t * 100) + "%";
     $("legend-ticks").appendChild(span);
   });
-  $("depth-method").textContent = "Distance from the sensor, " + data.depth.method + "; colours " +
+  $("depth-method").textContent = (micro ? "Depth from the native object plane (towards the objective: +), " :
+    "Distance from the sensor, ") + data.depth.method + "; colours " +
     data.depth.colour_scale + ".";
 
   function fillTable(table, rows) {
