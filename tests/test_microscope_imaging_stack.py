@@ -149,3 +149,21 @@ def test_refocus_command_writes_a_microscope_stack(tmp_path):
     assert float(pixels.get("PhysicalSizeX")) == pytest.approx(6.25)
     assert float(pixels.get("PhysicalSizeZ")) == pytest.approx(z[1] - z[0], rel=1e-9)
     assert [float(p.get("PositionZ")) for p in pixels.findall("ome:Plane", ns)] == pytest.approx(z)
+
+
+def test_batch_writes_the_same_stack_as_refocus(tmp_path):
+    """``lfproc batch --stack``: per capture the z-stack ``lfproc refocus --stack`` writes, byte for byte."""
+    camera = Camera.from_toml(LFM_20X)
+    m = camera.m_hat
+    views = np.random.default_rng(4).random((m, m, 9, 10, 1)).astype(np.float32)
+    LightField.from_views(views, camera).save(tmp_path / "lfm.lfp.npz")
+    args = ["--a", "-0.1,0,0.1", "--stack", "imagej"]
+    single = run_cli("refocus", tmp_path / "lfm.lfp.npz", *args, "-o", tmp_path / "single")
+    batch = run_cli("batch", tmp_path / "lfm.lfp.npz", *args, "--workers", "1", "-o", tmp_path / "batch")
+    assert single.returncode == 0, single.stderr
+    assert batch.returncode == 0, batch.stderr
+    with tifffile.TiffFile(tmp_path / "single" / "lfm_stack.tif") as a, \
+            tifffile.TiffFile(tmp_path / "batch" / "lfm_stack.tif") as b:
+        assert np.array_equal(a.asarray(), b.asarray())
+        assert a.imagej_metadata == b.imagej_metadata
+        assert a.imagej_metadata["unit"] == "micron" and a.asarray().shape == (3, 9, 10)

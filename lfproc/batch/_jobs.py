@@ -41,6 +41,7 @@ class Job:
     mosaic: bool = False        # with views: also the mosaic of all views
     gif: bool = False           # with views: also the animation
     inside_aperture: bool = False  # with views: only those inside the main lens aperture
+    stack: str | None = None    # with slices: also one z-stack file, "imagej" or "ome" (lfproc refocus --stack)
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""

@@ -23,21 +23,21 @@ def register(sub) -> None:
     add_slice_options(p).required = True
     add_output_folder_option(p)
     add_render_options(p)
-    p.add_argument("--stack", choices=("imagej", "ome"),
-                   help="also write all slices of a capture as one z-stack file, STEM_stack.tif (imagej: an ImageJ "
-                        "hyperstack) or STEM_stack.ome.tif (ome: OME-TIFF), with the physical x/y/z spacing in µm "
-                        "for a microscope (Fiji and napari open it to scale) and each slice's a and distance "
-                        "for a photographic camera")
     p.set_defaults(func=run)
 
 
 def add_render_options(p) -> None:
-    """``--format``, ``--interpolation`` and ``--upsample`` of refocused slices (refocus and batch)."""
+    """``--format``, ``--interpolation``, ``--upsample`` and ``--stack`` of refocused slices (refocus and batch)."""
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
     p.add_argument("--interpolation", default="cubic-sharp", choices=("nearest", "linear", "cubic", "cubic-sharp"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
                    help="render slices on an S times finer grid than the lenses (default 1)")
+    p.add_argument("--stack", choices=("imagej", "ome"),
+                   help="also write all slices of a capture as one z-stack file, STEM_stack.tif (imagej: an ImageJ "
+                        "hyperstack) or STEM_stack.ome.tif (ome: OME-TIFF), with the physical x/y/z spacing in µm "
+                        "for a microscope (Fiji and napari open it to scale) and each slice's a and distance "
+                        "for a photographic camera")
 
 
 def check_render_options(args) -> None:
