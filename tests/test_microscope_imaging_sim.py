@@ -137,3 +137,22 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
         r, q = np.unravel_index(np.argmin(np.hypot(*(centres - xy).transpose(2, 0, 1))), lf.lens_shape)
         i = int(np.argmax(stack[:, r - 1:r + 2, q - 1:q + 2, 0].max(axis=(1, 2))))
         assert abs(geo.z_um[i] - bead.z_um) <= geo.dof_um[i] / 2, (bead.z_um, geo.z_um[i], geo.dof_um[i])
+
+
+@pytest.mark.parametrize("make, words", [(lambda: Bead(0, 0, float("nan")), "z_um"),
+                                         (lambda: Bead(0, 0, 1, radius_um=0), "radius_um"),
+                                         (lambda: Sheet(1.0, period_um=-2), "period_um"),
+                                         (lambda: Sheet(1.0, waves=0), "waves")])
+def test_bad_beads_and_sheets_are_one_line_errors(make, words):
+    from lfproc import LfprocError
+
+    with pytest.raises(LfprocError, match=words):
+        make()
+
+
+def test_microscope_render_needs_a_microscope_camera():
+    from lfproc import LfprocError
+
+    camera = Camera.from_toml(SAMPLES / "sample" / "camera.toml")
+    with pytest.raises(LfprocError, match=r"\[microscope\]"):
+        render_microscope_views(camera, MicroscopeScene(), (4, 4))

@@ -53,6 +53,9 @@ class Bead:
     radius_um: float = 1.0
     brightness: float = 1.0
 
+    def __post_init__(self):
+        _finite(self, ("x_um", "y_um", "z_um", "brightness"), positive=("radius_um",))
+
 
 @dataclass(frozen=True)
 class Sheet:
@@ -65,6 +68,11 @@ class Sheet:
     seed: int = 0
     low: float = 0.2
     high: float = 1.0
+
+    def __post_init__(self):
+        _finite(self, ("z_um", "low", "high"), positive=("period_um",))
+        if isinstance(self.waves, bool) or not isinstance(self.waves, int) or self.waves < 1:
+            raise LfprocError(f"Sheet: waves must be a positive integer, got {self.waves!r}")
 
     def value(self, x_um: np.ndarray, y_um: np.ndarray) -> np.ndarray:
         rng = np.random.default_rng(self.seed)
@@ -84,6 +92,17 @@ class MicroscopeScene:
 
     beads: tuple = field(default_factory=tuple)
     sheets: tuple = field(default_factory=tuple)
+
+
+def _finite(obj, names, positive=()) -> None:
+    """One-line LfprocError for a non-finite field of a bead or sheet, or a non-positive size."""
+    kind = type(obj).__name__
+    for name in (*names, *positive):
+        value = getattr(obj, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise LfprocError(f"{kind}: {name} must be a finite number, got {value!r}")
+        if name in positive and value <= 0:
+            raise LfprocError(f"{kind}: {name} must be positive, got {value!r}")
 
 
 def _scope(camera: Camera):
