@@ -12,7 +12,10 @@ For each interpolation (nearest, linear, cubic = Catmull-Rom, cubic-sharp = Keys
   float32), seconds per slice and as a ratio to the floor of one read of the views
   (``views.sum(axis=(0, 1))``), measured in the same run; integer slices (a pure gather) for reference.
 
-Usage: ``python scripts/bench_interpolation.py [--repeats N] [--small] [--exponents 2,1.5,3] [--speed-only]``.
+``--simulator`` adds the same sweep on the photographic simulator's renders of the bundled sample camera.
+
+Usage: ``python scripts/bench_interpolation.py [--repeats N] [--small] [--exponents 2,1.5,3] [--speed-only]
+[--simulator]``.
 Timings on a shared machine: read the ratios.
 """
 
@@ -57,6 +60,34 @@ def bias_table(exponent):
     return rows
 
 
+def simulator_bias(feature_mm=2.0):
+    """The same sweep on the photographic simulator's ideal views of the bundled sample camera (11 × 11
+    views, f/4; only the views wholly inside the stop are averaged) of a value-noise plane at the
+    distance of each a0: worst |error| per interpolation."""
+    from dataclasses import replace
+
+    import lfproc
+    from lfproc import Camera, geometry
+    from lfproc.simulate import Noise, Plane, Scene, render_ideal_views
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    camera = replace(Camera.from_toml(os.path.join(root, "lfproc", "samples", "sample", "camera.toml")), cfa="none")
+    m = camera.m_hat
+    worst = {name: 0.0 for name in INTERPOLATIONS[1:]}
+    for a0 in (0.1, 0.25, 0.5, 0.75, 0.9, 1.1, 1.5, 1.9):
+        scene = Scene([Plane(float(geometry.slice_distance_mm(camera, a0)), Noise(feature_mm=feature_mm, seed=3))])
+        views, weight, _ = render_ideal_views(camera, scene, (11 * 48, 11 * 48), pixel_samples=2, aperture_samples=2,
+                                              channels=1)
+        lf = lfproc.LightField.from_views(views, view_mask=weight.reshape(m, m, -1).min(axis=2) > 0.999)
+        a = np.round(np.arange(a0 - 0.05, a0 + 0.0501, 0.001), 9)
+        border = int(np.ceil(np.abs(a).max() * (m - 1) / 2)) + 3
+        for name in worst:
+            stack = lfproc.refocus(lf, a, interpolation=name)
+            found = a[int(np.argmax(stack[:, border:-border, border:-border, 0].reshape(len(a), -1).var(axis=1)))]
+            worst[name] = max(worst[name], abs(float(found - a0)))
+    return worst
+
+
 def best_of(fn, repeats):
     best = None
     for _ in range(repeats):
@@ -90,9 +121,15 @@ def main(argv=None):
     parser.add_argument("--exponents", default="2")
     parser.add_argument("--json", metavar="PATH")
     parser.add_argument("--speed-only", action="store_true", help="leave out the bias tables")
+    parser.add_argument("--simulator", action="store_true",
+                        help="also the bias on the photographic simulator's renders of the sample camera")
     args = parser.parse_args(argv)
     result = {"bias": {} if args.speed_only else {e: bias_table(float(e)) for e in args.exponents.split(",")},
               "speed": speed_table(args.repeats, args.small), "load_average": os.getloadavg()[0]}
+    if args.simulator:
+        result["simulator_bias"] = simulator_bias()
+        print("worst |sharpest a - true a| on the simulator's renders (sample camera, value noise):",
+              ", ".join(f"{k} {v:.3f}" for k, v in result["simulator_bias"].items()))
     for exponent, rows in result["bias"].items():
         print(f"worst |sharpest a - true a|, texture power ~ 1/f^{exponent}:")
         for name, row in rows.items():
