@@ -162,7 +162,7 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
     check_white_is_white(white.source, white.data, white.cfa, estimate.grid)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
-                              exit_pupil_warning(white.source, pupil, camera.exit_pupil_distance_mm))):
+                              exit_pupil_warning(white.source, pupil, camera))):
         warnings.warn(line.replace(": warning: ", ": ", 1), stacklevel=2)
     if not record:
         return estimate.grid

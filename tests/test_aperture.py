@@ -15,7 +15,7 @@ from lfproc import Camera, LfprocError
 from lfproc import geometry as g
 from lfproc import simulate
 from lfproc.outputs import slice_metadata
-from lfproc.scene import Noise, Plane, Scene
+from lfproc.simulate import Noise, Plane, Scene
 
 from conftest import SAMPLES, assert_clean_error, run_cli
 

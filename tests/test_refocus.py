@@ -324,6 +324,7 @@ def test_integer_a_is_a_pure_gather(monkeypatch, interpolation):
     def forbidden(*args):
         raise AssertionError("interpolating kernel used for whole-lens shifts")
     monkeypatch.setattr(rf, "_interpolated_band", forbidden)
+    monkeypatch.setattr(rf, "_interpolated_rows_band", forbidden)     # the upsample-1 interpolating kernel
     views = random_views(5, 6, 7, 1)
     lfproc.refocus(views, [0, 3, -1], interpolation)
     lfproc.refocus(views, [0.37, -2.5], "nearest")
@@ -390,8 +391,8 @@ def _kernel_cache_misses_and_hits_in_a_new_process():
     code = ("import importlib, numpy as np, lfproc\n"
             "rf_kernels = importlib.import_module('lfproc.refocus._kernels')\n"
             "v = np.ones((3, 3, 4, 5, 1), np.float32)\n"
-            "lfproc.refocus(v, [0, 1]); lfproc.refocus(v, 0.5)\n"
-            "k = (rf_kernels._gather_band, rf_kernels._interpolated_band)\n"
+            "lfproc.refocus(v, [0, 1]); lfproc.refocus(v, 0.5); lfproc.refocus(v, 0.5, upsample=2)\n"
+            "k = (rf_kernels._gather_band, rf_kernels._interpolated_rows_band, rf_kernels._interpolated_band)\n"
             "print(*(sum(sum(getattr(f.stats, n).values()) for f in k) for n in ('cache_misses', 'cache_hits')))")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
@@ -399,17 +400,18 @@ def _kernel_cache_misses_and_hits_in_a_new_process():
 
 
 def test_second_process_loads_kernels_from_cache():
-    """cache=True: a new process loads both kernels from numba's on-disk cache instead of compiling.
+    """cache=True: a new process loads the three kernels from numba's on-disk cache instead of compiling.
 
     The cache is shared with anything else that runs lfproc in this tree at the same moment, which may
     rewrite it (another source stamp): then the first probe compiles, and the next one must not.
     """
     lfproc.refocus(random_views(3, 4, 5, 1), [0, 1])     # compiles (or loads) and saves in this process
     lfproc.refocus(random_views(3, 4, 5, 1), 0.5)
+    lfproc.refocus(random_views(3, 4, 5, 1), 0.5, upsample=2)
     misses, hits = _kernel_cache_misses_and_hits_in_a_new_process()
     if misses:
         misses, hits = _kernel_cache_misses_and_hits_in_a_new_process()
-    assert (misses, hits) == (0, 2)
+    assert (misses, hits) == (0, 3)
 
 
 @pytest.mark.parametrize("interpolation", INTERPOLATIONS)

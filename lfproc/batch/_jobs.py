@@ -43,6 +43,7 @@ class Job:
     inside_aperture: bool = False  # with views: only those inside the main lens aperture
     aperture: float | None = None  # synthetic aperture f-number for the slices (None: every view with light)
     dark: str | None = None     # dark frame (--dark) or None; stamped into the fingerprint when given
+    stack: str | None = None    # with slices: also one z-stack file, "imagej" or "ome" (lfproc refocus --stack)
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""

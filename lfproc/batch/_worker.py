@@ -82,6 +82,14 @@ def run_job(job: Job) -> JobResult:
             stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
             outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
                                     view_mask=summed.view_mask)
+            if job.stack:
+                from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack
+
+                outputs.append(write_focal_stack(stack_path(job.outdir, job.stem, job.stack), stack,
+                                                 slice_metadata(job.source, lf.camera, job.refocus_a,
+                                                                summed.view_mask),
+                                                 kind=job.stack, lens_um=lateral_um_per_lens(lf.camera),
+                                                 upsample=job.upsample))
         if job.views:
             outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
                                       gif=job.gif, inside_aperture=job.inside_aperture)

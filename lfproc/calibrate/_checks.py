@@ -13,6 +13,11 @@
 * **Exit pupil** (given a camera): micro image centres form the lens lattice scaled by
   ``(d_A + f_s)/d_A`` about the optical axis, so the fitted pitch over the camera file's lens pitch
   implies the exit pupil distance ``d_A = f_s / (scale − 1)``.
+* **Microscope pitch**: a light-field microscope is telecentric (the objective's stop sits in the tube
+  lens's front focal plane), so its micro images sit exactly under their lenslets and a pitch that
+  differs from the camera file's is no exit pupil: it is the pixel size at the lenslets' focal plane,
+  ``sensor.pixel_pitch_mm / microscope.relay_magnification``, that is off. The measured pitch implies
+  the relay magnification (or, without a relay, the pixel pitch) to write into the camera file.
 """
 
 from __future__ import annotations
@@ -163,13 +168,36 @@ def implied_exit_pupil(pitch_px: float, pitch_sigma_px: float, camera) -> ExitPu
     expected = micro_image_scale(camera)
     sigma = pitch_sigma_px / lens_pitch_px
     allowance = 3.0 * sigma + NOMINAL_PITCH_TOLERANCE * expected
+    if getattr(camera, "microscope", None) is not None:     # telecentric by construction: no exit pupil to imply
+        return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=math.inf, range_mm=(math.inf, math.inf),
+                                 expected_scale=expected)
     distance = exit_pupil_from_scale(scale, camera) if scale - allowance > 1.0 else math.inf
     span = (exit_pupil_from_scale(scale + allowance, camera), exit_pupil_from_scale(scale - allowance, camera))
     return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=distance, range_mm=span,
                              expected_scale=expected)
 
 
-def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance_mm: float) -> str | None:
+def microscope_pitch_warning(source: str, estimate: ExitPupilEstimate, camera) -> str | None:
+    """For a microscope camera: the measured pitch in pixels, and the relay magnification or pixel pitch it
+    implies (module docstring), when it contradicts the camera file; ``None`` otherwise."""
+    if not estimate.contradicts_camera:
+        return None
+    ratio = estimate.scale
+    relay = camera.relay_magnification
+    return (f"{source}: warning: the micro images are {ratio * camera.pitch_px:.4f} px apart but the camera file "
+            f"predicts {camera.pitch_px:.4f} px ({100 * (ratio - 1):+.2f} %); a microscope is telecentric, so the "
+            f"pixel size at the lenslets is off: set microscope.relay_magnification = {relay * ratio:.5g} (now "
+            f"{relay:g}), or, without a relay, check sensor.pixel_pitch_mm (the pitch implies "
+            f"{camera.pixel_pitch_mm / ratio:.6g} mm)")
+
+
+def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance_mm) -> str | None:
+    """The exit pupil the pitch implies, when it contradicts the camera file. ``camera_distance_mm`` is the
+    camera file's exit pupil distance, or the camera itself: a microscope camera gets
+    :func:`microscope_pitch_warning` (no exit pupil to blame)."""
+    if getattr(camera_distance_mm, "microscope", None) is not None:
+        return microscope_pitch_warning(source, estimate, camera_distance_mm)
+    camera_distance_mm = getattr(camera_distance_mm, "exit_pupil_distance_mm", camera_distance_mm)
     if not estimate.contradicts_camera:
         return None
     given = "infinite (telecentric)" if math.isinf(camera_distance_mm) else f"{camera_distance_mm:.1f} mm"

@@ -128,7 +128,7 @@ def run(args) -> int:
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
                       args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
-                      _abs(args.dark))
+                      _abs(args.dark), args.stack if a_values else None)
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -147,7 +147,7 @@ def run(args) -> int:
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
-            "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
+            "stack": args.stack, "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
         return _process(args, jobs, manifest, camera)
 
 

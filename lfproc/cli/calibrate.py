@@ -65,7 +65,7 @@ def run(args) -> int:
     if args.plot:
         plot_grid_fit(capture.data, cfa, estimate, args.plot)
     warnings = list(estimate.warnings)
-    warnings.append(exit_pupil_warning(args.white, pupil, camera.exit_pupil_distance_mm))
+    warnings.append(exit_pupil_warning(args.white, pupil, camera))
     for line in filter(None, warnings):
         print(f"lfproc calibrate: {line}", file=sys.stderr)
     print(f"{args.output}: {grid.kind} grid of {grid.rows} x {grid.cols} lenses, pitch {grid.pitch_px:.4f} px, "

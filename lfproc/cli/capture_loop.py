@@ -35,8 +35,8 @@ def add_decode_options(p) -> None:
 def add_dark_option(p) -> None:
     p.add_argument("--dark", metavar="DARK",
                    help="dark frame (same camera, size and mode; lens cap on): subtracted per pixel from every capture "
-                        "and white image after the same level mapping; recorded in grids made with it "
-                        "(see docs/inputs.md)")
+                        "and white image after the same level mapping; recorded in grids made with it, and a "
+                        "different one later is refused")
 
 
 def add_output_folder_option(p) -> None:

@@ -29,12 +29,17 @@ def register(sub) -> None:
 
 
 def add_render_options(p) -> None:
-    """``--format``, ``--interpolation`` and ``--upsample`` of refocused slices (refocus and batch)."""
+    """``--format``, ``--interpolation``, ``--upsample`` and ``--stack`` of refocused slices (refocus and batch)."""
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
-    p.add_argument("--interpolation", default="linear", choices=("nearest", "linear", "cubic"),
+    p.add_argument("--interpolation", default="cubic-sharp", choices=("nearest", "linear", "cubic", "cubic-sharp"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
                    help="render slices on an S times finer grid than the lenses (default 1: one pixel per lens)")
+    p.add_argument("--stack", choices=("imagej", "ome"),
+                   help="also write all slices of a capture as one z-stack file, STEM_stack.tif (imagej: an ImageJ "
+                        "hyperstack) or STEM_stack.ome.tif (ome: OME-TIFF), with the physical x/y/z spacing in µm "
+                        "for a microscope (Fiji and napari open it to scale) and each slice's a and distance "
+                        "for a photographic camera")
 
 
 def check_render_options(args) -> None:
@@ -43,7 +48,8 @@ def check_render_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..outputs import write_slice_previews, write_slices
+    from ..outputs import (lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack, write_slice_previews,
+                           write_slices)
     from ..pipeline import unique_stems
     from ..refocus import refocus
     from ..viewpoints import with_aperture
@@ -85,6 +91,10 @@ def run(args) -> int:
         if args.preview:
             write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview,
                                  view_mask=lf.view_mask)
+        if args.stack:
+            write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,
+                              slice_metadata(os.path.abspath(path), lf.camera, values, lf.view_mask), kind=args.stack,
+                              lens_um=lateral_um_per_lens(lf.camera), upsample=args.upsample)
         progress.update(len(values))
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 

@@ -22,8 +22,11 @@ Interpolation (for positions between lenses; whole-lens positions read the lens 
     ``"nearest"``: the lens at ``floor(pos + 0.5)`` (halves round up). ``"linear"``: bilinear, two taps
     per axis. ``"cubic"``: separable cubic convolution of Keys with a = −0.5 — the Catmull-Rom spline —
     four taps per axis at ``floor(pos) − 1 … floor(pos) + 2``; taps beyond the array are clamped to its
-    edge. Whole-lens samples — every sample when ``a`` is an integer and ``upsample = 1`` — are a pure
-    gather: no weights, no multiplications, whatever ``interpolation`` says (nearest with ``upsample = 1``
+    edge. ``"cubic-sharp"``: the same with Keys' a = −0.9, which lifts the response between lenses: with
+    linear (and, less, Catmull-Rom) interpolation an interpolated slice is blurrier than a whole-lens one,
+    so the sharpest slice of a fine sweep snaps towards integer ``a``; cubic-sharp removes that pull for
+    natural textures (the commands' default; docs/microscope-imaging.md). Whole-lens samples — every
+    sample when ``a`` is an integer and ``upsample = 1`` — are a pure gather: no weights, no multiplications, whatever ``interpolation`` says (nearest with ``upsample = 1``
     is a gather too). A call whose slices are all gathers runs the gather kernel; integer slices that
     share a call with real ones take single unit-weight taps there, still without multiplications.
 Precision
@@ -51,7 +54,11 @@ through once, its rows added as contiguous shifted segments (the shift is consta
 per-view-row partial sums of every slice that reads them; these go into the float64 accumulators.
 Slices of one call thus share each loaded row instead of re-reading it from memory.
 Interpolation is separable: the x-resampled sum of a source row is formed once and serves every output
-row whose y-taps read it.
+row whose y-taps read it. At ``upsample = 1`` (``_interpolated_rows_band``) each view is x-resampled for
+each slice in one loop nest over all the rows the band reads (the per-row bookkeeping done once per view
+and slice): on a light-field microscope's short rows (27 × 27 views of 73 × 73 lenses, 101 slices) that
+takes a half (cubic) to a sixth (linear) of the CPU time of the per-row ring of ``_interpolated_band``,
+which still serves upsampled slices (bit-identical results).
 """
 
 import sys

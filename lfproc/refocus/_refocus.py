@@ -10,11 +10,11 @@ import numba
 import numpy as np
 
 from ..errors import LfprocError
-from ._kernels import _gather_band, _interpolated_band
+from ._kernels import _gather_band, _interpolated_band, _interpolated_rows_band
 from ._per_view import refocus_per_view
 from ._plan import AxisPlan, axis_plan
 
-INTERPOLATIONS = ("nearest", "linear", "cubic")
+INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp")
 
 #: dtypes the kernels read directly; other real dtypes are converted (see the module docstring)
 NATIVE_DTYPES = (np.dtype(np.float32), np.dtype(np.float64), np.dtype(np.uint16))
@@ -45,8 +45,10 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
-    interpolation : {"nearest", "linear", "cubic"}
-        How positions between lenses are read (module docstring). Irrelevant for integer ``a`` with
+    interpolation : {"nearest", "linear", "cubic", "cubic-sharp"}
+        How positions between lenses are read (module docstring). ``"linear"`` (the default here) and
+        ``"nearest"`` make the sharpest slice of a sweep snap to integer ``a``; ``"cubic-sharp"`` (the
+        default of the commands) does not. Irrelevant for integer ``a`` with
         ``upsample = 1``, which is a pure gather.
     upsample : int, optional
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
@@ -248,6 +250,11 @@ def _phase0(arr: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(arr[:, :, 0])
 
 
+def _weights0(weights: np.ndarray) -> np.ndarray:
+    """The ``r = 0`` phase of a ``(K, m, s, 4)`` weight array, as a C-ordered ``(K, m, 4)`` array."""
+    return np.ascontiguousarray(weights[:, :, 0, :])
+
+
 def _render(views: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, upsample: int) -> np.ndarray:
     """Run the kernel that fits the plans over all bands of output rows; returns ``(K, Ny', Nx'·C)`` float32.
 
@@ -265,6 +272,12 @@ def _render(views: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, upsample: int
         args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.lo), _phase0(plan_y.hi),
                 _phase0(plan_x.first), _phase0(plan_x.lo), _phase0(plan_x.hi), plan_y.count, plan_x.count)
         kernel = _gather_band
+    elif upsample == 1:
+        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.ntaps), _weights0(plan_y.weights),
+                _phase0(plan_y.lo), _phase0(plan_y.hi), _phase0(plan_x.first), _phase0(plan_x.ntaps),
+                _weights0(plan_x.weights).astype(part.dtype), _phase0(plan_x.lo), _phase0(plan_x.hi),
+                plan_y.count, plan_x.count)
+        kernel = _interpolated_rows_band
     else:
         args = (flat, channels, upsample, plan_y.first, plan_y.ntaps, plan_y.weights, plan_y.lo, plan_y.hi,
                 plan_x.first, plan_x.ntaps, plan_x.weights.astype(part.dtype), plan_x.lo, plan_x.hi,

@@ -9,9 +9,14 @@ Private modules, one concern each: ``_textures`` (plane textures), ``_scene`` (p
 ``_scene_file`` (TOML scene files), ``_setup`` (lattice, rim and sampling), ``_scene_arrays`` (the scene
 as flat arrays), ``_kernels`` (numba ray tracing), ``_render`` (the public render functions),
 ``_ground_truth`` (what the central view sees), ``_sensor`` (mosaic, noise, DN), ``_checks``
-(argument validators).
+(argument validators), ``_microscope`` (light-field microscope renders: beads and sheets at known depths
+through an aplanatic objective, numpy), ``_plane_views`` (exact light fields of a textured plane at a
+fractional a: the interpolation-bias ground truth).
 """
 
+from ._microscope import (Bead, MicroscopeScene, Sheet, lens_of_point, render_microscope_sensor,
+                          render_microscope_views)
+from ._plane_views import plane_views
 from ._render import SimulatedCapture, render, render_ideal_views, render_radiance, render_white
 from ._scene import Plane, Scene
 from ._scene_file import RenderOptions, SceneFile, load_scene_file, parse_scene_dict
@@ -21,6 +26,13 @@ from ._textures import (KIND_CHECKER, KIND_IMAGE, KIND_NOISE, KIND_SINUSOID, KIN
                         ImageTexture, Noise, Sinusoid, Uniform, read_texture_image, srgb_to_linear)
 
 __all__ = [
+                        "Bead",
+                        "MicroscopeScene",
+                        "Sheet",
+                        "lens_of_point",
+                        "plane_views",
+                        "render_microscope_sensor",
+                        "render_microscope_views",
                         "KIND_CHECKER",
                         "KIND_IMAGE",
                         "KIND_NOISE",

@@ -1,0 +1,142 @@
+"""A focal stack as one file: an ImageJ hyperstack TIFF or an OME-TIFF with its physical spacing.
+
+Besides the per-slice images and sidecars, ``lfproc refocus --stack`` writes all slices of a capture
+into one multi-page TIFF that Fiji/ImageJ (hyperstack) or Bio-Formats and napari (OME-TIFF) open as a
+z-stack at its physical scale:
+
+microscope captures
+    x/y spacing = the object-space size of one lens (lenslet pitch / objective magnification, Levoy
+    et al. 2006) divided by ``upsample``; z spacing = the step between the slices' ``z_um`` (object
+    space, positive towards the objective); slices ordered by increasing z. Unit: micron.
+photographic captures
+    the slices lie at distances that are not evenly spaced and have no single lateral scale, so the
+    spacing is one (pixel units) and each slice's ``a`` and ``distance_mm`` go into the metadata: the
+    ImageJ slice labels and ``Info``, the OME planes' ``PositionZ`` (mm from the sensor).
+
+Every slice's full sidecar record is stored as JSON (ImageJ ``Info``, OME ``Description``). Written
+atomically; tifffile loads only here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from ..atomic import atomic_path, json_safe
+from ..errors import LfprocError
+
+#: ``--stack`` kinds and their file name endings
+STACK_KINDS = {"imagej": "_stack.tif", "ome": "_stack.ome.tif"}
+
+#: relative unevenness of the z steps below which a stack counts as evenly spaced
+EVEN_TOLERANCE = 1e-6
+
+
+def lateral_um_per_lens(camera) -> float | None:
+    """Object-space size of one lens in µm for a microscope (:func:`lfproc.geometry.lateral_sampling_um`,
+    pitch / M), ``None`` for a photographic camera."""
+    if getattr(camera, "microscope", None) is None:
+        return None
+    from .. import geometry
+    return geometry.lateral_sampling_um(camera)
+
+
+def stack_path(outdir: str, stem: str, kind: str) -> str:
+    import os
+
+    if kind not in STACK_KINDS:
+        raise LfprocError(f"unknown stack kind {kind!r}; use one of {', '.join(STACK_KINDS)}")
+    return os.path.join(outdir, stem + STACK_KINDS[kind])
+
+
+def stack_axis(records: list[dict]) -> tuple[np.ndarray, np.ndarray, str]:
+    """The stack's order (indices into ``records``), each slice's axial position and its unit:
+    ``z_um`` ascending for a microscope, else ``distance_mm`` in order of increasing ``a``."""
+    if records and all("z_um" in r for r in records):
+        z = np.array([r["z_um"] for r in records], dtype=np.float64)
+        order = np.argsort(z, kind="stable")
+        return order, z[order], "µm"
+    a = np.array([r["a"] for r in records], dtype=np.float64)
+    order = np.argsort(a, kind="stable")
+    return order, np.array([r.get("distance_mm", math.nan) for r in records], dtype=np.float64)[order], "mm"
+
+
+def z_spacing_um(z_um: np.ndarray) -> float:
+    """The step of evenly spaced ``z_um`` (the mean step otherwise; 1 for a single slice)."""
+    if len(z_um) < 2:
+        return 1.0
+    steps = np.diff(z_um)
+    return float(steps.mean()) if steps.mean() > 0 else 1.0
+
+
+def write_focal_stack(path: str, images: np.ndarray, records: list[dict], *, kind: str = "imagej",
+                      lens_um: float | None = None, upsample: int = 1) -> str:
+    """Write the slices ``images`` (``(K, H, W, C)`` float32) as one z-stack file; returns ``path``.
+
+    Parameters
+    ----------
+    path : str
+        Target file (``…_stack.tif`` or ``…_stack.ome.tif``, :func:`stack_path`).
+    images : ndarray
+        The refocused slices in the order of ``records``.
+    records : list of dict
+        Each slice's sidecar fields (``a`` and ``distance_mm``, or ``z_um`` for a microscope).
+    kind : {"imagej", "ome"}
+    lens_um : float or None
+        Object-space size of one lens in µm (:func:`lateral_um_per_lens`); ``None``: pixel units.
+    upsample : int
+        The slices' upsampling: the pixel is ``lens_um / upsample``.
+    """
+    import tifffile
+
+    images = np.asarray(images, dtype=np.float32)
+    if images.ndim != 4 or images.shape[0] != len(records):
+        raise LfprocError(f"{path}: a stack needs (K, H, W, C) slices, one per record; got {images.shape} "
+                          f"for {len(records)} record(s)")
+    order, position, unit = stack_axis(records)
+    data = np.ascontiguousarray(np.moveaxis(images[order], 3, 1))        # (Z, C, Y, X)
+    channels = data.shape[1]
+    axes = "ZCYX" if channels > 1 else "ZYX"
+    if channels == 1:
+        data = data[:, 0]
+    metric = lens_um is not None and unit == "µm"
+    pixel = lens_um / upsample if metric else 1.0
+    dz = z_spacing_um(position) if metric else 1.0
+    ordered = [records[i] for i in order]
+    labels = [_label(r) for r in ordered for _ in range(channels)]
+    info = json.dumps(json_safe({"slices": ordered, "pixel_um": pixel if metric else None,
+                                 "z_spacing_um": dz if metric else None,
+                                 "evenly_spaced": _even(position) if metric else None}), allow_nan=False)
+    with atomic_path(path, suffix=".tif") as tmp:
+        if kind == "imagej":
+            tifffile.imwrite(tmp, data, imagej=True, resolution=(1.0 / pixel, 1.0 / pixel),
+                             metadata={"axes": axes, "spacing": dz, "unit": "micron" if metric else "pixel",
+                                       "Labels": labels, "Info": info})
+        elif kind == "ome":
+            meta = {"axes": axes, "Description": info,
+                    "Plane": {"PositionZ": [float(p) if math.isfinite(p) else 0.0 for p in position
+                                            for _ in range(channels)],
+                              "PositionZUnit": [unit] * (len(position) * channels)}}
+            if metric:
+                meta.update(PhysicalSizeX=pixel, PhysicalSizeXUnit="µm", PhysicalSizeY=pixel,
+                            PhysicalSizeYUnit="µm", PhysicalSizeZ=dz, PhysicalSizeZUnit="µm")
+            tifffile.imwrite(tmp, data, ome=True, metadata=meta)
+        else:
+            raise LfprocError(f"unknown stack kind {kind!r}; use one of {', '.join(STACK_KINDS)}")
+    return path
+
+
+def _even(z: np.ndarray) -> bool:
+    if len(z) < 3:
+        return True
+    steps = np.diff(z)
+    return bool(np.ptp(steps) <= EVEN_TOLERANCE * max(abs(float(steps.mean())), 1e-12))
+
+
+def _label(record: dict) -> str:
+    if "z_um" in record:
+        return f"a={record['a']:.6g} z={record['z_um']:.6g} um"
+    distance = record.get("distance_mm", math.nan)
+    return f"a={record['a']:.6g} d={'inf' if not math.isfinite(distance) else f'{distance:.6g}'} mm"
