@@ -12,7 +12,8 @@ from ._demosaic import DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._view_mask import faithful_views
+from ._cells import CLASSES, cell_classes, masked
+from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
@@ -26,24 +27,46 @@ def _band_rows(m_hat: int, cols: int, channels: int) -> int:
 
 
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
-              interpolation: str) -> np.ndarray:
+              interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None) -> np.ndarray:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
+    ``shift`` moves each view's samples (:func:`view_offsets_px`); ``cells``, the sensor's lens class map
+    (:mod:`._cells`), makes every lens read its own cell only (else the plain sensor image is read).
     """
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
-    y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0])
-    strip = to_channels(sensor[y0:y1], cfa, demosaic_method)
-    channels = strip.shape[2]
-    out = np.empty((m_hat, m_hat * len(rows), grid.cols, channels), dtype=np.float32)
-    flag = cv_flag(interpolation)
-    if strip.shape[0] == 0:
+    y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0], shift)
+    channels = channel_count(sensor, cfa)
+    out = np.empty((m_hat, m_hat, len(rows), grid.cols, channels), dtype=np.float32)
+    if y1 <= y0:
         out[...] = 0.0
-    else:
-        strip = np.ascontiguousarray(strip)
-        for ky, (map_x, map_y) in enumerate(band_maps(grid, m_hat, rows, y0)):
-            remap_into(out[ky], strip, map_x, map_y, flag)
-    return out.reshape(m_hat, m_hat, len(rows), grid.cols, channels)
+        return out
+    flag = cv_flag(interpolation)
+    maps = band_maps(grid, m_hat, rows, y0, shift)
+    if cells is None:
+        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
+        flat = out.reshape(m_hat, m_hat * len(rows), grid.cols, channels)
+        for ky, (map_x, map_y) in enumerate(maps):
+            remap_into(flat[ky], strip, map_x, map_y, flag)
+        return out
+    classes = cells[y0:y1]
+    raw = sensor[y0:y1]
+    for cls in range(CLASSES):
+        first_row = rows.start + ((cls // 2 - rows.start) % 2)      # the band's first row of this class
+        first_col = cls % 2
+        if first_row >= rows.stop or first_col >= grid.cols:
+            continue
+        rsel = slice(first_row - rows.start, None, 2)
+        qsel = slice(first_col, None, 2)
+        strip = np.ascontiguousarray(to_channels(masked(raw, classes, cls), cfa, demosaic_method))
+        for ky, (map_x, map_y) in enumerate(maps):
+            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
+            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
+            part = np.empty(mx.shape + (channels,), dtype=np.float32)
+            remap_into(part.reshape(-1, mx.shape[2], channels), strip, mx.reshape(-1, mx.shape[2]),
+                       my.reshape(-1, mx.shape[2]), flag)
+            out[ky][:, rsel, qsel] = part
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +86,8 @@ class Decoder:
     inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C) on ``grid``: 1 / white views where delivered, else 0
     output_grid: LensGrid        # lens positions of the decoded light field (rectangular, also for hex input)
     views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
+    view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
+    cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -89,7 +114,8 @@ class Decoder:
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation)
+            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
+                              self.view_shift_px, self.cells)
             views *= self.inverse_white[:, :, rows.start:rows.stop]
             if grid.kind == "hexagonal":
                 hex_rows_to_rect(views, rows.start, out_rows, out[:, :, out_rows.start:out_rows.stop])
@@ -99,14 +125,16 @@ class Decoder:
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
-                   interpolation: str, dark_fraction: float, delivered: np.ndarray) -> np.ndarray:
+                   interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
+                   cells=None) -> np.ndarray:
     """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
     channels = channel_count(white, cfa)
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
     step = _band_rows(m_hat, grid.cols, channels)
     for r0 in range(0, grid.rows, step):
         rows = range(r0, min(r0 + step, grid.rows))
-        inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation)
+        inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation,
+                                                shift, cells)
     flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
@@ -167,19 +195,26 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
     if centroid_tolerance is None:
-        delivered = np.ones((m_hat, m_hat), dtype=bool)
+        delivered, shift, cells = np.ones((m_hat, m_hat), dtype=bool), None, None
     else:
-        delivered = faithful_views(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction,
-                                   centroid_tolerance, crosstalk_tolerance)
+        sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
+        delivered, shift = sampling.delivered, sampling.shift_px
     if whole_lenses:
-        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape)
+        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
     if grid.kind == "hexagonal":
         check_hex_size(grid.rows, grid.cols)
-    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered)
+    if centroid_tolerance is not None:
+        cells = cell_classes(grid, white.shape)
+    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
+                             shift, cells)
+    if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
+        kept = carrying_views(inverse, delivered)
+        inverse[~kept] = 0.0
+        delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells)
 
 
 def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):

@@ -1,39 +1,88 @@
-"""Which views a decoder can deliver faithfully: the white-image probe behind the systematic refocus bias.
+"""Which views carry light, and where to read them so that each sample stands for its own ray.
 
 A decoded sample is ``K·capture / K·white`` for the sampling kernel K of that sample (the sensor pixel,
 the demosaicing and the interpolation together, all linear for ``"fast"`` demosaicing). As a function
 of the ray direction it reads, its *white-weighted centroid* is ``K·(white·x) / K·white``. The geometry
 (and refocusing) assume that centroid is the view's nominal position, the lens centre plus
-(k − c)·pitch/m̂. Where K reaches past the edge of the lens's own illuminated micro image that fails:
+(k − c)·pitch/m̂. Where K reaches past the edge of the lens's lit micro image that fails: dark pixels
+(outside the main lens aperture, the gaps between micro images) weigh nothing after the division, so
+the centroid moves *inwards*, the view's parallax is compressed and a refocus sweep peaks at a lower
+a (issue 13). Lit pixels of the neighbouring micro image (crosstalk) are kept out by reading every
+lens from its own cell (:mod:`._cells`).
 
-* dark pixels (outside the main lens aperture, the gaps between micro images) weigh nothing after the
-  division by the white image, so the centroid moves *inwards*: the view behaves as one nearer the
-  centre, its parallax is compressed, and a refocus sweep peaks at a lower a (focus too far);
-* pixels of the neighbouring micro image are lit in the white image, so they are averaged in at full
-  weight: crosstalk, whose centroid sits a whole lens away.
+This probe works on the white image alone, at up to :data:`PROBED_LENSES` lenses away from the sensor
+border, by reading the white image and the white image times each pixel's offset from the lens
+centre with the decoder's own kernel (own cell, demosaicing, interpolation):
 
-This probe measures that centroid per view at a sample of lenses away from the sensor border, by
-decoding the white image multiplied by each pixel's offset from the centre of the lens whose cell
-contains it. A view is delivered where the centroid is within ``tolerance`` effective pixels of
-nominal at (nearly) every probed lens on which it is lit; the other views are set to 0 everywhere,
-like views outside the aperture. Deciding per view (not per sample) keeps every slice evenly bright.
+1. **The lit disc.** The white-weighted centroid of each lens's own cell, averaged over lenses and
+   channels, is where the lit micro image is centred. If it lies more than :data:`CENTRE_TOLERANCE`
+   effective pixels off the grid's lens centres, every view is read around it instead (the views are
+   decoded centred on the light; :attr:`ViewSampling.centre_offset_px` says by how much).
+2. **Views inside it.** View k is lit at a lens where its white sample at the nominal position is at
+   least :data:`LIT_FRACTION` of the central view's, in every channel. The edge of a blurred disc reads
+   half its interior, so this keeps exactly the views whose ray passes through the aperture (or the
+   objective's NA), and never one that reads the dark gaps between micro images, however much the
+   division by the white image would amplify them.
+3. **Where to read them.** Each view's samples are moved off nominal until their white-weighted
+   centroid, averaged over the probed lenses, is the nominal position (a few fixed-point steps, at most
+   :data:`MAX_SHIFT` effective pixels): the outer views are read a little further out, where their rays
+   really are.
+
+A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its corrected
+centroid is within ``tolerance`` of nominal; the set is made symmetric (a view and its mirror images
+both or neither), so slices stay evenly bright. Deciding per view (not per sample) keeps every slice
+evenly bright; all of it is a pure function of (white, grid, m̂, CFA, settings).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..grid import LensGrid
+from ._cells import cell_classes, lens_class
 from ._demosaic import to_channels
 from ._positions import view_offsets_px
 from ._resample import cv_flag
 
 #: the most lenses probed (spread over the central 60 % of the grid)
 PROBED_LENSES = 400
-#: a view is delivered where its centroid is right at this fraction of the probed lenses it is lit on
+#: a view is delivered where it is lit (and right) at this fraction of the probed lenses
 REQUIRED_FRACTION = 0.9
+#: a view is lit at a lens where its white reaches this fraction of the central view's (every channel)
+LIT_FRACTION = 0.4
+#: the lit disc is decoded centred when its centre is further than this (effective pixels) off the grid's
+CENTRE_TOLERANCE = 0.1
+#: decode around a measured off-centre disc (off: the measurement is biased on hexagonal Bayer whites, see docs)
+CENTRE_DECODING = False
+#: the furthest (effective pixels) a view's samples are moved off their nominal position
+MAX_SHIFT = 0.5
+#: fixed-point steps of the centroid correction
+ITERATIONS = 14
+#: move views off nominal to put their mean centroid there (off: per-lens residuals still bias a sweep
+#: on mono renders by -0.02 in a; views are then kept only where the centroid is right at nominal)
+CORRECT_POSITIONS = False
+
+
+@dataclass(frozen=True)
+class ViewSampling:
+    """What the white image says about the views (see the module docstring).
+
+    ``delivered`` (m̂, m̂) bool; ``shift_px`` (m̂, m̂, 2) sensor px (x, y) each view's samples are read off
+    nominal (the disc centre's offset included); ``centre_offset_px`` (x, y) the lit disc's centre off the
+    grid's lens centres as measured; ``centred`` whether the views are read around it; ``residual`` (m̂, m̂)
+    the remaining mean centroid error (effective pixels); ``lit`` (m̂, m̂) the share of probed lenses on
+    which each view is lit.
+    """
+
+    delivered: np.ndarray
+    shift_px: np.ndarray
+    centre_offset_px: tuple
+    centred: bool
+    residual: np.ndarray
+    lit: np.ndarray
 
 
 def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, int]]:
@@ -46,45 +95,12 @@ def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, 
     return [(r, q) for r in spread(grid.rows) for q in spread(grid.cols)]
 
 
-def _foreign_pixels(grid: LensGrid, r: int, q: int, xx: np.ndarray, yy: np.ndarray) -> np.ndarray:
-    """1.0 where a pixel centre is nearer another lens (among lens (r, q)'s neighbours) than (r, q), else 0."""
-    lx, ly = grid.lens_xy(r, q)
-    own = (xx - lx) ** 2 + (yy - ly) ** 2
-    nearest_other = np.full(xx.shape, np.inf)
-    for dr in range(-2, 3):
-        for dq in range(-2, 3):
-            if dr or dq:
-                ox, oy = grid.lens_xy(r + dr, q + dq)
-                np.minimum(nearest_other, (xx - ox) ** 2 + (yy - oy) ** 2, out=nearest_other)
-    return (nearest_other < own).astype(np.float64)
-
-
-def _read(image: np.ndarray, cfa: str, demosaic_method: str, map_x, map_y, flag) -> np.ndarray:
-    """``image`` demosaiced and read at the maps: ``(m̂, m̂, C)``."""
-    import cv2
-
-    img = to_channels(image.astype(np.float32), cfa, demosaic_method)
-    planes = [cv2.remap(np.ascontiguousarray(img[..., ch0:ch0 + 4] if img.shape[2] > 1 else img[..., 0]),
-                        map_x, map_y, flag, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-              for ch0 in range(0, img.shape[2], 4)]
-    return np.concatenate([p.reshape(map_x.shape + (-1,)) for p in planes], axis=-1)
-
-
-def centroid_errors(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
-                    interpolation: str, lenses=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per probed lens and view (worst channel): the centroid shift (px), the crosstalk fraction, the white.
-
-    The shift is the distance between the white-weighted centroid of a sample's kernel and the
-    kernel's own (unweighted) centroid; the crosstalk fraction is the share of the sample's white
-    that comes from pixels of other lenses' cells. Returns three ``(lenses, m̂, m̂)`` arrays; the first
-    two are NaN where the white reads 0.
-    """
-    flag = cv_flag(interpolation)
-    off_x, off_y = view_offsets_px(grid, m_hat)
+def _planes(white, grid, cfa, demosaic_method, lenses, own_cells):
+    """Per probed lens: its centre, patch origin and the demosaiced ``white``, ``white·dx``, ``white·dy``."""
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
-    shifts, crosstalk, levels = [], [], []
-    for r, q in (lenses if lenses is not None else probe_lenses(grid)):
+    out = []
+    for r, q in lenses:
         cx, cy = (float(v) for v in grid.lens_xy(r, q))
         x0, y0 = max(0, int(cx) - half) & ~1, max(0, int(cy) - half) & ~1   # even: the CFA phase stays
         x1, y1 = min(w, int(cx) + half + 1), min(h, int(cy) + half + 1)
@@ -92,46 +108,156 @@ def centroid_errors(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, dem
             continue
         patch = np.asarray(white[y0:y1, x0:x1], dtype=np.float64)
         yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64)
-        dx, dy, foreign = xx - cx, yy - cy, _foreign_pixels(grid, r, q, xx, yy)
+        dx, dy = xx - cx, yy - cy
+        if own_cells:
+            own = (cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q)) & (np.hypot(dx, dy) < 1.5 * grid.pitch_px)
+            patch = patch * (own[..., None] if patch.ndim == 3 else own)
         if patch.ndim == 3:
-            dx, dy, foreign = dx[..., None], dy[..., None], foreign[..., None]
-        flat = np.ones_like(patch)
-        map_x = (cx + off_x - x0).astype(np.float32)
-        map_y = (cy + off_y - y0).astype(np.float32)
-        level, wx, wy, wf, ones, gx, gy = (_read(p, cfa, demosaic_method, map_x, map_y, flag) for p in
-                                           (patch, patch * dx, patch * dy, patch * foreign, flat, flat * dx,
-                                            flat * dy))
+            dx, dy = dx[..., None], dy[..., None]
+        ones = np.ones_like(patch)
+        # the white, its first moments, and the same of a flat image (the kernel's own centroid)
+        planes = [to_channels(p.astype(np.float32), cfa, demosaic_method)
+                  for p in (patch, patch * dx, patch * dy, ones, ones * dx, ones * dy)]
+        moments = (float(np.sum(patch)), float(np.sum(patch * dx)), float(np.sum(patch * dy)))  # raw, no demosaic
+        out.append((cx, cy, x0, y0, np.concatenate(planes, axis=-1), moments))
+    return out
+
+
+def _read(stack, cx, cy, x0, y0, off_x, off_y, flag):
+    """The stacked planes read at the view samples: ``(m̂, m̂, 3C)``."""
+    import cv2
+
+    map_x = (cx + off_x - x0).astype(np.float32)
+    map_y = (cy + off_y - y0).astype(np.float32)
+    parts = [cv2.remap(np.ascontiguousarray(stack[..., c0:c0 + 4]), map_x, map_y, flag,
+                       borderMode=cv2.BORDER_CONSTANT, borderValue=0).reshape(map_x.shape + (-1,))
+             for c0 in range(0, stack.shape[2], 4)]
+    return np.concatenate(parts, axis=-1)
+
+
+def _centroids(planes, off_x, off_y, flag):
+    """Per lens: white level ``(L, m̂, m̂, C)`` and the white-weighted centroid (x, y) of the samples, all
+    channels together, from the lens centre, less the kernel's own centroid plus the sample position
+    (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the sample
+    position (nearest neighbour) is not a fault of the white image."""
+    levels, gx, gy = [], [], []
+    for cx, cy, x0, y0, stack, _ in planes:
+        got = _read(stack, cx, cy, x0, y0, off_x, off_y, flag).astype(np.float64)
+        c = got.shape[-1] // 6
+        lvl, total, flat = got[..., :c], got[..., :c].sum(axis=-1), got[..., 3 * c:4 * c].sum(axis=-1)
         with np.errstate(invalid="ignore", divide="ignore"):
-            shift = np.hypot(wx / level - gx / ones, wy / level - gy / ones)
-            share = np.abs(wf / level)
-        dark = ~(level > 0)
-        shift[dark] = np.nan
-        share[dark] = np.nan
-        shifts.append(np.max(shift, axis=-1))
-        crosstalk.append(np.max(share, axis=-1))
-        levels.append(np.min(level, axis=-1))
-    if not shifts:
-        empty = np.full((0, m_hat, m_hat), np.nan)
-        return empty, empty, np.zeros((0, m_hat, m_hat))
-    return np.array(shifts), np.array(crosstalk), np.array(levels)
+            own_x = got[..., 4 * c:5 * c].sum(axis=-1) / flat - off_x
+            own_y = got[..., 5 * c:].sum(axis=-1) / flat - off_y
+            gx.append(np.where(total > 0, got[..., c:2 * c].sum(axis=-1) / total - own_x, np.nan))
+            gy.append(np.where(total > 0, got[..., 2 * c:3 * c].sum(axis=-1) / total - own_y, np.nan))
+        levels.append(lvl)
+    return np.array(levels), np.array(gx), np.array(gy)
 
 
-def faithful_views(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
-                   interpolation: str, dark_fraction: float, tolerance: float,
-                   crosstalk_tolerance: float) -> np.ndarray:
-    """Boolean ``(m̂, m̂)``: the views the decoder delivers (see the module docstring).
+def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag):
+    """Mean centroid error (x, y) over the lenses where each view is lit, ``(m̂, m̂)`` each (px)."""
+    _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
+    ex, ey = gx - tx, gy - ty
+    use = lit & np.isfinite(ex) & np.isfinite(ey)
+    n = use.sum(axis=0)
+    mean_x = np.where(n > 0, np.where(use, ex, 0.0).sum(axis=0) / np.maximum(n, 1), np.inf)
+    mean_y = np.where(n > 0, np.where(use, ey, 0.0).sum(axis=0) / np.maximum(n, 1), np.inf)
+    return mean_x, mean_y
 
-    A view is kept where, among the probed lenses on which its white sample is lit (above
-    ``dark_fraction`` of the bright level), at least :data:`REQUIRED_FRACTION` have the centroid within
-    ``tolerance`` effective pixels (pitch/m̂) of the kernel's own and at most ``crosstalk_tolerance`` of
-    their white from other lenses (a view lit on none of them, outside the aperture, is not delivered).
+
+def disc_centre(planes) -> tuple[float, float]:
+    """Mean white-weighted centre (x, y) of the probed lenses' own cells, relative to their lens centres."""
+    cs = [(mx / total, my / total) for *_, (total, mx, my) in planes if total > 0]
+    return tuple(float(v) for v in np.mean(cs, axis=0)) if cs else (0.0, 0.0)
+
+
+def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
+    """Per-view shifts moving the mean white-weighted centroid onto nominal, and the residual (eff. px)."""
+    m_hat = nom_x.shape[0]
+    base = shift.copy()
+    best, best_err = shift.copy(), np.full((m_hat, m_hat), np.inf)
+    for i in range(ITERATIONS + 1):
+        ex, ey = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
+        err = np.hypot(ex, ey)
+        better = err < best_err
+        best[better], best_err[better] = shift[better], err[better]
+        if i == ITERATIONS:
+            break
+        step = np.stack([np.nan_to_num(ex, posinf=0.0), np.nan_to_num(ey, posinf=0.0)], axis=-1)
+        shift = shift - step
+        away = np.hypot(*np.moveaxis(shift - base, -1, 0))
+        shift = base + (shift - base) * np.minimum(1.0, MAX_SHIFT * eff / np.maximum(away, 1e-12))[..., None]
+    return best, best_err / eff
+
+
+def symmetric(views: np.ndarray) -> np.ndarray:
+    """``views`` where the view and its mirror images (about either axis and the centre) all are."""
+    return views & views[::-1] & views[:, ::-1] & views[::-1, ::-1]
+
+
+def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
+                  interpolation: str, tolerance: float, lenses=None) -> ViewSampling:
+    """Delivered views and where to read them (see the module docstring); ``tolerance`` in effective pixels."""
+    flag = cv_flag(interpolation)
+    eff = grid.pitch_px / m_hat
+    c = (m_hat - 1) // 2
+    planes = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True)
+    nom_x, nom_y = view_offsets_px(grid, m_hat)
+    if not planes:
+        return ViewSampling(np.ones((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2)), (0.0, 0.0), False,
+                            np.zeros((m_hat, m_hat)), np.ones((m_hat, m_hat)))
+    centre = disc_centre(planes)
+    centred = CENTRE_DECODING and math.hypot(*centre) > CENTRE_TOLERANCE * eff
+    tx, ty = (nom_x + centre[0], nom_y + centre[1]) if centred else (nom_x, nom_y)
+    shift = np.zeros((m_hat, m_hat, 2))
+    shift[..., 0], shift[..., 1] = tx - nom_x, ty - nom_y
+    level, _, _ = _centroids(planes, tx, ty, flag)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = (level / level[:, c:c + 1, c:c + 1, :]).mean(axis=-1)        # (L, m̂, m̂), channel mean
+    centre_lit = level[:, c, c, :].min(axis=-1) > 0
+    lit = (np.nan_to_num(ratio, nan=0.0) >= LIT_FRACTION) & centre_lit[:, None, None]
+    n_lenses = max(1, int(centre_lit.sum()))
+    lit_share = lit.sum(axis=0) / n_lenses
+    if CORRECT_POSITIONS:
+        shift, residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
+        right = np.broadcast_to(residual <= tolerance, lit.shape) & lit
+    else:      # per lens: the centroid at the nominal position must be right
+        _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
+        err = np.nan_to_num(np.hypot(gx - tx, gy - ty) / eff, nan=np.inf)
+        right = lit & (err <= tolerance)
+        residual = np.sort(np.where(lit, err, np.inf), axis=0)[min(len(planes) - 1, n_lenses // 2)]  # ~median
+    delivered = (lit_share >= REQUIRED_FRACTION) & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1))
+    delivered[c, c] = delivered[c, c] or not lit.any()
+    delivered = symmetric(delivered)
+    shift[~delivered] = 0.0
+    return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share)
+
+
+def carrying_views(inverse: np.ndarray, delivered: np.ndarray) -> np.ndarray:
+    """``delivered`` less the views whose samples carry signal (non-zero inverse white) at fewer than
+    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric."""
+    rows, cols = inverse.shape[2:4]
+    r0, r1 = (int(0.2 * rows), int(math.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
+    q0, q1 = (int(0.2 * cols), int(math.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
+    share = (inverse[:, :, r0:r1, q0:q1] != 0).any(axis=-1).mean(axis=(2, 3))
+    return symmetric(delivered & (share >= REQUIRED_FRACTION))
+
+
+def centroid_errors(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
+                    interpolation: str, lenses=None, shift=None,
+                    own_cells: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per probed lens and view: the centroid error (px, all channels together), the white's level (worst channel).
+
+    The error is the distance between the white-weighted centroid of each sample (read at nominal plus
+    ``shift``, from the lens's own cell unless ``own_cells`` is false) and the view's nominal position,
+    the kernel's own offset (nearest neighbour reads a pixel off the sample position) left out.
+    Returns ``(errors, levels)``, each ``(lenses, m̂, m̂)``; errors are NaN where the white reads 0.
     """
-    errors, crosstalk, levels = centroid_errors(white, grid, m_hat, cfa, demosaic_method, interpolation)
-    if errors.shape[0] == 0:
-        return np.ones((m_hat, m_hat), dtype=bool)
-    bright = float(np.percentile(levels, 99))
-    lit = levels > dark_fraction * bright if bright > 0 else np.zeros(levels.shape, dtype=bool)
-    right = (lit & (np.nan_to_num(errors, nan=np.inf) <= tolerance * grid.pitch_px / m_hat)
-             & (np.nan_to_num(crosstalk, nan=np.inf) <= crosstalk_tolerance))
-    n_lit = lit.sum(axis=0)
-    return right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(n_lit, 1)
+    flag = cv_flag(interpolation)
+    planes = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, own_cells)
+    nom_x, nom_y = view_offsets_px(grid, m_hat)
+    off_x, off_y = view_offsets_px(grid, m_hat, shift)
+    if not planes:
+        return np.full((0, m_hat, m_hat), np.nan), np.zeros((0, m_hat, m_hat))
+    level, gx, gy = _centroids(planes, off_x, off_y, flag)
+    return np.hypot(gx - nom_x, gy - nom_y), level.min(axis=-1)
