@@ -20,6 +20,8 @@ from ._whole_lenses import crop_to_whole_lenses
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
 LEVEL_SAMPLES = 4_000_000
+#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
+MIN_OWN_WEIGHT = 0.05
 
 
 def _band_rows(m_hat: int, cols: int, channels: int) -> int:
@@ -127,14 +129,24 @@ class Decoder:
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
                    interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
                    cells=None) -> np.ndarray:
-    """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
+    """1 / white views where the white carries signal in every channel and the view is delivered, else 0.
+
+    Reading own cells (``cells``), a sample's white is compared with the threshold per unit of its kernel's
+    weight on its own cell: a view read near the micro image's edge puts little weight on the lit pixels
+    but stands for them alone (the weight cancels in capture / white).
+    """
     channels = channel_count(white, cfa)
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
+    weight = None if cells is None else np.empty_like(inverse)
+    ones = None if cells is None else np.ones(white.shape, dtype=np.float32)
     step = _band_rows(m_hat, grid.cols, channels)
     for r0 in range(0, grid.rows, step):
         rows = range(r0, min(r0 + step, grid.rows))
         inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation,
                                                 shift, cells)
+        if cells is not None:
+            weight[:, :, r0:rows.stop] = read_band(ones, grid, m_hat, rows, cfa, demosaic_method, interpolation,
+                                                   shift, cells)
     flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
@@ -145,7 +157,8 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
         w = inverse[ky]
         # a sample carries signal only where every channel does: one dark channel alone would turn a
         # neutral sample magenta or green
-        signal = np.broadcast_to((w > threshold).all(axis=-1, keepdims=True), w.shape)
+        lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
+        signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
         np.divide(np.float32(1.0), w, out=w, where=signal)
         w[~signal] = 0.0
     inverse[~delivered] = 0.0

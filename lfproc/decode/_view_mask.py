@@ -58,12 +58,14 @@ CENTRE_TOLERANCE = 0.1
 #: decode around a measured off-centre disc (off: the measurement is biased on hexagonal Bayer whites, see docs)
 CENTRE_DECODING = False
 #: the furthest (effective pixels) a view's samples are moved off their nominal position
-MAX_SHIFT = 0.5
+MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
-ITERATIONS = 14
+ITERATIONS = 10
 #: move views off nominal to put their mean centroid there (off: per-lens residuals still bias a sweep
 #: on mono renders by -0.02 in a; views are then kept only where the centroid is right at nominal)
-CORRECT_POSITIONS = False
+CORRECT_POSITIONS = True
+#: a pixel the micro image's rim crosses stands for its lit part (see _lit_part_offsets)
+LIT_PART = True
 
 
 @dataclass(frozen=True)
@@ -90,85 +92,117 @@ def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, 
     def spread(n):
         lo, hi = (int(0.2 * n), int(math.ceil(0.8 * n))) if n >= 10 else (0, n)
         per_axis = max(1, int(math.sqrt(count)))
-        step = max(1, (hi - lo) // per_axis)
-        return range(lo, hi, step)
+        return sorted({int(v) for v in np.linspace(lo, hi - 1, min(per_axis, hi - lo))})
     return [(r, q) for r in spread(grid.rows) for q in spread(grid.cols)]
 
 
-def _planes(white, grid, cfa, demosaic_method, lenses, own_cells):
-    """Per probed lens: its centre, patch origin and the demosaiced ``white``, ``white·dx``, ``white·dy``."""
+@dataclass(frozen=True)
+class _Probe:
+    """The probed lenses' patches side by side: ``tiles`` is a list of contiguous ``(L·S, S, ≤4)`` float32
+    images holding, per lens, the demosaiced white, its first moments, and those of a flat image
+    (channels ``6C`` in all); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments``
+    ``(L, 3)`` the raw own-cell white's sum and first moments (for the disc centre)."""
+
+    tiles: list
+    origin: np.ndarray
+    moments: np.ndarray
+    channels: int
+
+
+def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | None:
+    """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor)."""
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
-    out = []
+    size = 2 * half + 2
+    tiles, origin, moments = [], [], []
     for r, q in lenses:
         cx, cy = (float(v) for v in grid.lens_xy(r, q))
-        x0, y0 = max(0, int(cx) - half) & ~1, max(0, int(cy) - half) & ~1   # even: the CFA phase stays
-        x1, y1 = min(w, int(cx) + half + 1), min(h, int(cy) + half + 1)
-        if x1 <= x0 or y1 <= y0:
+        x0, y0 = int(cx) - half & ~1, int(cy) - half & ~1   # even: the CFA phase stays
+        if x0 < 0 or y0 < 0 or x0 + size > w or y0 + size > h:
             continue
-        patch = np.asarray(white[y0:y1, x0:x1], dtype=np.float64)
-        yy, xx = np.mgrid[y0:y1, x0:x1].astype(np.float64)
+        patch = np.asarray(white[y0:y0 + size, x0:x0 + size], dtype=np.float64)
+        yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
         if own_cells:
             own = (cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q)) & (np.hypot(dx, dy) < 1.5 * grid.pitch_px)
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
         if patch.ndim == 3:
             dx, dy = dx[..., None], dy[..., None]
+        rx, ry = _lit_part_offsets(patch, dx, dy, cfa) if LIT_PART else (dx, dy)
         ones = np.ones_like(patch)
         # the white, its first moments, and the same of a flat image (the kernel's own centroid)
         planes = [to_channels(p.astype(np.float32), cfa, demosaic_method)
-                  for p in (patch, patch * dx, patch * dy, ones, ones * dx, ones * dy)]
-        moments = (float(np.sum(patch)), float(np.sum(patch * dx)), float(np.sum(patch * dy)))  # raw, no demosaic
-        out.append((cx, cy, x0, y0, np.concatenate(planes, axis=-1), moments))
-    return out
+                  for p in (patch, patch * rx, patch * ry, ones, ones * dx, ones * dy)]
+        tiles.append(np.concatenate(planes, axis=-1))
+        origin.append((cx - x0, cy - y0 + len(origin) * size))
+        moments.append((np.sum(patch), np.sum(patch * dx), np.sum(patch * dy)))   # raw, no demosaic
+    if not tiles:
+        return None
+    stack = np.concatenate(tiles, axis=0)
+    groups = [np.ascontiguousarray(stack[..., c0:c0 + 4]) for c0 in range(0, stack.shape[2], 4)]
+    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), stack.shape[2] // 6)
 
 
-def _read(stack, cx, cy, x0, y0, off_x, off_y, flag):
-    """The stacked planes read at the view samples: ``(m̂, m̂, 3C)``."""
-    import cv2
+def _lit_part_offsets(patch, dx, dy, cfa):
+    """Where each pixel's lit rays are, from the lens centre: a pixel the rim of the micro image crosses is
+    lit over its inner part only (lit fraction f of the full level), so its rays sit (1 − f)/2 px inwards
+    of its centre along the radius. The full level is the median of the well lit pixels (above half the
+    brightest) of the same Bayer phase (mono: of the patch), so that the gentle fall-off of the interior
+    does not count as a rim."""
+    frac = np.zeros_like(patch)
+    phases = [(slice(py, None, 2), slice(px, None, 2)) for py in (0, 1) for px in (0, 1)] if (
+        cfa != "none" and patch.ndim == 2) else [(slice(None), slice(None))]
+    for sy, sx in phases:
+        sub = patch[sy, sx]
+        top = float(sub.max()) if sub.size else 0.0
+        lit = sub[sub > 0.5 * top]
+        ref = float(np.median(lit)) if lit.size else 0.0
+        frac[sy, sx] = np.clip(sub / ref, 0.0, 1.0) if ref > 0 else 0.0
+    rho = np.maximum(np.hypot(dx, dy), 1e-9)
+    pull = 0.5 * (1.0 - frac)
+    return dx - pull * dx / rho, dy - pull * dy / rho
 
-    map_x = (cx + off_x - x0).astype(np.float32)
-    map_y = (cy + off_y - y0).astype(np.float32)
-    parts = [cv2.remap(np.ascontiguousarray(stack[..., c0:c0 + 4]), map_x, map_y, flag,
-                       borderMode=cv2.BORDER_CONSTANT, borderValue=0).reshape(map_x.shape + (-1,))
-             for c0 in range(0, stack.shape[2], 4)]
-    return np.concatenate(parts, axis=-1)
 
-
-def _centroids(planes, off_x, off_y, flag):
+def _centroids(probe: _Probe, off_x, off_y, flag):
     """Per lens: white level ``(L, m̂, m̂, C)`` and the white-weighted centroid (x, y) of the samples, all
     channels together, from the lens centre, less the kernel's own centroid plus the sample position
     (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the sample
     position (nearest neighbour) is not a fault of the white image."""
-    levels, gx, gy = [], [], []
-    for cx, cy, x0, y0, stack, _ in planes:
-        got = _read(stack, cx, cy, x0, y0, off_x, off_y, flag).astype(np.float64)
-        c = got.shape[-1] // 6
-        lvl, total, flat = got[..., :c], got[..., :c].sum(axis=-1), got[..., 3 * c:4 * c].sum(axis=-1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            own_x = got[..., 4 * c:5 * c].sum(axis=-1) / flat - off_x
-            own_y = got[..., 5 * c:].sum(axis=-1) / flat - off_y
-            gx.append(np.where(total > 0, got[..., c:2 * c].sum(axis=-1) / total - own_x, np.nan))
-            gy.append(np.where(total > 0, got[..., 2 * c:3 * c].sum(axis=-1) / total - own_y, np.nan))
-        levels.append(lvl)
-    return np.array(levels), np.array(gx), np.array(gy)
+    import cv2
+
+    n, m = probe.origin.shape[0], off_x.shape[0]
+    map_x = (probe.origin[:, 0, None, None] + off_x[None]).astype(np.float32).reshape(n * m, m)
+    map_y = (probe.origin[:, 1, None, None] + off_y[None]).astype(np.float32).reshape(n * m, m)
+    got = np.concatenate([cv2.remap(t, map_x, map_y, flag, borderMode=cv2.BORDER_CONSTANT,
+                                    borderValue=0).reshape(n, m, m, -1) for t in probe.tiles],
+                         axis=-1).astype(np.float64)
+    c = probe.channels
+    lvl, total, flat = got[..., :c], got[..., :c].sum(axis=-1), got[..., 3 * c:4 * c].sum(axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        own_x = got[..., 4 * c:5 * c].sum(axis=-1) / flat - off_x
+        own_y = got[..., 5 * c:].sum(axis=-1) / flat - off_y
+        gx = np.where(total > 0, got[..., c:2 * c].sum(axis=-1) / total - own_x, np.nan)
+        gy = np.where(total > 0, got[..., 2 * c:3 * c].sum(axis=-1) / total - own_y, np.nan)
+    return lvl, gx, gy
 
 
 def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag):
-    """Mean centroid error (x, y) over the lenses where each view is lit, ``(m̂, m̂)`` each (px)."""
-    _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
+    """Mean centroid error (x, y) over the lenses where each view is lit, ``(m̂, m̂)`` each (px), and the
+    share of those lenses on which the samples read light in every channel (the mean is over them)."""
+    level, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
     ex, ey = gx - tx, gy - ty
-    use = lit & np.isfinite(ex) & np.isfinite(ey)
+    use = lit & np.isfinite(ex) & np.isfinite(ey) & (level.min(axis=-1) > 0)
     n = use.sum(axis=0)
     mean_x = np.where(n > 0, np.where(use, ex, 0.0).sum(axis=0) / np.maximum(n, 1), np.inf)
     mean_y = np.where(n > 0, np.where(use, ey, 0.0).sum(axis=0) / np.maximum(n, 1), np.inf)
-    return mean_x, mean_y
+    return mean_x, mean_y, n / np.maximum(lit.sum(axis=0), 1)
 
 
-def disc_centre(planes) -> tuple[float, float]:
+def disc_centre(probe: _Probe) -> tuple[float, float]:
     """Mean white-weighted centre (x, y) of the probed lenses' own cells, relative to their lens centres."""
-    cs = [(mx / total, my / total) for *_, (total, mx, my) in planes if total > 0]
-    return tuple(float(v) for v in np.mean(cs, axis=0)) if cs else (0.0, 0.0)
+    total, mx, my = probe.moments.T
+    ok = total > 0
+    return (float(np.mean(mx[ok] / total[ok])), float(np.mean(my[ok] / total[ok]))) if ok.any() else (0.0, 0.0)
 
 
 def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
@@ -177,9 +211,9 @@ def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
     base = shift.copy()
     best, best_err = shift.copy(), np.full((m_hat, m_hat), np.inf)
     for i in range(ITERATIONS + 1):
-        ex, ey = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
+        ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
         err = np.hypot(ex, ey)
-        better = err < best_err
+        better = (err < best_err) & (covered >= REQUIRED_FRACTION)
         best[better], best_err[better] = shift[better], err[better]
         if i == ITERATIONS:
             break
@@ -203,7 +237,7 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     c = (m_hat - 1) // 2
     planes = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True)
     nom_x, nom_y = view_offsets_px(grid, m_hat)
-    if not planes:
+    if planes is None:
         return ViewSampling(np.ones((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2)), (0.0, 0.0), False,
                             np.zeros((m_hat, m_hat)), np.ones((m_hat, m_hat)))
     centre = disc_centre(planes)
@@ -218,14 +252,17 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     lit = (np.nan_to_num(ratio, nan=0.0) >= LIT_FRACTION) & centre_lit[:, None, None]
     n_lenses = max(1, int(centre_lit.sum()))
     lit_share = lit.sum(axis=0) / n_lenses
-    if CORRECT_POSITIONS:
-        shift, residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
-        right = np.broadcast_to(residual <= tolerance, lit.shape) & lit
-    else:      # per lens: the centroid at the nominal position must be right
-        _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
-        err = np.nan_to_num(np.hypot(gx - tx, gy - ty) / eff, nan=np.inf)
-        right = lit & (err <= tolerance)
-        residual = np.sort(np.where(lit, err, np.inf), axis=0)[min(len(planes) - 1, n_lenses // 2)]  # ~median
+    # per lens: is the centroid right at the nominal position?
+    _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
+    err = np.nan_to_num(np.hypot(gx - tx, gy - ty) / eff, nan=np.inf)
+    right = lit & (err <= tolerance)
+    residual = np.sort(np.where(lit, err, np.inf), axis=0)[min(planes.origin.shape[0] - 1, n_lenses // 2)]  # ~median
+    if CORRECT_POSITIONS:     # the views not right at nominal are read where their mean centroid is
+        fine = right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)
+        moved, moved_residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
+        shift = np.where(fine[..., None], shift, moved)
+        residual = np.where(fine, residual, moved_residual)
+        right = right | (~fine & (moved_residual <= tolerance))[None] & lit
     delivered = (lit_share >= REQUIRED_FRACTION) & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1))
     delivered[c, c] = delivered[c, c] or not lit.any()
     delivered = symmetric(delivered)
@@ -257,7 +294,7 @@ def centroid_errors(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, dem
     planes = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, own_cells)
     nom_x, nom_y = view_offsets_px(grid, m_hat)
     off_x, off_y = view_offsets_px(grid, m_hat, shift)
-    if not planes:
+    if planes is None:
         return np.full((0, m_hat, m_hat), np.nan), np.zeros((0, m_hat, m_hat))
     level, gx, gy = _centroids(planes, off_x, off_y, flag)
     return np.hypot(gx - nom_x, gy - nom_y), level.min(axis=-1)
