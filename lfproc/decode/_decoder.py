@@ -137,30 +137,30 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     """
     channels = channel_count(white, cfa)
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
-    weight = None if cells is None else np.empty_like(inverse)
-    ones = None if cells is None else np.ones(white.shape, dtype=np.float32)
     step = _band_rows(m_hat, grid.cols, channels)
-    for r0 in range(0, grid.rows, step):
-        rows = range(r0, min(r0 + step, grid.rows))
-        inverse[:, :, r0:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation,
-                                                shift, cells)
-        if cells is not None:
-            weight[:, :, r0:rows.stop] = read_band(ones, grid, m_hat, rows, cfa, demosaic_method, interpolation,
-                                                   shift, cells)
+    bands = [range(r0, min(r0 + step, grid.rows)) for r0 in range(0, grid.rows, step)]
+    for rows in bands:
+        inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
+                                                        interpolation, shift, cells)
     flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
         raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
     threshold = np.float32(dark_fraction * bright)
-    for ky in range(m_hat):      # per view row: the boolean temporaries stay small
-        w = inverse[ky]
-        # a sample carries signal only where every channel does: one dark channel alone would turn a
-        # neutral sample magenta or green
-        lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
-        signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
-        np.divide(np.float32(1.0), w, out=w, where=signal)
-        w[~signal] = 0.0
+    ones = None if cells is None else np.broadcast_to(np.float32(1.0), white.shape)   # no full-size copy
+    for rows in bands:
+        band = inverse[:, :, rows.start:rows.stop]
+        weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
+                                                      interpolation, shift, cells)
+        for ky in range(m_hat):      # per view row: the boolean temporaries stay small
+            w = band[ky]
+            # a sample carries signal only where every channel does: one dark channel alone would turn a
+            # neutral sample magenta or green
+            lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
+            signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
+            np.divide(np.float32(1.0), w, out=w, where=signal)
+            w[~signal] = 0.0
     inverse[~delivered] = 0.0
     return inverse
 

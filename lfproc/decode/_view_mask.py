@@ -11,27 +11,33 @@ a (issue 13). Lit pixels of the neighbouring micro image (crosstalk) are kept ou
 lens from its own cell (:mod:`._cells`).
 
 This probe works on the white image alone, at up to :data:`PROBED_LENSES` lenses away from the sensor
-border, by reading the white image and the white image times each pixel's offset from the lens
-centre with the decoder's own kernel (own cell, demosaicing, interpolation):
+border (their patches side by side, so that one ``remap`` reads them all), by reading the white image
+and the white image times each pixel's offset from the lens centre with the decoder's own kernel (own
+cell, demosaicing, interpolation); the kernel's own centroid (a flat image read the same way) is taken
+off, so that nearest-neighbour reading is not counted against the white image:
 
-1. **The lit disc.** The white-weighted centroid of each lens's own cell, averaged over lenses and
-   channels, is where the lit micro image is centred. If it lies more than :data:`CENTRE_TOLERANCE`
-   effective pixels off the grid's lens centres, every view is read around it instead (the views are
-   decoded centred on the light; :attr:`ViewSampling.centre_offset_px` says by how much).
+1. **The lit disc.** The white-weighted centre of each lens's own cell, averaged over lenses, is
+   measured (:attr:`ViewSampling.centre_offset_px`). Reading the views around it when it is off the
+   grid's centres (:data:`CENTRE_DECODING`) is written but off: on hexagonal Bayer white images the
+   raw mosaic's centre is biased by the colour channels' gains (−0.25 px on the Lytro sample, whose
+   discs are centred), so an off-centre disc is reported, not corrected.
 2. **Views inside it.** View k is lit at a lens where its white sample at the nominal position is at
-   least :data:`LIT_FRACTION` of the central view's, in every channel. The edge of a blurred disc reads
-   half its interior, so this keeps exactly the views whose ray passes through the aperture (or the
+   least :data:`LIT_FRACTION` of the central view's (channel mean). The edge of a blurred disc reads
+   half its interior, so this keeps the views whose ray passes through the aperture (or the
    objective's NA), and never one that reads the dark gaps between micro images, however much the
    division by the white image would amplify them.
-3. **Where to read them.** Each view's samples are moved off nominal until their white-weighted
-   centroid, averaged over the probed lenses, is the nominal position (a few fixed-point steps, at most
-   :data:`MAX_SHIFT` effective pixels): the outer views are read a little further out, where their rays
-   really are.
+3. **Where to read them.** A view whose centroid is right at nominal (within ``tolerance`` at
+   :data:`REQUIRED_FRACTION` of the lenses it is lit on) is read there. Any other view is moved off
+   nominal until the white-weighted centroid of its samples, averaged over the probed lenses on which
+   they read light in every channel, is the nominal position (:data:`ITERATIONS` fixed-point steps, at
+   most :data:`MAX_SHIFT` effective pixels; a larger move over-corrected the renders, +0.011 in a). A
+   pixel the rim of the micro image crosses counts at the centre of its lit part
+   (:func:`_lit_part_offsets`): without that the outer ring stayed compressed (−0.03…−0.07 in a).
 
-A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its corrected
-centroid is within ``tolerance`` of nominal; the set is made symmetric (a view and its mirror images
-both or neither), so slices stay evenly bright. Deciding per view (not per sample) keeps every slice
-evenly bright; all of it is a pure function of (white, grid, m̂, CFA, settings).
+A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its
+(corrected) centroid is right; the set is made symmetric (a view and its mirror images both or
+neither), so slices stay evenly bright, and :func:`carrying_views` drops views whose samples carry no
+signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
 """
 
 from __future__ import annotations
