@@ -168,7 +168,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
                  interpolation: str = "linear", demosaic_method: str = "fast",
                  dark_fraction: float = 0.05, centroid_tolerance: float | None = 0.1,
-                 crosstalk_tolerance: float = 0.25, whole_lenses: bool = True) -> Decoder:
+                 whole_lenses: bool = True) -> Decoder:
     """Prepare a :class:`Decoder`: the views it delivers, the lenses it keeps, the white's inverse views.
 
     Parameters
@@ -185,11 +185,11 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         Samples whose white value is below this fraction of the white's bright level (its 99th
         percentile) in any channel carry no signal and decode to 0 in every channel.
     centroid_tolerance : float or None
-        A view is delivered only where its samples' white-weighted centroid lies within this many
-        effective pixels of its nominal position (see :mod:`lfproc.decode`); other views are 0.
-        ``None`` delivers every view the white image lights (biased parallax at the micro image edges).
-    crosstalk_tolerance : float
-        ... and where at most this share of the samples' white comes from other lenses' cells.
+        A view is delivered only where it is lit at its nominal position and its samples' white-weighted
+        centroid lies (at nominal, or read further out: :mod:`lfproc.decode._view_mask`) within this many
+        effective pixels of its nominal position; every lens is read from its own cell. Other views are 0.
+        ``None`` reads every view at nominal from the plain sensor image and delivers all of them (the
+        old decoder: biased parallax and crosstalk at the micro image edges, views in the gaps).
     whole_lenses : bool
         Crop the grid to the lenses whose delivered samples all lie on the sensor (default); ``False``
         keeps every lens of ``grid`` (partial lenses then read 0 past the sensor border).
