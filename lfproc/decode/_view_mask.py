@@ -57,7 +57,7 @@ from ._resample import cv_flag
 PROBED_LENSES = 400
 #: a view is delivered where it is lit (and right) at this fraction of the probed lenses
 REQUIRED_FRACTION = 0.9
-#: a view is lit at a lens where its white reaches this fraction of the central view's (every channel)
+#: a view is lit at a lens where its white reaches this fraction of the central view's (channel mean)
 LIT_FRACTION = 0.4
 #: the lit disc is decoded centred when its centre is further than this (effective pixels) off the grid's
 CENTRE_TOLERANCE = 0.1
@@ -67,11 +67,6 @@ CENTRE_DECODING = False
 MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
 ITERATIONS = 10
-#: move views off nominal to put their mean centroid there (off: per-lens residuals still bias a sweep
-#: on mono renders by -0.02 in a; views are then kept only where the centroid is right at nominal)
-CORRECT_POSITIONS = True
-#: a pixel the micro image's rim crosses stands for its lit part (see _lit_part_offsets)
-LIT_PART = True
 
 
 @dataclass(frozen=True)
@@ -130,11 +125,12 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
         yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
         if own_cells:
-            own = (cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q)) & (np.hypot(dx, dy) < 1.5 * grid.pitch_px)
+            own = ((cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q))
+                   & (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
         if patch.ndim == 3:
             dx, dy = dx[..., None], dy[..., None]
-        rx, ry = _lit_part_offsets(patch, dx, dy, cfa) if LIT_PART else (dx, dy)
+        rx, ry = _lit_part_offsets(patch, dx, dy, cfa)      # where each pixel's lit rays are
         ones = np.ones_like(patch)
         # the white, its first moments, and the same of a flat image (the kernel's own centroid)
         planes = [to_channels(p.astype(np.float32), cfa, demosaic_method)
@@ -262,14 +258,16 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     _, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
     err = np.nan_to_num(np.hypot(gx - tx, gy - ty) / eff, nan=np.inf)
     right = lit & (err <= tolerance)
-    residual = np.sort(np.where(lit, err, np.inf), axis=0)[min(planes.origin.shape[0] - 1, n_lenses // 2)]  # ~median
-    if CORRECT_POSITIONS:     # the views not right at nominal are read where their mean centroid is
-        fine = right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)
-        moved, moved_residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
-        shift = np.where(fine[..., None], shift, moved)
-        residual = np.where(fine, residual, moved_residual)
-        right = right | (~fine & (moved_residual <= tolerance))[None] & lit
-    delivered = (lit_share >= REQUIRED_FRACTION) & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1))
+    median = min(planes.origin.shape[0] - 1, n_lenses // 2)
+    residual = np.sort(np.where(lit, err, np.inf), axis=0)[median]
+    # the views not right at nominal are read where their mean centroid is
+    fine = right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)
+    moved, moved_residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
+    shift = np.where(fine[..., None], shift, moved)
+    residual = np.where(fine, residual, moved_residual)
+    right = right | (~fine & (moved_residual <= tolerance))[None] & lit
+    delivered = ((lit_share >= REQUIRED_FRACTION)
+                 & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)))
     delivered[c, c] = delivered[c, c] or not lit.any()
     delivered = symmetric(delivered)
     shift[~delivered] = 0.0
