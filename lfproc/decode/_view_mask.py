@@ -55,6 +55,8 @@ from ._resample import cv_flag
 
 #: the most lenses probed (spread over the central 60 % of the grid)
 PROBED_LENSES = 400
+#: fewer probed lenses than this (a grid of a few lenses) decide only which views are lit at all, at nominal
+MIN_PROBED = 4
 #: a view is delivered where it is lit (and right) at this fraction of the probed lenses
 REQUIRED_FRACTION = 0.9
 #: a view is lit at a lens where its white reaches this fraction of the central view's (channel mean)
@@ -118,10 +120,13 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
     tiles, origin, moments = [], [], []
     for r, q in lenses:
         cx, cy = (float(v) for v in grid.lens_xy(r, q))
-        x0, y0 = int(cx) - half & ~1, int(cy) - half & ~1   # even: the CFA phase stays
-        if x0 < 0 or y0 < 0 or x0 + size > w or y0 + size > h:
+        x0, y0 = int(math.floor(cx)) - half & ~1, int(math.floor(cy)) - half & ~1   # even: the CFA phase stays
+        xs, ys = max(0, x0), max(0, y0)
+        xe, ye = min(w, x0 + size), min(h, y0 + size)
+        if xe <= xs or ye <= ys:
             continue
-        patch = np.asarray(white[y0:y0 + size, x0:x0 + size], dtype=np.float64)
+        patch = np.zeros((size, size) + white.shape[2:], dtype=np.float64)    # black beyond the sensor
+        patch[ys - y0:ye - y0, xs - x0:xe - x0] = white[ys:ye, xs:xe]
         yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
         if own_cells:
@@ -242,6 +247,12 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     if planes is None:
         return ViewSampling(np.ones((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2)), (0.0, 0.0), False,
                             np.zeros((m_hat, m_hat)), np.ones((m_hat, m_hat)))
+    if planes.origin.shape[0] < MIN_PROBED:      # too few lenses to tell a micro image from noise
+        level, _, _ = _centroids(planes, nom_x, nom_y, flag)
+        lit = np.all(level.min(axis=-1) > 0, axis=0)
+        lit[c, c] = True
+        return ViewSampling(symmetric(lit), np.zeros((m_hat, m_hat, 2)), disc_centre(planes), False,
+                            np.zeros((m_hat, m_hat)), lit.astype(float))
     centre = disc_centre(planes)
     centred = CENTRE_DECODING and math.hypot(*centre) > CENTRE_TOLERANCE * eff
     tx, ty = (nom_x + centre[0], nom_y + centre[1]) if centred else (nom_x, nom_y)
