@@ -66,6 +66,10 @@ def test_dark_samples_are_zero_not_nan():
     sensor = np.full_like(white, 0.7)
     views = decode(sensor, white, aligned_grid(m, rows, cols), m, interpolation="nearest")
     assert np.all(np.isfinite(views))
+    # the dark view row is not delivered, nor (so that slices stay evenly bright) its mirror
+    assert np.all(views[0] == 0.0) and np.all(views[-1] == 0.0) and np.allclose(views[1:-1], 0.7)
+    # every view delivered: the dark samples alone are 0
+    views = decode(sensor, white, aligned_grid(m, rows, cols), m, interpolation="nearest", centroid_tolerance=None)
     assert np.all(views[0] == 0.0) and np.allclose(views[1:], 0.7)
 
 

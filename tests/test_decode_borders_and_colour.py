@@ -98,10 +98,15 @@ def test_a_grey_card_decodes_grey_within_the_noise(grey_card, method):
     photons, read_rel = 4000 * 0.8, 20 / (65535 * 0.8)
     sigma = 0.5 * math.sqrt(1 / (photons * 0.5) + 1 / photons + (read_rel / 0.5) ** 2 + read_rel ** 2)
     delivered = views[decoder.views_delivered]
+    # the outer views (won back, issue 20) stand for the partly lit pixels at the micro image's rim: a
+    # sample whose white is a fraction f of the bright level has the noise of a pixel at f, σ/√f
+    white_views = 1.0 / decoder.inverse_white[:, :, 1:-1, 1:-1][decoder.views_delivered]
+    bright = np.percentile(white_views, 99, axis=(0, 1, 2))
     for ch in range(3):
         values = delivered[..., ch]
         assert values.std() <= sigma                       # measured 0.010 against sigma = 0.016
-        assert np.abs(values - 0.5).max() <= 6 * sigma     # a Gaussian tail over ~1e5 samples: < 4.5 sigma
+        allowed = 6 * sigma * np.sqrt(np.maximum(1.0, bright[ch] / white_views[..., ch]))
+        assert np.all(np.abs(values - 0.5) <= allowed)     # a Gaussian tail over ~1e5 samples: < 4.5 sigma
     spans = [np.percentile(delivered[..., ch], 99) - np.percentile(delivered[..., ch], 1) for ch in range(3)]
     assert spans[1] <= 1.25 * min(spans[0], spans[2])     # G no wider than R and B (the issue: 0.48 vs 0.30)
 

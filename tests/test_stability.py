@@ -783,13 +783,21 @@ def test_white_image_with_zeros_and_negatives_decodes_without_nan(interpolation)
     white[rng.random(white.shape) < 0.3] = 0.0
     white[rng.random(white.shape) < 0.05] = -1e-3
     sensor = rng.random(white.shape).astype(np.float32)
-    views = decode(sensor, white, aligned_grid(m, rows, cols), m, interpolation=interpolation)
-    assert np.all(np.isfinite(views))
     w = micro_images(white, m, rows, cols)
     s = micro_images(sensor, m, rows, cols)
     signal = w > 0.05 * np.percentile(w, 99)          # the documented dark_fraction rule, default 0.05
     expected = np.where(signal, s / np.where(signal, w, 1.0), 0.0)
+    # every view delivered: sample by sample
+    views = decode(sensor, white, aligned_grid(m, rows, cols), m, interpolation=interpolation,
+                   centroid_tolerance=None)
+    assert np.all(np.isfinite(views))
     np.testing.assert_allclose(views, expected, rtol=1e-6, atol=0)
+    # the default delivers the views this speckled white image lights (the others are 0), by the same rule
+    decoder = make_decoder(white, aligned_grid(m, rows, cols), m, interpolation=interpolation)
+    views = decoder(sensor)
+    delivered = decoder.views_delivered
+    assert np.all(np.isfinite(views)) and np.all(views[~delivered] == 0.0)
+    np.testing.assert_allclose(views[delivered], expected[delivered], rtol=1e-6, atol=0)
 
 
 def test_white_image_with_zeros_on_a_rotated_grid_has_no_nan():

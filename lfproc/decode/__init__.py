@@ -14,8 +14,12 @@ over bands of lens rows:
   white balance included for colour sensors. Samples where the white image is darker than
   ``dark_fraction`` of its bright level in any channel carry no signal and are set to 0 in every
   channel (never NaN, never one channel alone: that would colour them).
-* **Delivered views** (``_view_mask``): only views whose samples read their own lens's lit micro image
-  are delivered; the others are 0 everywhere — see *the refocus bias* below.
+* **Own cells** (``_cells``): every lens is read from its own cell only (the pixels nearer to its
+  centre than to any other), demosaicing included, so no sample mixes in the neighbouring micro image.
+* **Delivered views** (``_view_mask``): exactly the views lit at their nominal position (inside the main
+  lens aperture or the objective's NA, never the gaps between micro images), symmetric; an outer view
+  whose samples' white-weighted centroid is off nominal is read further out, where its rays are — see
+  *the refocus bias* below.
 * **Whole lenses** (``_whole_lenses``): by default the grid is cropped to the lenses whose delivered
   samples all lie on the sensor, so no partial lens leaks black or extrapolated samples; the light
   field's grid is the cropped one, so lens indices stay those of refocusing and depth.
@@ -36,16 +40,17 @@ The refocus bias (issue 13) and its cause
     the division, so the sample's white-weighted centroid — the ray direction it really stands for —
     moves inwards, and lit pixels of the neighbouring micro image enter as crosstalk. The sample
     positions, the effective pitch (pitch/m̂ in both the decoder and ``geometry``) and the truth were
-    right. The fix measures that centroid from the white image itself (``_view_mask``) and delivers
-    only views whose centroid is within ``centroid_tolerance`` (0.1 effective pixel) of nominal; a
-    sweep then peaks within 0.002 of the true a (``tests/test_decode_bias.py``). The cost: fewer
-    views at the rim (for 12 px lenses at f-number match, 45 of 121 with Bayer demosaicing, 69 mono).
+    right. The decoder measures that centroid from the white image itself (``_view_mask``): views right
+    at nominal are read there, the others are read up to 0.75 effective pixel further out, where the
+    mean centroid is nominal (a rim pixel counting at the centre of its lit part), and delivered if that
+    works; a sweep then peaks within 0.006 of the true a (``tests/test_decode_bias.py``) with 89 of the
+    97 views inside the aperture (mono, hexagonal RGGB) and 77 (rectangular RGGB) instead of 45–69.
     Two measurement traps found on the way: linearly interpolated refocusing peaks towards integer a
     (1.93 → 2.00 on exactly shifted synthetic views), and the simulator's ideal views that the stop
     cuts partly (weight < 1) have the same inward centroid (ideal views with them: 1.896).
 
-Crosstalk. With micro images that fill their cells, the outer ring of views reads the neighbouring
-micro image; those views are not delivered (above).
+Crosstalk. With micro images that fill their cells, the outer ring of views would read the
+neighbouring micro image; reading every lens from its own cell keeps it out.
 
 The white image's views depend only on the white image, the grid and the settings, so a
 :class:`Decoder` computes them once and then decodes any number of captures.
@@ -56,8 +61,8 @@ from ._demosaic import DEMOSAIC_METHODS, demosaic, to_channels
 from ._hexagonal import hex_to_rect
 from ._positions import remap_maps, sample_positions
 from ._resample import INTERPOLATIONS, resample_views
-from ._view_mask import centroid_errors
+from ._view_mask import centroid_errors, view_sampling
 
 __all__ = ["DEMOSAIC_METHODS", "INTERPOLATIONS", "Decoder", "centroid_errors", "decode", "decode_capture",
            "demosaic", "hex_to_rect", "make_decoder", "remap_maps", "resample_views", "sample_positions",
-           "to_channels"]
+           "to_channels", "view_sampling"]

@@ -12,61 +12,63 @@ from ._demosaic import DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._view_mask import faithful_views
+from ._cells import CLASSES, cell_classes, masked
+from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
 LEVEL_SAMPLES = 4_000_000
+#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
+MIN_OWN_WEIGHT = 0.05
 
 
 def _band_rows(m_hat: int, cols: int, channels: int) -> int:
     return max(2, BAND_BYTES // max(1, m_hat * m_hat * cols * channels * 4))
 
 
-def view_runs(delivered: np.ndarray) -> list[tuple[int, int, int]]:
-    """``(ky, kx0, kx1)`` per view row with delivered views: the run from its first to its last one.
-
-    Only these views are resampled and devignetted; the others are 0 and never computed (for a
-    round aperture the runs hold about π/4 of the views of their bounding square)."""
-    runs = []
-    for ky, row in enumerate(np.asarray(delivered, dtype=bool)):
-        kx = np.flatnonzero(row)
-        if kx.size:
-            runs.append((ky, int(kx[0]), int(kx[-1]) + 1))
-    return runs
-
-
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
-              interpolation: str, runs: list | None = None, scratch: np.ndarray | None = None) -> np.ndarray:
+              interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None) -> np.ndarray:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
-    With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
-    ``scratch``, a flat float32 buffer reused from band to band, holds the result where it is large
-    enough (a fresh band-sized array costs its page faults again for every band).
+    ``shift`` moves each view's samples (:func:`view_offsets_px`); ``cells``, the sensor's lens class map
+    (:mod:`._cells`), makes every lens read its own cell only (else the plain sensor image is read).
     """
-    runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
-    y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0])
-    strip = to_channels(sensor[y0:y1], cfa, demosaic_method)
-    channels = strip.shape[2]
-    n = len(rows)
-    shape = (m_hat, m_hat * n, grid.cols, channels)
-    size = int(np.prod(shape))
-    out = scratch[:size].reshape(shape) if scratch is not None and scratch.size >= size else \
-        np.empty(shape, dtype=np.float32)
-    flag = cv_flag(interpolation)
-    if strip.shape[0] == 0:
+    y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0], shift)
+    channels = channel_count(sensor, cfa)
+    out = np.empty((m_hat, m_hat, len(rows), grid.cols, channels), dtype=np.float32)
+    if y1 <= y0:
         out[...] = 0.0
-    else:
-        strip = np.ascontiguousarray(strip)
-        maps = band_maps(grid, m_hat, rows, y0)
-        for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
-            map_x, map_y = maps[ky]
-            remap_into(out[ky, kx0 * n:kx1 * n], strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
-    return out.reshape(m_hat, m_hat, n, grid.cols, channels)
+        return out
+    flag = cv_flag(interpolation)
+    maps = band_maps(grid, m_hat, rows, y0, shift)
+    if cells is None:
+        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
+        flat = out.reshape(m_hat, m_hat * len(rows), grid.cols, channels)
+        for ky, (map_x, map_y) in enumerate(maps):
+            remap_into(flat[ky], strip, map_x, map_y, flag)
+        return out
+    classes = cells[y0:y1]
+    raw = sensor[y0:y1]
+    for cls in range(CLASSES):
+        first_row = rows.start + ((cls // 2 - rows.start) % 2)      # the band's first row of this class
+        first_col = cls % 2
+        if first_row >= rows.stop or first_col >= grid.cols:
+            continue
+        rsel = slice(first_row - rows.start, None, 2)
+        qsel = slice(first_col, None, 2)
+        strip = np.ascontiguousarray(to_channels(masked(raw, classes, cls), cfa, demosaic_method))
+        for ky, (map_x, map_y) in enumerate(maps):
+            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
+            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
+            part = np.empty(mx.shape + (channels,), dtype=np.float32)
+            remap_into(part.reshape(-1, mx.shape[2], channels), strip, mx.reshape(-1, mx.shape[2]),
+                       my.reshape(-1, mx.shape[2]), flag)
+            out[ky][:, rsel, qsel] = part
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,6 +88,8 @@ class Decoder:
     inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C) on ``grid``: 1 / white views where delivered, else 0
     output_grid: LensGrid        # lens positions of the decoded light field (rectangular, also for hex input)
     views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
+    view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
+    cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -107,72 +111,64 @@ class Decoder:
                               f"{self.channels}; use a white image taken with the same camera settings")
         m, grid = self.m_hat, self.grid
         out_grid = self.output_grid
-        # zeros: the views never delivered are never written, so their memory is never touched either
-        out = np.zeros((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
-        runs = view_runs(np.ones((m, m), bool) if self.views_delivered is None else self.views_delivered)
+        out = np.empty((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
         step = _band_rows(m, grid.cols, self.channels)
-        scratch = None
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            if scratch is None:   # the first band is the largest (hexagonal bands read one or two rows more)
-                scratch = np.empty(m * m * (len(rows) + 2) * grid.cols * self.channels, dtype=np.float32)
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation, runs,
-                              scratch)
-            for ky, kx0, kx1 in runs:
-                run = views[ky:ky + 1, kx0:kx1]
-                run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
-                dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
-                if grid.kind == "hexagonal":
-                    hex_rows_to_rect(run, rows.start, out_rows, dst)
-                else:
-                    dst[...] = run
+            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
+                              self.view_shift_px, self.cells)
+            views *= self.inverse_white[:, :, rows.start:rows.stop]
+            if grid.kind == "hexagonal":
+                hex_rows_to_rect(views, rows.start, out_rows, out[:, :, out_rows.start:out_rows.stop])
+            else:
+                out[:, :, out_rows.start:out_rows.stop] = views
         return out
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
-                   interpolation: str, dark_fraction: float, delivered: np.ndarray) -> np.ndarray:
-    """1 / white views where the white carries signal in every channel and the view is delivered, else 0."""
+                   interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
+                   cells=None) -> np.ndarray:
+    """1 / white views where the white carries signal in every channel and the view is delivered, else 0.
+
+    Reading own cells (``cells``), a sample's white is compared with the threshold per unit of its kernel's
+    weight on its own cell: a view read near the micro image's edge puts little weight on the lit pixels
+    but stands for them alone (the weight cancels in capture / white).
+    """
     channels = channel_count(white, cfa)
-    # zeros: only the runs of delivered views are computed (and their memory touched)
-    inverse = np.zeros((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
-    c = (m_hat - 1) // 2
-    runs = view_runs(delivered) or [(c, c, c + 1)]   # none delivered: the central view for the level alone
+    inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
     step = _band_rows(m_hat, grid.cols, channels)
-    scratch = np.empty(m_hat * m_hat * min(step, grid.rows) * grid.cols * channels, dtype=np.float32)
-    for r0 in range(0, grid.rows, step):
-        rows = range(r0, min(r0 + step, grid.rows))
-        band = read_band(white, grid, m_hat, rows, cfa, demosaic_method, interpolation, runs, scratch)
-        for ky, kx0, kx1 in runs:
-            inverse[ky, kx0:kx1, r0:rows.stop] = band[ky, kx0:kx1]
-    # the bright level over the views delivered (a strided subset): the others are 0 and carry no signal
-    total = sum((kx1 - kx0) for _, kx0, kx1 in runs) * grid.rows * grid.cols * channels
-    stride = max(1, total // LEVEL_SAMPLES)
-    subset = np.concatenate([inverse[ky, kx0:kx1].reshape(-1)[::stride] for ky, kx0, kx1 in runs])
+    bands = [range(r0, min(r0 + step, grid.rows)) for r0 in range(0, grid.rows, step)]
+    for rows in bands:
+        inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
+                                                        interpolation, shift, cells)
+    flat = inverse.reshape(-1)
+    subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
         raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
-    if not delivered.any():
-        inverse[c, c] = 0.0
-        return inverse
     threshold = np.float32(dark_fraction * bright)
-    for ky, kx0, kx1 in runs:      # per view row: the boolean temporaries stay small
-        w = inverse[ky, kx0:kx1]
-        # a sample carries signal only where every channel does: one dark channel alone would turn a
-        # neutral sample magenta or green
-        signal = np.broadcast_to((w > threshold).all(axis=-1, keepdims=True), w.shape)
-        np.divide(np.float32(1.0), w, out=w, where=signal)
-        w[~signal] = 0.0
-        for kx in range(kx0, kx1):   # gaps inside a run (a mask that is not convex)
-            if not delivered[ky, kx]:
-                w[kx - kx0] = 0.0
+    ones = None if cells is None else np.broadcast_to(np.float32(1.0), white.shape)   # no full-size copy
+    for rows in bands:
+        band = inverse[:, :, rows.start:rows.stop]
+        weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
+                                                      interpolation, shift, cells)
+        for ky in range(m_hat):      # per view row: the boolean temporaries stay small
+            w = band[ky]
+            # a sample carries signal only where every channel does: one dark channel alone would turn a
+            # neutral sample magenta or green
+            lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
+            signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
+            np.divide(np.float32(1.0), w, out=w, where=signal)
+            w[~signal] = 0.0
+    inverse[~delivered] = 0.0
     return inverse
 
 
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
                  interpolation: str = "linear", demosaic_method: str = "fast",
                  dark_fraction: float = 0.05, centroid_tolerance: float | None = 0.1,
-                 crosstalk_tolerance: float = 0.25, whole_lenses: bool = True) -> Decoder:
+                 whole_lenses: bool = True) -> Decoder:
     """Prepare a :class:`Decoder`: the views it delivers, the lenses it keeps, the white's inverse views.
 
     Parameters
@@ -189,11 +185,11 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         Samples whose white value is below this fraction of the white's bright level (its 99th
         percentile) in any channel carry no signal and decode to 0 in every channel.
     centroid_tolerance : float or None
-        A view is delivered only where its samples' white-weighted centroid lies within this many
-        effective pixels of its nominal position (see :mod:`lfproc.decode`); other views are 0.
-        ``None`` delivers every view the white image lights (biased parallax at the micro image edges).
-    crosstalk_tolerance : float
-        ... and where at most this share of the samples' white comes from other lenses' cells.
+        A view is delivered only where it is lit at its nominal position and its samples' white-weighted
+        centroid lies (at nominal, or read further out: :mod:`lfproc.decode._view_mask`) within this many
+        effective pixels of its nominal position; every lens is read from its own cell. Other views are 0.
+        ``None`` reads every view at nominal from the plain sensor image and delivers all of them (the
+        old decoder: biased parallax and crosstalk at the micro image edges, views in the gaps).
     whole_lenses : bool
         Crop the grid to the lenses whose delivered samples all lie on the sensor (default); ``False``
         keeps every lens of ``grid`` (partial lenses then read 0 past the sensor border).
@@ -212,19 +208,26 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
     if centroid_tolerance is None:
-        delivered = np.ones((m_hat, m_hat), dtype=bool)
+        delivered, shift, cells = np.ones((m_hat, m_hat), dtype=bool), None, None
     else:
-        delivered = faithful_views(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction,
-                                   centroid_tolerance, crosstalk_tolerance)
+        sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
+        delivered, shift = sampling.delivered, sampling.shift_px
     if whole_lenses:
-        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape)
+        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
     if grid.kind == "hexagonal":
         check_hex_size(grid.rows, grid.cols)
-    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered)
+    if centroid_tolerance is not None:
+        cells = cell_classes(grid, white.shape)
+    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
+                             shift, cells)
+    if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
+        kept = carrying_views(inverse, delivered)
+        inverse[~kept] = 0.0
+        delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells)
 
 
 def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):

@@ -24,32 +24,40 @@ def check_m_hat(m_hat: int) -> int:
     return int(m_hat)
 
 
-def view_offsets_px(grid: LensGrid, m_hat: int) -> tuple[np.ndarray, np.ndarray]:
+def view_offsets_px(grid: LensGrid, m_hat: int, shift=None) -> tuple[np.ndarray, np.ndarray]:
     """Offsets (x, y) in sensor pixels of every view sample from its lens centre, each ``(m̂, m̂)``.
 
     View k sits (k − c)·pitch/m̂ from the centre along each lattice axis (contract: view index and
-    lens index increase with the sensor coordinate).
+    lens index increase with the sensor coordinate). ``shift`` ``(m̂, m̂, 2)`` (sensor pixels x, y), when
+    given, moves each view's samples off that nominal position: where the decoder reads a view so
+    that its samples stand for their nominal rays (:mod:`lfproc.decode._view_mask`).
     """
     m_hat = check_m_hat(m_hat)
     c = (m_hat - 1) // 2
     k = (np.arange(m_hat) - c) * (grid.pitch_px / m_hat)
     u, v = grid.axes
-    return k[None, :] * u[0] + k[:, None] * v[0], k[None, :] * u[1] + k[:, None] * v[1]
+    x, y = k[None, :] * u[0] + k[:, None] * v[0], k[None, :] * u[1] + k[:, None] * v[1]
+    if shift is not None:
+        x, y = x + shift[..., 0], y + shift[..., 1]
+    return x, y
 
 
-def lens_offsets_px(grid: LensGrid, m_hat: int, rows: range) -> tuple[np.ndarray, np.ndarray]:
+def lens_offsets_px(grid: LensGrid, m_hat: int, rows: range, shift=None) -> tuple[np.ndarray, np.ndarray]:
     """Offsets (x, y) of every view sample from its lens centre for the lenses of ``rows``, each broadcastable
     to ``(m̂, m̂, len(rows), cols)``: the global ones (:func:`view_offsets_px`) on a rigid lattice, per lens
-    from the local lattice on a smooth one (module docstring)."""
+    from the local lattice on a smooth one (module docstring); plus ``shift`` (see :func:`view_offsets_px`)."""
     if grid.deviation is None:
-        off_x, off_y = view_offsets_px(grid, m_hat)
+        off_x, off_y = view_offsets_px(grid, m_hat, shift)
         return off_x[:, :, None, None], off_y[:, :, None, None]
     m_hat = check_m_hat(m_hat)
     r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
     step = (grid.lens_xy(r, q + 0.5) - grid.lens_xy(r, q - 0.5)) / m_hat    # s·u per lens, (R, C, 2)
     k = (np.arange(m_hat) - (m_hat - 1) // 2).astype(np.float64)
     kx, ky = k[None, :, None, None], k[:, None, None, None]
-    return kx * step[..., 0] - ky * step[..., 1], kx * step[..., 1] + ky * step[..., 0]
+    x, y = kx * step[..., 0] - ky * step[..., 1], kx * step[..., 1] + ky * step[..., 0]
+    if shift is not None:
+        x, y = x + shift[:, :, 0, None, None], y + shift[:, :, 1, None, None]
+    return x, y
 
 
 def lens_centers(grid: LensGrid, rows: range | None = None) -> np.ndarray:
@@ -59,22 +67,25 @@ def lens_centers(grid: LensGrid, rows: range | None = None) -> np.ndarray:
     return grid.lens_xy(r, q)
 
 
-def sample_positions(grid: LensGrid, m_hat: int) -> tuple[np.ndarray, np.ndarray]:
-    """Sensor positions (x, y) of every view sample, each shaped ``(m̂, m̂, rows, cols)``, float64."""
-    off_x, off_y = lens_offsets_px(grid, m_hat, range(grid.rows))
+def sample_positions(grid: LensGrid, m_hat: int, shift=None) -> tuple[np.ndarray, np.ndarray]:
+    """Sensor positions (x, y) of every view sample, each shaped ``(m̂, m̂, rows, cols)``, float64
+    (``shift``: see :func:`view_offsets_px`)."""
+    off_x, off_y = lens_offsets_px(grid, m_hat, range(grid.rows), shift)
     centers = lens_centers(grid)
     x = centers[None, None, :, :, 0] + off_x
     y = centers[None, None, :, :, 1] + off_y
     return x, y
 
 
-def band_maps(grid: LensGrid, m_hat: int, rows: range, y0: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
+def band_maps(grid: LensGrid, m_hat: int, rows: range, y0: int = 0,
+              shift=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """float32 remap maps of lens ``rows`` for every view row ky, each ``(m̂·len(rows), cols)``.
 
     Map rows run over (kx, r), so one ``remap`` per view row writes ``views[ky, :, rows]``. ``y0`` is
-    subtracted from y: the maps read a sensor strip that starts at row ``y0``.
+    subtracted from y: the maps read a sensor strip that starts at row ``y0``; ``shift``: see
+    :func:`view_offsets_px`.
     """
-    off_x, off_y = lens_offsets_px(grid, m_hat, rows)
+    off_x, off_y = lens_offsets_px(grid, m_hat, rows, shift)
     centers = lens_centers(grid, rows).astype(np.float32)
     cx = centers[None, :, :, 0]
     cy = centers[None, :, :, 1] - np.float32(y0)
@@ -83,15 +94,16 @@ def band_maps(grid: LensGrid, m_hat: int, rows: range, y0: int = 0) -> list[tupl
              (cy + off_y[ky].astype(np.float32)).reshape(shape)) for ky in range(m_hat)]
 
 
-def remap_maps(grid: LensGrid, m_hat: int) -> list[tuple[np.ndarray, np.ndarray]]:
+def remap_maps(grid: LensGrid, m_hat: int, shift=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """The float32 ``cv2.remap`` maps of every view row ky over all lenses, each ``(m̂·rows, cols)``."""
-    return band_maps(grid, m_hat, range(grid.rows))
+    return band_maps(grid, m_hat, range(grid.rows), shift=shift)
 
 
-def sensor_rows_read(grid: LensGrid, m_hat: int, rows: range, margin: int, height: int) -> tuple[int, int]:
+def sensor_rows_read(grid: LensGrid, m_hat: int, rows: range, margin: int, height: int,
+                     shift=None) -> tuple[int, int]:
     """The sensor rows ``[y0, y1)`` that the samples of lens ``rows`` read, widened by ``margin`` and
     clipped to the sensor; ``y0`` is even so that a Bayer strip keeps the mosaic's phase."""
-    _, off_y = lens_offsets_px(grid, m_hat, rows)
+    _, off_y = lens_offsets_px(grid, m_hat, rows, shift)
     ys = lens_centers(grid, rows)[..., 1]
     lo = float(ys.min()) + float(off_y.min()) - margin
     hi = float(ys.max()) + float(off_y.max()) + margin

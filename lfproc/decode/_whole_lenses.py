@@ -20,10 +20,10 @@ from ..grid import LensGrid
 from ._positions import lens_centers, view_offsets_px
 
 
-def whole_lens_mask(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape) -> np.ndarray:
+def whole_lens_mask(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape, shift=None) -> np.ndarray:
     """Boolean ``(rows, cols)``: lenses whose samples of the ``views`` (an ``(m̂, m̂)`` mask) are on the sensor."""
     height, width = sensor_shape[:2]
-    off_x, off_y = view_offsets_px(grid, m_hat)
+    off_x, off_y = view_offsets_px(grid, m_hat, shift)
     if not views.any():
         views = np.zeros_like(views)
         views[(m_hat - 1) // 2, (m_hat - 1) // 2] = True
@@ -77,8 +77,9 @@ def sub_grid(grid: LensGrid, r0: int, q0: int, rows: int, cols: int) -> LensGrid
     return dataclasses.replace(grid, origin_xy_px=(float(origin[0]), float(origin[1])), rows=rows, cols=cols)
 
 
-def crop_to_whole_lenses(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape) -> LensGrid:
-    """``grid`` cropped to its largest block of whole lenses (see the module docstring)."""
-    whole = whole_lens_mask(grid, m_hat, views, sensor_shape)
+def crop_to_whole_lenses(grid: LensGrid, m_hat: int, views: np.ndarray, sensor_shape, shift=None) -> LensGrid:
+    """``grid`` cropped to its largest block of whole lenses (see the module docstring); ``shift`` moves
+    the views' samples off nominal (:func:`view_offsets_px`)."""
+    whole = whole_lens_mask(grid, m_hat, views, sensor_shape, shift)
     r0, q0, rows, cols = largest_whole_block(whole, even_start_row=grid.kind == "hexagonal")
     return sub_grid(grid, r0, q0, rows, cols)
