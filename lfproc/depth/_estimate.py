@@ -170,7 +170,7 @@ def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf
     (:func:`lfproc.depth._cost.half_aperture_volumes`); returns the chosen :class:`CostMinimum` and confidence."""
     from ._confidence import confidence, cost_floor, defocus_estimate
     from ._cost import half_aperture_volumes
-    from ._refine import CostMinimum, aggregate, refine_minimum
+    from ._refine import CostMinimum, aggregate_edge_aware, refine_minimum
 
     floor = cost_floor(volume.luminance)
     textured = central_texture(sweep, bin_lenses)
@@ -181,7 +181,7 @@ def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf
         if not finite.any():
             continue
         cost = np.where(finite, cost, np.float32(10.0 * float(cost[finite].max()) + 1.0))
-        found = refine_minimum(aggregate(cost), a_values, floor)
+        found = refine_minimum(aggregate_edge_aware(cost), a_values, floor)
         lum = np.where(np.isfinite(half.luminance), half.luminance, volume.luminance)
         conf_half = confidence(found.a, found.a_low, found.a_high, defocus_estimate(lum, a_values), center_index,
                                resolution=bin_lenses)
@@ -252,7 +252,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     from ._confidence import confidence, cost_floor, defocus_estimate
     from ._cost import auto_view_step, cost_volume, delivered_views, sweep_luminance
     from ._metric import metric_depth
-    from ._refine import aggregate, refine_minimum
+    from ._refine import aggregate_edge_aware, refine_minimum
     from ._search import default_step, search_range_a, sweep_parameters
 
     views = np.asarray(getattr(lf, "views", lf))
@@ -305,7 +305,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["cost volume (fused refocus)"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    minimum = refine_minimum(aggregate(volume.cost), a_values, cost_floor(volume.luminance))
+    minimum = refine_minimum(aggregate_edge_aware(volume.cost), a_values, cost_floor(volume.luminance))
     timings["aggregation and sub-slice minimum"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
