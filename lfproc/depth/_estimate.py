@@ -249,7 +249,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     """
     from .. import geometry
     from ._allfocus import allfocus
-    from ._confidence import confidence, cost_floor, defocus_estimate
+    from ._confidence import confidence, cost_floor, defocus_estimate, view_coverage
     from ._cost import auto_view_step, cost_volume, delivered_views, sweep_luminance
     from ._metric import metric_depth
     from ._refine import aggregate_edge_aware, refine_minimum
@@ -310,7 +310,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
 
     t0 = time.perf_counter()
     a_defocus = defocus_estimate(volume.luminance, a_values)
-    conf = confidence(minimum.a, minimum.a_low, minimum.a_high, a_defocus, c)
+    conf = confidence(minimum.a, minimum.a_low, minimum.a_high, a_defocus, c,
+                      coverage=view_coverage(minimum.a, reach, view_step))
     conf = np.where(minimum.interior, conf, np.float32(0.0))
     timings["confidence (defocus cue)"] = time.perf_counter() - t0
 
