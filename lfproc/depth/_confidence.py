@@ -56,10 +56,35 @@ def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
     return refine_minimum(energy, a_values, 0.0).a
 
 
+#: share of the views a slice must average at a lens for its sharpness (the defocus cue) to count there
+DEFOCUS_MIN_COVERAGE = 0.75
+
+
+def view_coverage(a: np.ndarray, reach: int, view_step: int = 1) -> np.ndarray:
+    """Per lens ``(Ny, Nx)``: the share of the views ``c + step·t`` (``|step·t| ≤ reach``) whose sample
+    lies on the image in the slice ``a`` of that lens (per axis, multiplied): 1 in the interior, less near
+    the image border, where views shift off it."""
+    ny, nx = a.shape
+    t = np.arange(-(reach // view_step), reach // view_step + 1) * view_step
+    a = np.nan_to_num(np.asarray(a, dtype=np.float64))[..., None]
+
+    def along(index, n):
+        pos = index[..., None] + a * t      # the contract's j + a·(c − k) for every view offset
+        return np.mean((pos >= 0) & (pos <= n - 1), axis=-1)
+
+    rows = np.arange(ny, dtype=np.float64)[:, None] + np.zeros((1, nx))
+    cols = np.arange(nx, dtype=np.float64)[None, :] + np.zeros((ny, 1))
+    return along(rows, ny) * along(cols, nx)
+
+
 def confidence(a_corr: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, a_defocus: np.ndarray,
-               center_index: int, resolution: float = 1.0) -> np.ndarray:
+               center_index: int, resolution: float = 1.0, coverage: np.ndarray | None = None) -> np.ndarray:
     """The confidence (0–1) of each estimate (module docstring); ``resolution`` > 1 widens ``h`` for a
-    sweep on a coarser lens grid (binned b × b lenses see b times less parallax per unit of ``a``)."""
+    sweep on a coarser lens grid (binned b × b lenses see b times less parallax per unit of ``a``).
+
+    ``coverage`` (:func:`view_coverage`): where a slice averages fewer than :data:`DEFOCUS_MIN_COVERAGE` of
+    the views (near the image border) its sharpness says nothing (fewer views blur less) and the
+    defocus cue is left out: the basin of the correspondence cost decides alone."""
     h = dof_half_width_a(a_corr, center_index) * resolution
     with np.errstate(invalid="ignore"):
         spread = np.maximum(a_corr - a_low, a_high - a_corr)
@@ -67,4 +92,6 @@ def confidence(a_corr: np.ndarray, a_low: np.ndarray, a_high: np.ndarray, a_defo
         corr = np.where(np.isfinite(spread), corr, 0.0)
         delta = np.abs(a_corr - a_defocus)
         agreement = 1.0 / (1.0 + (delta / (2.0 * h)) ** 4)
+        if coverage is not None:
+            agreement = np.where(coverage >= DEFOCUS_MIN_COVERAGE, agreement, 1.0)
     return np.nan_to_num(corr * agreement).astype(np.float32)

@@ -96,14 +96,19 @@ def sweep_luminance(views: np.ndarray, view_step: int = 1, reach: int | None = N
     return SweepLuminance(luminance(views[np.ix_(picked, picked)]), weight, int(view_step))
 
 
+def binned(y: np.ndarray, bin_lenses: int) -> np.ndarray:
+    """Views' luminance ``(n, n, Ny, Nx)`` averaged over ``bin_lenses`` × ``bin_lenses`` lenses (a coarser grid)."""
+    if bin_lenses <= 1:
+        return y
+    b = bin_lenses
+    n, _, ny, nx = y.shape
+    return y[:, :, :ny // b * b, :nx // b * b].reshape(n, n, ny // b, b, nx // b, b).mean(axis=(3, 5))
+
+
 def sweep_views(sweep: SweepLuminance, bin_lenses: int = 1) -> np.ndarray:
     """The light field a sweep refocuses: channels ``w·Y`` and ``w·Y²``; with ``bin_lenses`` = b the
     luminance is first averaged over b × b lenses (a coarser lens grid, on which parallax is a/b)."""
-    y = sweep.y
-    if bin_lenses > 1:
-        b = bin_lenses
-        n, _, ny, nx = y.shape
-        y = y[:, :, :ny // b * b, :nx // b * b].reshape(n, n, ny // b, b, nx // b, b).mean(axis=(3, 5))
+    y = binned(sweep.y, bin_lenses)
     out = np.empty(y.shape + (2,), dtype=np.float32)
     np.multiply(y, y, out=out[..., 1])
     out[..., 0] = y
@@ -146,3 +151,73 @@ def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear
     cost -= mean * mean
     np.maximum(cost, np.float32(0), out=cost)
     return CostVolume(a, cost, mean, sweep.view_step)
+
+
+#: a half aperture counts at a lens and slice where it keeps at least this share of its views inside the image
+HALF_APERTURE_COMPLETE = 0.9
+
+#: the half apertures of the occlusion- and border-aware sweep: views with k ≤ c or k ≥ c along one axis
+HALF_APERTURES = (("x", -1), ("x", +1), ("y", -1), ("y", +1))
+
+
+def half_aperture_weights(n: int, weight: np.ndarray | None) -> list[np.ndarray]:
+    """``(n, n)`` weights of the four half apertures of a sweep's ``n × n`` views (:data:`HALF_APERTURES`):
+    each keeps the views on one side of the central row or column, the central one included."""
+    centre = (n - 1) // 2
+    t = np.arange(n) - centre
+    base = np.ones((n, n), np.float32) if weight is None else np.asarray(weight, np.float32)
+    halves = []
+    for axis, side in HALF_APERTURES:
+        along = (side * t >= 0).astype(np.float32)
+        halves.append(base * (along[None, :] if axis == "x" else along[:, None]))
+    return halves
+
+
+def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str = "linear",
+                          bin_lenses: int = 1) -> list[CostVolume]:
+    """The cost volume of each half aperture (:func:`half_aperture_weights`), exact at the image border.
+
+    Near the border of the image and next to a nearer occluder, some views of a lens see something else
+    (they shift off the image, or onto the occluder), and the variance over all views has no clean
+    minimum. The views on one side of the centre usually all see the surface: a lens at the right border
+    keeps every view that looks left, a surface left of an occluder every view that looks away from it
+    (the angular split of occlusion-aware depth estimation, Wang et al., ICCV 2015). One fused refocus
+    per axis computes, for both halves of that axis, the sums of ``w``, ``w·Y`` and ``w·Y²`` over the
+    views inside the image; their ratios are each half's mean and mean square over exactly the views
+    it has there. Where a half has lost views off the image (:data:`HALF_APERTURE_COMPLETE`) its cost is
+    ``inf``: a half counts only where it is whole.
+    """
+    from ..lightfield import LightField
+    from ..refocus import refocus
+
+    a = np.asarray(a_values, dtype=np.float64)
+    shift = a * sweep.view_step / bin_lenses
+    n = sweep.y.shape[0]
+    halves = half_aperture_weights(n, sweep.weight)
+    union = sweep.weight > 0 if sweep.weight is not None else np.ones((n, n), bool)
+    y = binned(sweep.y, bin_lenses)
+    volumes = []
+    for pair in ((0, 1), (2, 3)):
+        channels = np.empty(y.shape + (3 * len(pair),), dtype=np.float32)
+        for slot, h in enumerate(pair):
+            w = halves[h][:, :, None, None]
+            channels[..., 3 * slot] = w
+            np.multiply(y, w, out=channels[..., 3 * slot + 1])
+            np.multiply(channels[..., 3 * slot + 1], y, out=channels[..., 3 * slot + 2])
+        stack = refocus(LightField.from_views(channels, view_mask=union), shift, interpolation=interpolation)
+        del channels
+        for slot, h in enumerate(pair):
+            share = stack[..., 3 * slot]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                mean = stack[..., 3 * slot + 1] / share
+                cost = stack[..., 3 * slot + 2] / share - mean * mean
+            # a half that lost views off the image (its share of the views there below its share of all
+            # views) is incomplete: fewer samples give a smaller variance and false minima; leave it out
+            complete_share = float(halves[h].sum() / union.sum())
+            empty = ~(share >= HALF_APERTURE_COMPLETE * complete_share)
+            cost[empty] = np.inf
+            mean[empty] = np.nan
+            np.maximum(cost, np.float32(0), out=cost)
+            volumes.append(CostVolume(a, cost.astype(np.float32, copy=False), mean.astype(np.float32, copy=False),
+                                      sweep.view_step))
+    return volumes

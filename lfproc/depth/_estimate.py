@@ -104,14 +104,15 @@ def occupied_range(sweep, a_lo, a_hi, step, center_index) -> tuple[float, float]
     """The part of ``[a_lo, a_hi]`` the scene occupies, from a sweep at twice the step on lenses binned
     2 × 2 (a quarter of the samples, parallax a/2), with linear interpolation (its pull towards integer
     ``a`` is far below the coarse step): from the least to the largest ``a`` estimated with some
-    confidence, widened by one coarse step.
+    confidence, widened by one coarse step. The fine sweep grows beyond it where surfaces lie at its ends
+    (:func:`extended_sweep`).
     Where nothing is confidently known the whole range is kept."""
     from ._confidence import confidence, cost_floor
     from ._cost import cost_volume
     from ._refine import aggregate, refine_minimum
     from ._search import sweep_parameters
 
-    coarse = sweep_parameters(a_lo, a_hi, 2.0 * step)
+    coarse = sweep_parameters(a_lo, a_hi, 2.0 * step, center_index)
     bin_lenses = 2 if min(sweep.y.shape[2:4]) >= 16 else 1
     volume = cost_volume(sweep, coarse, interpolation="linear", bin_lenses=bin_lenses)
     found = refine_minimum(aggregate(volume.cost), coarse, cost_floor(volume.luminance))
@@ -123,9 +124,99 @@ def occupied_range(sweep, a_lo, a_hi, step, center_index) -> tuple[float, float]
             min(a_hi, max(float(found.a[known].max()) + 2.0 * step, a_lo)))
 
 
+#: local contrast of the central view (3 × 3 lenses, relative to the median luminance) below which a half
+#: aperture's estimate is not trusted: a textureless lens next to a textured surface would take its depth
+HALF_APERTURE_MIN_CONTRAST = 0.03
+
+
+def central_texture(sweep, bin_lenses: int = 1) -> np.ndarray:
+    """Lenses whose own neighbourhood (3 × 3 lenses of the central view) has texture: where a half aperture's
+    estimate can describe the surface the lens sees, not one that only some of its views see."""
+    from scipy import ndimage
+
+    from ._cost import binned
+
+    n = sweep.y.shape[0]
+    y = binned(sweep.y[n // 2:n // 2 + 1, n // 2:n // 2 + 1], bin_lenses)[0, 0].astype(np.float64)
+    mean = ndimage.uniform_filter(y, 3, mode="nearest")
+    spread = np.sqrt(np.maximum(ndimage.uniform_filter(y * y, 3, mode="nearest") - mean * mean, 0.0))
+    return spread >= HALF_APERTURE_MIN_CONTRAST * max(float(np.median(y)), 1e-12)
+
+
+#: share of the lenses whose cost minimum may sit at an end of the sweep before the sweep grows there
+OPEN_END_SHARE = 0.02
+
+
+def extended_sweep(sweep, volume, full_range, step, center_index, interpolation):
+    """The cost volume grown slice by slice beyond an end of the sweep (up to ``full_range``) while more
+    than :data:`OPEN_END_SHARE` of the lenses have their least cost within the padding at that end: a
+    surface the coarse pass placed too near (or missed) still gets a basin that closes inside the sweep."""
+    from ._cost import CostVolume, cost_volume
+    from ._refine import aggregate
+    from ._search import PADDING_SLICES, dof_half_width_a
+
+    a = volume.a
+    textured = central_texture(sweep)
+    while True:
+        best = np.argmin(aggregate(volume.cost), axis=0)
+        grow = []
+        for end, sign, limit in ((0, -1, full_range[0]), (len(a) - 1, +1, full_range[1])):
+            near_end = ((best <= PADDING_SLICES) if end == 0 else (best >= end - PADDING_SLICES)) & textured
+            beyond = sign * (limit - a[end]) > 1e-9
+            if beyond and near_end.mean() > OPEN_END_SHARE:
+                count = max(PADDING_SLICES, int(np.ceil(float(dof_half_width_a(a[end], center_index)) / step)))
+                extra = a[end] + sign * step * np.arange(1, count + 1)
+                extra = extra[sign * (limit - extra) >= -1e-9]
+                grow.append((sign, np.round(extra, 12)))
+        if not grow:
+            return volume
+        for sign, extra in grow:
+            more = cost_volume(sweep, extra, interpolation=interpolation)
+            if sign < 0:
+                order = slice(None, None, -1)
+                volume = CostVolume(np.concatenate([extra[order], volume.a]),
+                                    np.concatenate([more.cost[order], volume.cost]),
+                                    np.concatenate([more.luminance[order], volume.luminance]), volume.view_step)
+            else:
+                volume = CostVolume(np.concatenate([volume.a, extra]), np.concatenate([volume.cost, more.cost]),
+                                    np.concatenate([volume.luminance, more.luminance]), volume.view_step)
+        a = volume.a
+
+
+def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf, center_index, bin_lenses=1):
+    """Per lens, the most confident of the full aperture's estimate and the four half apertures' ones
+    (:func:`lfproc.depth._cost.half_aperture_volumes`); returns the chosen :class:`CostMinimum` and confidence."""
+    from ._confidence import confidence, cost_floor, defocus_estimate
+    from ._cost import half_aperture_volumes
+    from ._refine import CostMinimum, aggregate_edge_aware, refine_minimum
+
+    floor = cost_floor(volume.luminance)
+    textured = central_texture(sweep, bin_lenses)
+    best = minimum
+    for half in half_aperture_volumes(sweep, a_values, interpolation=interpolation, bin_lenses=bin_lenses):
+        cost = half.cost
+        finite = np.isfinite(cost)
+        if not finite.any():
+            continue
+        cost = np.where(finite, cost, np.float32(10.0 * float(cost[finite].max()) + 1.0))
+        found = refine_minimum(aggregate_edge_aware(cost), a_values, floor)
+        lum = np.where(np.isfinite(half.luminance), half.luminance, volume.luminance)
+        conf_half = confidence(found.a, found.a_low, found.a_high, defocus_estimate(lum, a_values), center_index,
+                               resolution=bin_lenses)
+        conf_half = np.where(found.interior & finite.all(axis=0) & textured, conf_half, np.float32(0.0))
+        take = conf_half > conf
+        if take.any():
+            pick = lambda new, old: np.where(take, new, old)
+            best = CostMinimum(a=pick(found.a, best.a), cost=pick(found.cost, best.cost),
+                               a_low=pick(found.a_low, best.a_low), a_high=pick(found.a_high, best.a_high),
+                               interior=pick(found.interior, best.interior))
+            conf = np.where(take, conf_half, conf)
+    return best, conf
+
+
 def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, camera=None,
           min_confidence: float = MIN_CONFIDENCE, interpolation: str = "cubic", outer_views: bool = False,
-          coarse_pass: bool = True) -> DepthMap:
+          coarse_pass: bool = True, half_apertures: bool = True) -> DepthMap:
     """Metric depth map of a light field (module docstring for the method).
 
     Parameters
@@ -151,6 +242,12 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         Also use the outer ring of views (default: not). Their samples lie on the border of the
         micro image, where decoding mixes in the neighbouring micro image (crosstalk): on decoded
         captures they pull the estimate about 7 % of the DOF farther (docs/depth.md).
+    half_apertures : bool
+        Where the estimate from all views is not confident, also estimate from each half of the
+        aperture (the views on one side of the centre) and keep the most confident: lenses near the
+        image border, whose outer views shift off the image, and surfaces next to a nearer occluder,
+        which some views see instead, get a depth from the views that see them (default; about twice
+        the sweep's work).
     camera : Camera, optional
         Overrides ``lf.camera``.
     min_confidence : float
@@ -170,10 +267,10 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     """
     from .. import geometry
     from ._allfocus import allfocus
-    from ._confidence import confidence, cost_floor, defocus_estimate
+    from ._confidence import confidence, cost_floor, defocus_estimate, view_coverage
     from ._cost import auto_view_step, cost_volume, delivered_views, sweep_luminance
     from ._metric import metric_depth
-    from ._refine import aggregate, refine_minimum
+    from ._refine import aggregate_edge_aware, refine_minimum
     from ._search import default_step, search_range_a, sweep_parameters
 
     views = np.asarray(getattr(lf, "views", lf))
@@ -193,7 +290,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     t0 = time.perf_counter()
     a_lo, a_hi = search_range_a(camera, depth_range_mm, a_range)
     step = default_step(c) if step is None else float(step)
-    a_values = sweep_parameters(a_lo, a_hi, step)
+    a_values = sweep_parameters(a_lo, a_hi, step, c)
+    full_range = a_values[0], a_values[-1]
     reach = c if outer_views or c < 2 else c - 1
     view_step = auto_view_step(reach, ny * nx) if view_step is None else int(view_step)
     if not 1 <= view_step <= reach:
@@ -219,19 +317,28 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
 
     t0 = time.perf_counter()
     volume = cost_volume(sweep, a_values, interpolation=interpolation)
+    if coarse_pass:   # what the coarse pass cut off but the scene has: surfaces whose minimum sits at an end
+        volume = extended_sweep(sweep, volume, full_range, step, c, interpolation)
+        a_values = volume.a
     timings["cost volume (fused refocus)"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    minimum = refine_minimum(aggregate(volume.cost), a_values, cost_floor(volume.luminance))
+    minimum = refine_minimum(aggregate_edge_aware(volume.cost), a_values, cost_floor(volume.luminance))
     timings["aggregation and sub-slice minimum"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     a_defocus = defocus_estimate(volume.luminance, a_values)
-    conf = confidence(minimum.a, minimum.a_low, minimum.a_high, a_defocus, c)
+    conf = confidence(minimum.a, minimum.a_low, minimum.a_high, a_defocus, c,
+                      coverage=view_coverage(minimum.a, reach, view_step))
     conf = np.where(minimum.interior, conf, np.float32(0.0))
+    timings["confidence (defocus cue)"] = time.perf_counter() - t0
+
+    if half_apertures and (conf < min_confidence).any():
+        t0 = time.perf_counter()
+        minimum, conf = best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf, c)
+        timings["half apertures (borders, occlusions)"] = time.perf_counter() - t0
     known = conf >= min_confidence
     a_known = np.where(known, minimum.a, np.nan)
-    timings["confidence (defocus cue)"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     offsets = np.abs(np.arange(weight.shape[0]) - c)

@@ -43,6 +43,29 @@ def aggregate(cost: np.ndarray, window: int = AGGREGATION_WINDOW) -> np.ndarray:
     return ndimage.uniform_filter(cost, size=(1, window, window), mode="nearest")
 
 
+def aggregate_edge_aware(cost: np.ndarray, window: int = AGGREGATION_WINDOW) -> np.ndarray:
+    """:func:`aggregate`, but each lens takes the ``window`` × ``window`` box centred on it or shifted by
+    ``window // 2`` lenses along either axis, whichever reaches the least cost: next to a depth edge the
+    box that does not straddle it (a lens of a near object beside a far one keeps its own cost curve,
+    not a blend of both)."""
+    centred = aggregate(cost, window)
+    if window <= 1 or min(cost.shape[1:]) <= window:
+        return centred
+    h = window // 2
+    ny, nx = cost.shape[1:]
+    best = centred
+    best_min = centred.min(axis=0)
+    for axis, step in ((1, h), (1, -h), (2, h), (2, -h)):
+        index = np.clip(np.arange(ny if axis == 1 else nx) + step, 0, (ny if axis == 1 else nx) - 1)
+        shifted = np.take(centred, index, axis=axis)
+        shifted_min = shifted.min(axis=0)
+        better = shifted_min < best_min
+        if better.any():
+            best = np.where(better[None], shifted, best)
+            best_min = np.where(better, shifted_min, best_min)
+    return best
+
+
 def parabola_vertex(c0, c1, c2):
     """Vertex offset in steps (clipped to ±0.5: the middle value is the least) and curvature
     ``c0 − 2c1 + c2`` of the parabola through equally spaced values ``c0, c1, c2``."""

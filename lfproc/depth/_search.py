@@ -83,12 +83,22 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
     return DEFAULT_A_RANGE
 
 
-def sweep_parameters(a_low: float, a_high: float, step: float) -> np.ndarray:
-    """Equally spaced ``a`` from ``a_low`` to ``a_high`` (inclusive, rounded outwards) plus the padding slices."""
+def sweep_parameters(a_low: float, a_high: float, step: float, center_index: int | None = None) -> np.ndarray:
+    """Equally spaced ``a`` from ``a_low`` to ``a_high`` (inclusive, rounded outwards) plus padding slices.
+
+    The padding lets the cost's basin around a surface at either end of the range close inside the
+    sweep (else the estimate is unknown): :data:`PADDING_SLICES`, or with ``center_index`` (c) as many as
+    span the DOF half-width there (:func:`dof_half_width_a`), which grows with ``a``: near slices have a
+    wider DOF in units of ``a``, and so a wider basin.
+    """
     if not (step > 0 and math.isfinite(step)):
         raise LfprocError(f"sweep step {step!r} must be a positive number (in units of a)")
-    first = math.floor(a_low / step + 1e-9) - PADDING_SLICES
-    last = math.ceil(a_high / step - 1e-9) + PADDING_SLICES
+    pad_low = pad_high = PADDING_SLICES
+    if center_index is not None:
+        pad_low = max(pad_low, math.ceil(float(dof_half_width_a(a_low, center_index)) / step - 1e-9))
+        pad_high = max(pad_high, math.ceil(float(dof_half_width_a(a_high, center_index)) / step - 1e-9))
+    first = math.floor(a_low / step + 1e-9) - pad_low
+    last = math.ceil(a_high / step - 1e-9) + pad_high
     count = last - first + 1
     if count > MAX_SWEEP_SLICES:
         raise LfprocError(f"the depth search needs {count} slices (more than {MAX_SWEEP_SLICES}); "
