@@ -28,14 +28,32 @@ def _band_rows(m_hat: int, cols: int, channels: int) -> int:
     return max(2, BAND_BYTES // max(1, m_hat * m_hat * cols * channels * 4))
 
 
+def view_runs(delivered) -> list[tuple[int, int, int]]:
+    """``(ky, kx0, kx1)`` per view row with delivered views: the run from its first to its last one.
+
+    Only these views are resampled and devignetted when a capture is decoded; the others are 0 and never
+    computed (for a round aperture the runs hold about π/4 of the views of their bounding square)."""
+    if delivered is None:
+        return None
+    runs = []
+    for ky, row in enumerate(np.asarray(delivered, dtype=bool)):
+        kx = np.flatnonzero(row)
+        if kx.size:
+            runs.append((ky, int(kx[0]), int(kx[-1]) + 1))
+    return runs
+
+
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
-              interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None) -> np.ndarray:
+              interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None,
+              runs: list | None = None) -> np.ndarray:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
     ``shift`` moves each view's samples (:func:`view_offsets_px`); ``cells``, the sensor's lens class map
     (:mod:`._cells`), makes every lens read its own cell only (else the plain sensor image is read).
+    With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
     """
+    runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
     y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0], shift)
     channels = channel_count(sensor, cfa)
@@ -48,8 +66,10 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
     if cells is None:
         strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
         flat = out.reshape(m_hat, m_hat * len(rows), grid.cols, channels)
-        for ky, (map_x, map_y) in enumerate(maps):
-            remap_into(flat[ky], strip, map_x, map_y, flag)
+        n = len(rows)
+        for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
+            map_x, map_y = maps[ky]
+            remap_into(flat[ky, kx0 * n:kx1 * n], strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
         return out
     classes = cells[y0:y1]
     raw = sensor[y0:y1]
@@ -61,13 +81,14 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
         rsel = slice(first_row - rows.start, None, 2)
         qsel = slice(first_col, None, 2)
         strip = np.ascontiguousarray(to_channels(masked(raw, classes, cls), cfa, demosaic_method))
-        for ky, (map_x, map_y) in enumerate(maps):
-            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
-            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[:, rsel, qsel])
+        for ky, kx0, kx1 in runs:
+            map_x, map_y = maps[ky]
+            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
+            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
             part = np.empty(mx.shape + (channels,), dtype=np.float32)
             remap_into(part.reshape(-1, mx.shape[2], channels), strip, mx.reshape(-1, mx.shape[2]),
                        my.reshape(-1, mx.shape[2]), flag)
-            out[ky][:, rsel, qsel] = part
+            out[ky][kx0:kx1, rsel, qsel] = part
     return out
 
 
@@ -111,18 +132,24 @@ class Decoder:
                               f"{self.channels}; use a white image taken with the same camera settings")
         m, grid = self.m_hat, self.grid
         out_grid = self.output_grid
-        out = np.empty((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
+        # zeros: only the runs of delivered views are computed, the others are never touched (nor paged in)
+        out = np.zeros((m, m, out_grid.rows, out_grid.cols, self.channels), dtype=np.float32)
+        runs = view_runs(self.views_delivered)
+        runs = [(ky, 0, m) for ky in range(m)] if runs is None else runs
         step = _band_rows(m, grid.cols, self.channels)
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
             views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
-                              self.view_shift_px, self.cells)
-            views *= self.inverse_white[:, :, rows.start:rows.stop]
-            if grid.kind == "hexagonal":
-                hex_rows_to_rect(views, rows.start, out_rows, out[:, :, out_rows.start:out_rows.stop])
-            else:
-                out[:, :, out_rows.start:out_rows.stop] = views
+                              self.view_shift_px, self.cells, runs)
+            for ky, kx0, kx1 in runs:
+                run = views[ky:ky + 1, kx0:kx1]
+                run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
+                dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
+                if grid.kind == "hexagonal":
+                    hex_rows_to_rect(run, rows.start, out_rows, dst)
+                else:
+                    dst[...] = run
         return out
 
 
