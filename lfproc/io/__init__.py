@@ -33,7 +33,7 @@ from ._lytro_camera import LytroCamera, lytro_camera
 from ._lytro_lambda import LambdaMap, lambda_map
 from ._lytro_metadata import LytroMetadata
 from ._lytro_picture import LytroPicture
-from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_metadata,
+from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_lambda_map, picture_metadata,
                                   refuse_pictures)
 from ._lytro_picture_pixels import confidence_map, depth_lambda
 from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
@@ -46,7 +46,7 @@ from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_imag
 
 __all__ = [
     "LambdaMap", "LytroPicture", "camera_metadata", "confidence_map", "depth_lambda", "is_picture_file",
-    "lambda_map", "open_picture", "picture_metadata", "refuse_pictures",
+    "lambda_map", "open_picture", "picture_lambda_map", "picture_metadata", "refuse_pictures",
     "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
     "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
     "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",

@@ -9,25 +9,18 @@ Added to the contract keys of ``_describe`` (``format`` "lytro-container", ``raw
 
 from __future__ import annotations
 
-from ..errors import LfprocError
 from ._lytro_picture import read_picture
-from ._lytro_picture_open import picture_metadata
+from ._lytro_picture_open import picture_lambda_map
 from ._lytro_picture_pixels import image_size
 
 
 def describe_picture(container) -> dict:
     """The picture's fields for ``lfproc info`` (nothing decoded but image headers)."""
     from ._describe import _metadata_fields
-    from ._lytro_lambda import DISTANCE_FROM, lambda_map
+    from ._lytro_lambda import DISTANCE_FROM
 
     picture = read_picture(container)
-    meta, why = picture_metadata(picture)
-    mapping = None
-    if meta is not None:
-        try:
-            mapping = lambda_map(meta)
-        except LfprocError as exc:
-            why = str(exc).split(": ", 1)[-1]
+    meta, mapping, why = picture_lambda_map(picture)
     info = {"picture": picture.contents, "generation": picture.generation}
     parts = []
     if picture.stack:

@@ -19,6 +19,21 @@ def picture_metadata(picture: LytroPicture):
         return None, str(exc).split(": ", 1)[-1]
 
 
+def picture_lambda_map(picture: LytroPicture):
+    """``(LytroMetadata or None, LambdaMap or None, why not)``: the picture's camera and its map from lambda
+    to the paper's a and distances, or the reason there is none (no camera metadata, or metadata that does
+    not describe the optics)."""
+    from ._lytro_lambda import lambda_map
+
+    meta, why = picture_metadata(picture)
+    if meta is None:
+        return None, None, why
+    try:
+        return meta, lambda_map(meta), None
+    except LfprocError as exc:
+        return meta, None, str(exc).split(": ", 1)[-1]
+
+
 def is_picture(container: LytroContainer) -> bool:
     """True for a container with picture content and no raw frame inside."""
     from ._lytro_container import raw_frame

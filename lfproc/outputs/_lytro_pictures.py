@@ -37,18 +37,11 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         Not a picture, damaged, an undecodable depth map or H.264 block. Everything is read and
         decoded before the first file is written.
     """
-    from ..io._lytro_lambda import lambda_map
-    from ..io import confidence_map, depth_lambda, open_picture, picture_metadata
+    from ..io import confidence_map, depth_lambda, open_picture, picture_lambda_map
 
     picture = open_picture(path)
     source = os.path.abspath(path)
-    meta, why = picture_metadata(picture)
-    mapping, note = None, why
-    if meta is not None:
-        try:
-            mapping = lambda_map(meta)
-        except LfprocError as exc:
-            note = str(exc).split(": ", 1)[-1]
+    meta, mapping, note = picture_lambda_map(picture)
     common = {"source": source, "camera_model": meta.model if meta else None}
     if mapping is None:
         common["camera_note"] = f"no distances: {note}"

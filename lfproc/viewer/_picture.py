@@ -32,8 +32,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     LfprocError
         A damaged picture, or one without a focus stack.
     """
-    from ..io._lytro_lambda import lambda_map
-    from ..io import depth_lambda, open_picture, picture_metadata
+    from ..io import depth_lambda, open_picture, picture_lambda_map
 
     picture = open_picture(path)
     if not picture.stack:
@@ -41,13 +40,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
         raise LfprocError(f"{path}: holds no raw light field but a processed Lytro picture ({held}) with no focus "
                           f"stack to view; use 'lfproc export' for its images and depth map, or the "
                           f"raw .lfp/.lfr the camera wrote")
-    meta, why = picture_metadata(picture)
-    mapping = None
-    if meta is not None:
-        try:
-            mapping = lambda_map(meta)
-        except LfprocError as exc:
-            why = str(exc)
+    meta, mapping, why = picture_lambda_map(picture)
     lambdas = np.array([s.lambda_ for s in picture.stack])
     records = mapping.slices(lambdas) if mapping else [{"lambda": float(v)} for v in lambdas]
     jpegs = [picture.image_bytes(s.reference) for s in picture.stack]
