@@ -8,6 +8,7 @@ import time
 
 from ..errors import LfprocError
 from ._jobs import Job, JobResult, file_stamp
+from ._signals import Cancelled
 
 #: per process: setup key -> DecodeSetup (the calibrated grid and white image), oldest first
 _SETUP_CACHE: dict = {}
@@ -54,32 +55,39 @@ def _portable_setups(jobs: list[Job]) -> dict:
     return {key: dataclasses.replace(setup, _decoders={}) for key, setup in _SETUP_CACHE.items() if key in keys}
 
 
-def run_job(job: Job) -> JobResult:
+def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     """Process one capture; any error becomes a ``failed`` result (with its message), never an exception.
 
-    Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching them
-    here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
+    The capture's outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`):
+    ``before_commit()`` runs when all are written, before the first is renamed into place, and may
+    raise :class:`Cancelled` to abandon them (the batch was interrupted); that gives a ``cancelled``
+    result. ``checkpoint()`` runs before each output file is begun and may raise it too. Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching
+    them here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
     """
+    from ..atomic import all_or_nothing
     from ..lightfield import LightField, is_lightfield_file
     from ..outputs import write_slices, write_view_set
     from ..pipeline import load_lightfield
 
     start = time.perf_counter()
     try:
-        lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
-            load_lightfield(job.source, decode_setup(job))
-        if lf.camera is None:
-            raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
-        outputs = []
-        if job.refocus_a:
-            from ..refocus import refocus
+        with all_or_nothing(before_commit, checkpoint):
+            lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
+                load_lightfield(job.source, decode_setup(job))
+            if lf.camera is None:
+                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
+            outputs = []
+            if job.refocus_a:
+                from ..refocus import refocus
 
-            stack = refocus(lf, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
-            outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt)
-        if job.views:
-            outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
-                                      gif=job.gif, inside_aperture=job.inside_aperture)
+                stack = refocus(lf, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
+                outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt)
+            if job.views:
+                outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
+                                          gif=job.gif, inside_aperture=job.inside_aperture)
         return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start)
+    except Cancelled:
+        return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start)
     except LfprocError as exc:
         return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start)
     except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
@@ -90,11 +98,7 @@ def run_job(job: Job) -> JobResult:
 
 def init_pool_worker(setups: dict | None = None) -> None:
     """Set up a local pool process: the parent's decode setups (no second calibration), one thread for
-    numba and OpenCV (parallelism comes from the processes), and Ctrl-C left to the parent, which lets
-    the captures in progress finish."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    numba and OpenCV (parallelism comes from the processes)."""
     _SETUP_CACHE.update(setups or {})
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # read when numba is first imported, later in run_job
     try:
@@ -102,4 +106,3 @@ def init_pool_worker(setups: dict | None = None) -> None:
         cv2.setNumThreads(1)
     except ImportError:  # pragma: no cover
         pass
-
