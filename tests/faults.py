@@ -9,6 +9,8 @@ which therefore reaches every process lfproc starts, its spawned batch workers i
 - ``kill``: {"stem": STEM, "after": N, "marker": PATH} — SIGKILL this process just before its N-th
   file of STEM, once (PATH records the victim's pid, so the retry goes through).
 
+- ``disk_full``: {"folder": DIR, "after": N} — as :func:`disk_full` below, for a whole process.
+
 ``disk_full(monkeypatch, folder, after_bytes, errno)`` makes Python-level writes into ``folder`` fail
 midway with ``OSError(errno)`` after ``after_bytes`` bytes (builtins.open, which json, Pillow, numpy
 and the PLY writer go through).
@@ -26,6 +28,8 @@ import time
 
 
 def install(spec: dict) -> None:
+    if spec.get("disk_full"):
+        builtins.open = failing_open(spec["disk_full"]["folder"], spec["disk_full"]["after"])
     import lfproc.io as io
 
     original = getattr(io.write_image, "__wrapped__", io.write_image)
@@ -80,6 +84,10 @@ class _FailingFile:
         self._budget[0] -= size
         return self._fh.write(data)
 
+    def fileno(self):  # no file descriptor: writers that would write to it in C (Pillow) use write() instead
+        import io
+        raise io.UnsupportedOperation("fileno")
+
     def __getattr__(self, name):
         return getattr(self._fh, name)
 
@@ -94,9 +102,9 @@ class _FailingFile:
         return iter(self._fh)
 
 
-def disk_full(monkeypatch, folder, after_bytes: int = 0, code: int = errno_module.ENOSPC) -> None:
-    """Writes of files opened in ``folder`` from now on fail midway (``code``, after ``after_bytes`` bytes
-    in all); opening a file there for writing fails at once for EACCES."""
+def failing_open(folder, after_bytes: int = 0, code: int = errno_module.ENOSPC):
+    """``open`` whose files opened for writing in ``folder`` fail midway (``code``, after ``after_bytes``
+    bytes in all); for EACCES the open itself fails."""
     folder = os.path.abspath(os.fspath(folder))
     real_open = builtins.open
     budget = [after_bytes]
@@ -110,4 +118,9 @@ def disk_full(monkeypatch, folder, after_bytes: int = 0, code: int = errno_modul
             return _FailingFile(real_open(file, mode, *args, **kwargs), budget, code)
         return real_open(file, mode, *args, **kwargs)
 
-    monkeypatch.setattr(builtins, "open", open_)
+    return open_
+
+
+def disk_full(monkeypatch, folder, after_bytes: int = 0, code: int = errno_module.ENOSPC) -> None:
+    """From now on (in this test), Python-level writes into ``folder`` fail midway (:func:`failing_open`)."""
+    monkeypatch.setattr(builtins, "open", failing_open(folder, after_bytes, code))
