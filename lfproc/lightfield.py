@@ -135,16 +135,63 @@ class LightField:
 
 
 def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
-    """The named arrays of a light field file (only those are read), every failure as one LfprocError."""
+    """The named arrays of a light field file (only those are read), every failure as one LfprocError.
+
+    Before numpy reads a member, its header is checked against the bytes the archive holds for it (a
+    declared shape the file cannot hold is refused before anything is allocated for it), and members
+    of Python objects are refused: lfproc never unpickles (``allow_pickle=False``).
+    """
     try:
+        with zipfile.ZipFile(path) as archive:
+            infos = {info.filename[:-4]: info for info in archive.infolist() if info.filename.endswith(".npy")}
+            if "format" not in infos:
+                raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+            for name in ("format", *names, *(n for n in optional if n in infos)):
+                if name not in infos:
+                    raise LfprocError(f"{path}: the light field file has no '{name}'; write it again with "
+                                      f"'lfproc decode'")
+                _check_member(archive, infos[name], name, path)
         with np.load(path, allow_pickle=False) as data:
-            if "format" not in data or str(data["format"]) != FILE_FORMAT:
+            if str(data["format"]) != FILE_FORMAT:
                 raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
             members = {name: data[name] for name in names}
             members.update({name: data[name] for name in optional if name in data})
             return members
     except FileNotFoundError:
         raise LfprocError(f"{path}: light field file not found; check the path") from None
-    except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError, NotImplementedError,
+            RuntimeError) as exc:
         raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
             from None
+
+
+#: a deflated member may expand at most this much (deflate's limit is about 1032:1)
+_MAX_INFLATION = 1100
+
+
+def _check_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str, path: str) -> None:
+    """Refuse a member that holds Python objects or declares more data than the archive holds for it."""
+    import math
+
+    if info.compress_size > os.path.getsize(path) or \
+            info.file_size > _MAX_INFLATION * info.compress_size + (1 << 20):
+        raise LfprocError(f"{path}: member '{name}' declares sizes the file cannot hold; the file is corrupt, "
+                          f"write it again with 'lfproc decode'")
+    with archive.open(info) as fh:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise LfprocError(f"{path}: member '{name}' has numpy format version {version}; write it again with "
+                              f"'lfproc decode'")
+        header_bytes = fh.tell()
+    if dtype.hasobject:
+        raise LfprocError(f"{path}: member '{name}' holds Python objects, which lfproc never unpickles; write the "
+                          f"file again with 'lfproc decode'")
+    declared = math.prod(shape) * dtype.itemsize
+    if declared > info.file_size - header_bytes:
+        raise LfprocError(f"{path}: member '{name}' declares {shape} {dtype} ({declared} bytes) but holds "
+                          f"{info.file_size - header_bytes}; the file is truncated or corrupt, write it again with "
+                          f"'lfproc decode'")
