@@ -379,3 +379,88 @@ def test_lightfield_files_with_damaged_bytes(lightfield_file, tmp_path_factory):
         path.write_bytes(data)
         read_or_refuse("light field .lfp.npz (bytes)", _read_lightfield, path, file_bytes=len(data))
     check()
+
+
+# ----------------------------------------------------------------------------- absurd declared sizes, explicitly
+def _tiff_declaring(width: int, height: int) -> bytes:
+    """A little-endian TIFF header declaring a ``width`` x ``height`` float32 image, with 64 bytes of data."""
+    import struct
+
+    tags = [(256, 4, 1, width), (257, 4, 1, height), (258, 3, 1, 32), (259, 3, 1, 1), (262, 3, 1, 1),
+            (273, 4, 1, 8 + 2 + 12 * 11 + 4), (277, 3, 1, 1), (278, 4, 1, height), (279, 4, 1, 64),
+            (284, 3, 1, 1), (339, 3, 1, 3)]
+    ifd = struct.pack("<H", len(tags)) + b"".join(struct.pack("<HHII", *t) for t in tags) + struct.pack("<I", 0)
+    return b"II*\x00" + struct.pack("<I", 8) + ifd + bytes(64)
+
+
+def test_an_image_header_declaring_gigabytes_is_refused_before_allocating(tmp_path):
+    path = tmp_path / "huge.tif"
+    path.write_bytes(_tiff_declaring(60000, 60000))  # 14.4 GB of float pixels declared in 226 bytes
+    from lfproc.io import read_capture
+    tracemalloc.start()
+    try:
+        with pytest.raises(LfprocError, match="huge.tif: .*(cannot hold|corrupt)"):
+            read_capture(path)
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    assert peak < ALLOC_SLACK
+    small = tmp_path / "small.tif"
+    small.write_bytes(_tiff_declaring(4, 4))  # the same header with a size its data holds reads fine
+    assert read_capture(small).data.shape == (4, 4)
+
+
+def test_a_lightfield_member_declaring_gigabytes_is_refused_before_allocating(tmp_path):
+    import zipfile
+
+    header = "{'descr': '<f4', 'fortran_order': False, 'shape': (100000, 100000), }"
+    header = header + " " * (-(10 + len(header) + 1) % 64) + "\n"
+    npy = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(64)
+    path = tmp_path / "lf.lfp.npz"
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, value in (("format", np.array("lfproc-lightfield-1")), ("camera_toml", np.array("")),
+                            ("grid_json", np.array(""))):
+            with archive.open(name + ".npy", "w") as fh:
+                np.lib.format.write_array(fh, value)
+        archive.writestr("views.npy", npy)
+    from lfproc import LightField
+    tracemalloc.start()
+    try:
+        with pytest.raises(LfprocError, match="declares"):
+            LightField.load(path)
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    assert peak < ALLOC_SLACK
+
+
+def test_an_object_member_is_refused_without_unpickling(tmp_path):
+    import pickle
+
+    class Boom:
+        def __reduce__(self):
+            return (os.system, ("touch " + str(tmp_path / "unpickled"),))
+
+    path = tmp_path / "lf.lfp.npz"
+    np.savez(path, views=np.array([Boom()], dtype=object), camera_toml=np.array(""), grid_json=np.array(""),
+             format=np.array("lfproc-lightfield-1"))
+    from lfproc import LightField
+    with pytest.raises(LfprocError, match="never unpickles"):
+        LightField.load(path)
+    assert not (tmp_path / "unpickled").exists()
+    del pickle
+
+
+def test_lytro_metadata_declaring_a_huge_sensor_is_refused_before_allocating(tmp_path):
+    document = copy.deepcopy(F01)
+    document["image"]["width"], document["image"]["height"] = 200000, 100000
+    (tmp_path / "frame.RAW").write_bytes(F01_RAW)
+    (tmp_path / "frame.json").write_text(json.dumps(document))
+    tracemalloc.start()
+    try:
+        with pytest.raises(LfprocError):
+            _read_lytro(tmp_path / "frame.RAW")
+    finally:
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    assert peak < ALLOC_SLACK
