@@ -464,3 +464,35 @@ def test_lytro_metadata_declaring_a_huge_sensor_is_refused_before_allocating(tmp
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
     assert peak < ALLOC_SLACK
+
+
+# ----------------------------------------------------------------------------- the batch manifest and journal
+def _manifest_document():
+    return {"version": 1, "parameters": {"views": True},
+            "captures": {"/data/cap0.png": {"status": "done", "last_run": "done", "fingerprint": "f0",
+                                            "parameters": {}, "outputs": ["cap0_a+0.000.tif"], "error": None,
+                                            "seconds": 1.0}},
+            "summary": {"done": 1}}
+
+
+def _resume(folder):
+    from lfproc import batch
+
+    manifest = batch.Manifest(str(folder), {"views": True})
+    job = batch.Job("/data/cap0.png", "cap0", str(folder), "", None, None, (0.0,), False)
+    if manifest.is_complete(job, "f0"):
+        manifest.record(job, batch.JobResult(job.source, "skipped"), "f0")
+    manifest.record(job, batch.JobResult(job.source, "done", (str(folder / "cap0_a+0.000.tif"),)), "f0")
+    manifest.save({"done": 1})
+
+
+@fuzz(60)
+@given(document=altered(_manifest_document()), journal=damaged(
+    (json.dumps(["/data/cap0.png", _manifest_document()["captures"]["/data/cap0.png"]]) + "\n").encode() * 2))
+def test_batch_manifests_and_journals(document, journal, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("out")
+    (folder / "lfproc-manifest.json").write_text(json.dumps(document))
+    (folder / ".lfproc-manifest.journal").write_bytes(journal)
+    (folder / "cap0_a+0.000.tif").write_bytes(b"x")
+    (folder / "cap0_a+0.000.json").write_bytes(b"{}")
+    read_or_refuse("batch manifest + journal", _resume, folder)

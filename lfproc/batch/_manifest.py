@@ -98,9 +98,12 @@ class Manifest:
         """True when ``job`` needs no rerun: same fingerprint, done, every output and sidecar still there
         (animations have no sidecar)."""
         entry = self.entry(job.source)
-        if not (entry and entry.get("fingerprint") == fingerprint and entry.get("status") == "done"):
+        if not (isinstance(entry, dict) and entry.get("fingerprint") == fingerprint and entry.get("status") == "done"):
             return False
-        images = [os.path.join(self.outdir, name) for name in entry.get("outputs", [])]
+        outputs = entry.get("outputs", [])
+        if not (isinstance(outputs, list) and all(isinstance(name, str) and name for name in outputs)):
+            return False  # an entry edited by hand or damaged: the capture is redone
+        images = [os.path.join(self.outdir, name) for name in outputs]
         return all(os.path.isfile(p) and (p.endswith(".gif") or os.path.isfile(sidecar_path(p))) for p in images)
 
     def record(self, job: Job, result: JobResult, fingerprint: str) -> None:
