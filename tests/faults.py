@@ -9,6 +9,8 @@ which therefore reaches every process lfproc starts, its spawned batch workers i
 - ``kill``: {"stem": STEM, "after": N, "marker": PATH} — SIGKILL this process just before its N-th
   file of STEM, once (PATH records the victim's pid, so the retry goes through).
 
+- ``starting``: {"dir": DIR, "seconds": S} — a spawned worker process creates ``DIR/worker-PID`` as soon as
+  its interpreter starts, then takes S seconds more to start (the window a Ctrl-C used to hit);
 - ``disk_full``: {"folder": DIR, "after": N} — as :func:`disk_full` below, for a whole process.
 
 ``disk_full(monkeypatch, folder, after_bytes, errno)`` makes Python-level writes into ``folder`` fail
@@ -23,6 +25,7 @@ import errno as errno_module
 import json
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -66,7 +69,13 @@ def uninstall() -> None:
 def install_from_env() -> None:
     spec = os.environ.get("LFPROC_FAULTS")
     if spec:
-        install(json.loads(spec))
+        spec = json.loads(spec)
+        starting = spec.get("starting")
+        if starting and "--multiprocessing-fork" in sys.argv:  # a spawned worker, at its very start
+            with open(os.path.join(starting["dir"], f"worker-{os.getpid()}"), "w"):
+                pass
+            time.sleep(starting["seconds"])
+        install(spec)
 
 
 class _FailingFile:

@@ -330,6 +330,29 @@ def test_ctrl_c_stops_a_local_batch_at_once_and_the_rerun_does_only_the_rest(dat
     assert tree_bytes(out) == reference[1]
 
 
+def test_ctrl_c_while_the_workers_start_is_one_line_too(data, tmp_path):
+    """The tracebacks of issue 23 came from workers hit by Ctrl-C while their interpreter started
+    (multiprocessing/spawn.py … KeyboardInterrupt): SIGINT to the group exactly then."""
+    out, starting = tmp_path / "out", tmp_path / "starting"
+    starting.mkdir()
+    proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"),
+                               {"starting": {"dir": str(starting), "seconds": 0.3}}, popen=True)
+    try:
+        poll(lambda: any(starting.iterdir()), proc, what="a worker to start")
+        os.killpg(proc.pid, signal.SIGINT)
+        signalled = time.monotonic()
+        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
+        gone_s = time.monotonic() - signalled
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stderr
+    assert len(stderr.splitlines()) == 1 and "interrupted" in stderr, stderr
+    assert gone_s < 2.0, gone_s
+    assert_only_recorded_outputs(out)
+
+
 def test_a_killed_batch_resumes_from_its_journal_and_takes_over_its_lock(data, reference, tmp_path):
     """SIGKILL to the batch process itself (no chance to save anything): its workers end with it, the
     captures it had recorded are skipped by the rerun, which takes the dead process's lock over with one

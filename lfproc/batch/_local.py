@@ -25,7 +25,7 @@ from ._signals import Cancelled, StopSignals, signals_blocked
 from ._worker import _portable_setups, init_pool_worker, run_job
 
 #: seconds a worker has to answer a stop (a capture that is computing is abandoned at once)
-STOP_GRACE_S = 1.0
+STOP_GRACE_S = 0.5
 #: seconds a worker that is renaming a capture's outputs into place has to finish it
 COMMIT_GRACE_S = 10.0
 #: the message a worker sends when it starts renaming a capture's outputs into place
@@ -122,7 +122,8 @@ def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignal
 
     def start_jobs():
         """Fill free slots; a capture whose worker died before runs alone."""
-        while queue and len(busy()) < workers and not any(attempts[w.job.source] for w in busy()):
+        while queue and len(busy()) < workers and not any(attempts[w.job.source] for w in busy()) \
+                and not stop.requested:  # a signal that came while a worker started: start no other
             if busy() and attempts[queue[0].source]:
                 return
             worker = next((w for w in pool if w.job is None), None)
@@ -203,7 +204,7 @@ def _worker_main(conn, setups: dict) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for the parent, which stops the workers
     _die_with_parent()
     with StopSignals((signal.SIGTERM,)) as stop:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, (signal.SIGINT, signal.SIGTERM))
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, (signal.SIGINT, signal.SIGTERM))  # blocked since the start
         try:
             init_pool_worker(setups)
             while not stop.requested:

@@ -77,11 +77,20 @@ class StopSignals:
 
 @contextlib.contextmanager
 def signals_blocked(signums=(signal.SIGINT, signal.SIGTERM)):
-    """Block ``signums`` in this thread: a process started inside inherits the block, so a Ctrl-C that
-    reaches the whole process group cannot interrupt its start-up; it unblocks them itself once it has
-    chosen what to do with them. Signals to this process wait and arrive at the end."""
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, signums)
+    """Block ``signums`` in this thread: a process started inside inherits the block through ``exec``, so
+    a Ctrl-C that reaches the whole process group can neither interrupt its start-up nor kill it before
+    it has read what ``spawn`` sends it (which would leave ``Process.start`` waiting for ever); it
+    decides what to do with them once it runs (``_local._worker_main``). Signals to this process stay
+    pending and reach its handler when the block ends.
+
+    multiprocessing's resource tracker, started by the first ``spawn`` of a process, unblocks these
+    signals in the thread that starts it: it is started before the block.
+    """
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, signums)
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)

@@ -150,6 +150,7 @@ def _process(args, jobs, manifest, camera) -> int:
                         integer=args.integer, max_slices=args.max_slices)
     start = time.perf_counter()
     interrupted = False
+    tqdm.monitor_interval = 0  # no monitor thread: signals reach the main thread's handler (batch._signals)
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
