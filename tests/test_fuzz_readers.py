@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 import lytrogen
@@ -47,8 +47,10 @@ STATS: dict = {}
 
 
 def fuzz(n_ci: int):
+    # the long random runs skip shrinking (minutes per failure): the failing input is printed as found
+    phases = (Phase.explicit, Phase.generate) if RANDOM else tuple(Phase)
     return settings(max_examples=EXAMPLES or n_ci, deadline=None, derandomize=not RANDOM, database=None,
-                    suppress_health_check=list(HealthCheck), print_blob=True)
+                    suppress_health_check=list(HealthCheck), print_blob=True, phases=phases)
 
 
 class Hang(Exception):
@@ -496,3 +498,22 @@ def test_batch_manifests_and_journals(document, journal, tmp_path_factory):
     (folder / "cap0_a+0.000.tif").write_bytes(b"x")
     (folder / "cap0_a+0.000.json").write_bytes(b"{}")
     read_or_refuse("batch manifest + journal", _resume, folder)
+
+
+# ----------------------------------------------------------------------------- escapes the long runs found
+@pytest.mark.parametrize("change, key", [({"bitsPerPixel": 2 ** 62}, "bitsPerPixel"),   # 2 ** bits: a hang
+                                         ({"mosaic": 7}, "Bayer"),                    # AttributeError
+                                         ({"black": float("nan")}, "black")])          # a NaN image
+def test_lytro_metadata_escapes_found_by_fuzzing(change, key, tmp_path):
+    metadata, private = copy.deepcopy(lytrogen.frame_metadata_of(ILLUM))
+    raw = metadata["image"]["rawDetails"]
+    if "bitsPerPixel" in change:
+        raw["pixelPacking"]["bitsPerPixel"] = change["bitsPerPixel"]
+    elif "mosaic" in change:
+        raw["mosaic"] = change["mosaic"]
+    else:
+        raw["pixelFormat"]["black"] = change["black"]
+    path = tmp_path / "IMG.LFR"
+    path.write_bytes(lytrogen.container_bytes(lytrogen.pack10_little(DN), metadata, private))
+    with hard_deadline(DEADLINE_S), pytest.raises(LfprocError, match=key):
+        _read_lytro(path)
