@@ -517,3 +517,12 @@ def test_lytro_metadata_escapes_found_by_fuzzing(change, key, tmp_path):
     path.write_bytes(lytrogen.container_bytes(lytrogen.pack10_little(DN), metadata, private))
     with hard_deadline(DEADLINE_S), pytest.raises(LfprocError, match=key):
         _read_lytro(path)
+
+
+def test_a_grid_origin_of_the_wrong_length_is_refused(tmp_path):
+    """Found by scripts/fuzz_long.py: origin_xy_px with one number raised IndexError."""
+    document = dict(_grid_document(), origin_xy_px=[5.0])
+    path = tmp_path / "grid.json"
+    path.write_text(json.dumps(document))
+    with pytest.raises(LfprocError, match="origin_xy_px"):
+        _grid(path)
