@@ -526,3 +526,11 @@ def test_a_grid_origin_of_the_wrong_length_is_refused(tmp_path):
     path.write_text(json.dumps(document))
     with pytest.raises(LfprocError, match="origin_xy_px"):
         _grid(path)
+
+
+def test_a_scene_texture_that_is_not_a_name_is_refused(tmp_path):
+    """Found by scripts/fuzz_long.py: texture = [ ... ] raised TypeError (unhashable list)."""
+    table = tomllib.loads(SCENE_TEXT)
+    table["plane"][0]["texture"] = ["noise"]
+    with pytest.raises(LfprocError, match="texture"):
+        _scene(_nested_toml(table), tmp_path)
