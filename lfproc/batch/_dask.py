@@ -18,6 +18,10 @@ def run_dask(jobs: list[Job], scheduler, on_result) -> None:
     the small :class:`Job` records; workers read captures and write outputs themselves, on a file
     system shared with this machine. A task lost with its worker is rerun elsewhere by the scheduler
     (up to its ``distributed.scheduler.allowed-failures`` times, then reported as failed here).
+
+    On SIGINT or SIGTERM: the tasks still running are told to abandon their capture at their next
+    output file (a ``distributed.Event``: a running task cannot be interrupted), those that finish
+    within a grace period are reported, the rest are cancelled; then ``KeyboardInterrupt`` is raised.
     """
     try:
         from distributed import Client, as_completed
