@@ -130,8 +130,18 @@ class LightField:
         members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask",))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
-        grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
+        grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
         return cls.from_views(views, camera, grid, members.get("view_mask"))
+
+
+def _grid_document(grid_json: str, path: str) -> dict:
+    try:
+        document = json.loads(grid_json)
+    except ValueError as exc:
+        raise LfprocError(f"{path}: its grid_json is not JSON ({exc}); write it again with 'lfproc decode'") from None
+    if not isinstance(document, dict):
+        raise LfprocError(f"{path}: its grid_json is not a grid; write it again with 'lfproc decode'")
+    return document
 
 
 def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:

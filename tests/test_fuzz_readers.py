@@ -534,3 +534,13 @@ def test_a_scene_texture_that_is_not_a_name_is_refused(tmp_path):
     table["plane"][0]["texture"] = ["noise"]
     with pytest.raises(LfprocError, match="texture"):
         _scene(_nested_toml(table), tmp_path)
+
+
+def test_a_lightfield_grid_member_that_is_not_json_is_refused(tmp_path):
+    """Found by scripts/fuzz_long.py: grid_json = "" of the wrong kind raised JSONDecodeError."""
+    path = tmp_path / "lf.lfp.npz"
+    np.savez(path, views=np.zeros((3, 3, 2, 2, 1), np.float32), camera_toml=np.array(""),
+             grid_json=np.array("{not json"), format=np.array("lfproc-lightfield-1"))
+    from lfproc import LightField
+    with pytest.raises(LfprocError, match="grid_json"):
+        LightField.load(path)
