@@ -99,7 +99,7 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
     packing = _get(raw, "pixelPacking", source, dict, "image.rawDetails.")
     width = _get(image, "width", source, int, "image.")
     height = _get(image, "height", source, int, "image.")
-    if width <= 0 or height <= 0:
+    if width <= 0 or height <= 0 or width * height > 1 << 40:  # no sensor has a trillion pixels
         raise LfprocError(f"{source}: image.width/height {width} x {height} is not a sensor size; "
                           f"the metadata is corrupt, re-copy it")
     bits = _get(packing, "bitsPerPixel", source, int, "image.rawDetails.pixelPacking.")
