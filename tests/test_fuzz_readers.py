@@ -503,7 +503,8 @@ def test_batch_manifests_and_journals(document, journal, tmp_path_factory):
 # ----------------------------------------------------------------------------- escapes the long runs found
 @pytest.mark.parametrize("change, key", [({"bitsPerPixel": 2 ** 62}, "bitsPerPixel"),   # 2 ** bits: a hang
                                          ({"mosaic": 7}, "Bayer"),                    # AttributeError
-                                         ({"black": float("nan")}, "black")])          # a NaN image
+                                         ({"black": float("nan")}, "black"),          # a NaN image
+                                         ({"height": 10 ** 300}, "sensor size")])      # OverflowError
 def test_lytro_metadata_escapes_found_by_fuzzing(change, key, tmp_path):
     metadata, private = copy.deepcopy(lytrogen.frame_metadata_of(ILLUM))
     raw = metadata["image"]["rawDetails"]
@@ -511,6 +512,8 @@ def test_lytro_metadata_escapes_found_by_fuzzing(change, key, tmp_path):
         raw["pixelPacking"]["bitsPerPixel"] = change["bitsPerPixel"]
     elif "mosaic" in change:
         raw["mosaic"] = change["mosaic"]
+    elif "height" in change:
+        metadata["image"]["height"] = change["height"]
     else:
         raw["pixelFormat"]["black"] = change["black"]
     path = tmp_path / "IMG.LFR"
@@ -537,7 +540,7 @@ def test_a_scene_texture_that_is_not_a_name_is_refused(tmp_path):
 
 
 def test_a_lightfield_grid_member_that_is_not_json_is_refused(tmp_path):
-    """Found by scripts/fuzz_long.py: grid_json = "" of the wrong kind raised JSONDecodeError."""
+    """Found by scripts/fuzz_long.py: a grid_json member that is not JSON raised JSONDecodeError."""
     path = tmp_path / "lf.lfp.npz"
     np.savez(path, views=np.zeros((3, 3, 2, 2, 1), np.float32), camera_toml=np.array(""),
              grid_json=np.array("{not json"), format=np.array("lfproc-lightfield-1"))
