@@ -116,9 +116,9 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
                           f"supported; only unshifted raw data can be read")
     black = _channel_levels(pixel_format.get("black"), channels, 0.0, source, "black")
     white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source, "white")
-    if any(w <= b for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
-        raise LfprocError(f"{source}: white level {white} is not above the black level {black}; "
-                          f"the metadata is corrupt, re-copy it")
+    if any(not 0 <= b < w <= 2 ** bits for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
+        raise LfprocError(f"{source}: white level {white} is not above the black level {black} within "
+                          f"0..{2 ** bits} ({bits}-bit data); the metadata is corrupt, re-copy it")
     devices = metadata.get("devices") if isinstance(metadata.get("devices"), dict) else {}
     sensor, mla, lens = (devices.get(k) if isinstance(devices.get(k), dict) else {} for k in ("sensor", "mla", "lens"))
     return LytroMetadata(
