@@ -187,15 +187,20 @@ def _check_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str, pa
             info.file_size > _MAX_INFLATION * info.compress_size + (1 << 20):
         raise LfprocError(f"{path}: member '{name}' declares sizes the file cannot hold; the file is corrupt, "
                           f"write it again with 'lfproc decode'")
+    import tokenize
+
     with archive.open(info) as fh:
         version = np.lib.format.read_magic(fh)
-        if version == (1, 0):
-            shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
-        else:
+        if version not in ((1, 0), (2, 0)):
             raise LfprocError(f"{path}: member '{name}' has numpy format version {version}; write it again with "
                               f"'lfproc decode'")
+        try:
+            read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                np.lib.format.read_array_header_2_0
+            shape, _, dtype = read_header(fh)
+        except (ValueError, TypeError, SyntaxError, tokenize.TokenError) as exc:
+            raise LfprocError(f"{path}: member '{name}' has a corrupt header ({type(exc).__name__}); write it "
+                              f"again with 'lfproc decode'") from None
         header_bytes = fh.tell()
     if dtype.hasobject:
         raise LfprocError(f"{path}: member '{name}' holds Python objects, which lfproc never unpickles; write the "

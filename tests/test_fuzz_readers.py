@@ -25,6 +25,7 @@ import os
 import signal
 import tomllib
 import tracemalloc
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,7 @@ STATS: dict = {}
 def fuzz(n_ci: int):
     # the long random runs skip shrinking (minutes per failure): the failing input is printed as found
     phases = (Phase.explicit, Phase.generate) if RANDOM else tuple(Phase)
-    return settings(max_examples=EXAMPLES or n_ci, deadline=None, derandomize=not RANDOM, database=None,
+    return settings(max_examples=EXAMPLES or 2 * n_ci, deadline=None, derandomize=not RANDOM, database=None,
                     suppress_health_check=list(HealthCheck), print_blob=True, phases=phases)
 
 
@@ -78,7 +79,8 @@ def read_or_refuse(target: str, read, *args, file_bytes: int | None = None):
     if file_bytes is not None:
         tracemalloc.start()
     try:
-        with hard_deadline(DEADLINE_S):
+        with hard_deadline(DEADLINE_S), warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)  # numpy overflow or invalid value: a wrong image
             read(*args)
     except LfprocError as exc:
         counts["refused"] += 1
@@ -186,7 +188,8 @@ F01_RAW = lytrogen.pack12_big(np.full((4, 6), 1000))
 def _read_lytro(path):
     from lfproc.io import read_lytro, read_lytro_metadata
     read_lytro_metadata(path)
-    read_lytro(path)
+    capture, _ = read_lytro(path)
+    assert np.all(np.isfinite(capture.data))  # read correctly: never a NaN or infinite image
 
 
 @fuzz(60)
@@ -244,7 +247,7 @@ IMAGES = {ext: _image_bytes(ext, dtype) for ext, dtype in ((".tif", np.float32),
 
 def _read_image(path):
     from lfproc.io import read_capture, read_image, read_metadata
-    read_capture(path)
+    assert np.all(np.isfinite(read_capture(path).data))
     read_image(path)
     read_metadata(path)
 
