@@ -131,6 +131,9 @@ class LightField:
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
+        if views.dtype.kind not in "fiub":
+            raise LfprocError(f"{path}: its views are {views.dtype} data, not numbers; write it again with "
+                              f"'lfproc decode'")
         return cls.from_views(views, camera, grid, members.get("view_mask"))
 
 

@@ -550,3 +550,13 @@ def test_a_lightfield_grid_member_that_is_not_json_is_refused(tmp_path):
     from lfproc import LightField
     with pytest.raises(LfprocError, match="grid_json"):
         LightField.load(path)
+
+
+def test_lightfield_views_that_are_not_numbers_are_refused(tmp_path):
+    """Found by scripts/fuzz_long.py: views of strings raised ValueError in the float conversion."""
+    path = tmp_path / "lf.lfp.npz"
+    np.savez(path, views=np.array("abc"), camera_toml=np.array(""), grid_json=np.array(""),
+             format=np.array("lfproc-lightfield-1"))
+    from lfproc import LightField
+    with pytest.raises(LfprocError, match="not numbers"):
+        LightField.load(path)
