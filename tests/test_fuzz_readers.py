@@ -12,7 +12,7 @@ another type, a key deleted, absurd numbers). Every example must
   :data:`ALLOC_PER_BYTE` times its size plus :data:`ALLOC_SLACK` — declared sizes are checked before
   anything is allocated for them.
 
-CI runs a bounded number of examples, derandomized (the same inputs every run, under ~20 s in all);
+CI runs a bounded number of examples, derandomized (the same inputs every run; 7-20 s in all on a 2-core machine);
 ``scripts/fuzz_long.py`` runs many more with fresh randomness (LFPROC_FUZZ_EXAMPLES, LFPROC_FUZZ_RANDOM).
 """
 
