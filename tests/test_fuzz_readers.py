@@ -560,3 +560,12 @@ def test_lightfield_views_that_are_not_numbers_are_refused(tmp_path):
     from lfproc import LightField
     with pytest.raises(LfprocError, match="not numbers"):
         LightField.load(path)
+
+
+def test_a_camera_whose_pitch_ratio_overflows_is_refused():
+    """Found by scripts/fuzz_long.py: pitch_mm 1e308 over pixel_pitch_mm 0.01 raised OverflowError."""
+    table = tomllib.loads(CAMERA_TEXT)
+    table["mla"]["pitch_mm"] = 1e308
+    table.setdefault("decode", {})["micro_image_px"] = 4
+    with pytest.raises(LfprocError, match="finite"):
+        _camera(_nested_toml(table))
