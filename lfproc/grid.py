@@ -122,6 +122,8 @@ class LensGrid:
     def __post_init__(self):
         if self.kind not in ROW_SPACING:
             raise LfprocError(f"unknown grid kind {self.kind!r}; use rectangular or hexagonal")
+        if len(self.origin_xy_px) != 2:
+            raise LfprocError(f"grid origin_xy_px must be two numbers (x, y), got {self.origin_xy_px!r}")
         origin = (float(self.origin_xy_px[0]), float(self.origin_xy_px[1]))
         if not (math.isfinite(self.pitch_px) and self.pitch_px > 0):
             raise LfprocError(f"grid pitch_px must be a finite positive number of pixels, got {self.pitch_px}")

@@ -161,7 +161,10 @@ class LightField:
         members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask",))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
-        grid = LensGrid.from_json_dict(json.loads(grid_json), source=path) if grid_json else None
+        grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
+        if views.dtype.kind not in "fiub":
+            raise LfprocError(f"{path}: its views are {views.dtype} data, not numbers; write it again with "
+                              f"'lfproc decode'")
         return cls.from_views(views, camera, grid, members.get("view_mask"))
 
 
@@ -171,17 +174,79 @@ def _any_nonzero(views: np.ndarray, which: np.ndarray) -> bool:
     return any(views[ky, kx].any() for ky, kx in zip(*np.nonzero(which)))
 
 
-def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
-    """The named arrays of a light field file (only those are read), every failure as one LfprocError."""
+def _grid_document(grid_json: str, path: str) -> dict:
     try:
+        document = json.loads(grid_json)
+    except ValueError as exc:
+        raise LfprocError(f"{path}: its grid_json is not JSON ({exc}); write it again with 'lfproc decode'") from None
+    if not isinstance(document, dict):
+        raise LfprocError(f"{path}: its grid_json is not a grid; write it again with 'lfproc decode'")
+    return document
+
+
+def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
+    """The named arrays of a light field file (only those are read), every failure as one LfprocError.
+
+    Before numpy reads a member, its header is checked against the bytes the archive holds for it (a
+    declared shape the file cannot hold is refused before anything is allocated for it), and members
+    of Python objects are refused: lfproc never unpickles (``allow_pickle=False``).
+    """
+    try:
+        with zipfile.ZipFile(path) as archive:
+            infos = {info.filename[:-4]: info for info in archive.infolist() if info.filename.endswith(".npy")}
+            if "format" not in infos:
+                raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+            for name in ("format", *names, *(n for n in optional if n in infos)):
+                if name not in infos:
+                    raise LfprocError(f"{path}: the light field file has no '{name}'; write it again with "
+                                      f"'lfproc decode'")
+                _check_member(archive, infos[name], name, path)
         with np.load(path, allow_pickle=False) as data:
-            if "format" not in data or str(data["format"]) != FILE_FORMAT:
+            if str(data["format"]) != FILE_FORMAT:
                 raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
             members = {name: data[name] for name in names}
             members.update({name: data[name] for name in optional if name in data})
             return members
     except FileNotFoundError:
         raise LfprocError(f"{path}: light field file not found; check the path") from None
-    except (OSError, ValueError, zipfile.BadZipFile, KeyError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError, NotImplementedError,
+            RuntimeError) as exc:
         raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
             from None
+
+
+#: a deflated member may expand at most this much (deflate's limit is about 1032:1)
+_MAX_INFLATION = 1100
+
+
+def _check_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str, path: str) -> None:
+    """Refuse a member that holds Python objects or declares more data than the archive holds for it."""
+    import math
+
+    if info.compress_size > os.path.getsize(path) or \
+            info.file_size > _MAX_INFLATION * info.compress_size + (1 << 20):
+        raise LfprocError(f"{path}: member '{name}' declares sizes the file cannot hold; the file is corrupt, "
+                          f"write it again with 'lfproc decode'")
+    import tokenize
+
+    with archive.open(info) as fh:
+        version = np.lib.format.read_magic(fh)
+        if version not in ((1, 0), (2, 0)):
+            raise LfprocError(f"{path}: member '{name}' has numpy format version {version}; write it again with "
+                              f"'lfproc decode'")
+        try:
+            read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                np.lib.format.read_array_header_2_0
+            shape, _, dtype = read_header(fh)
+        except (ValueError, TypeError, SyntaxError, tokenize.TokenError) as exc:
+            raise LfprocError(f"{path}: member '{name}' has a corrupt header ({type(exc).__name__}); write it "
+                              f"again with 'lfproc decode'") from None
+        header_bytes = fh.tell()
+    if dtype.hasobject:
+        raise LfprocError(f"{path}: member '{name}' holds Python objects, which lfproc never unpickles; write the "
+                          f"file again with 'lfproc decode'")
+    declared = math.prod(shape) * dtype.itemsize
+    if declared > info.file_size - header_bytes:
+        raise LfprocError(f"{path}: member '{name}' declares {shape} {dtype} ({declared} bytes) but holds "
+                          f"{info.file_size - header_bytes}; the file is truncated or corrupt, write it again with "
+                          f"'lfproc decode'")

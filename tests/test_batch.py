@@ -7,12 +7,12 @@ whose outputs and parameters are unchanged, without touching their files; a corr
 alone, with its error in the manifest and the summary, and exit status 2.
 """
 
-import concurrent.futures
+import contextlib
 import json
-import multiprocessing
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -25,7 +25,8 @@ from lfproc.cli import main
 from lfproc.io import write_image
 from lfproc.simulate import Noise, Plane, Scene
 
-from conftest import assert_clean_error, run_cli
+import faults
+from conftest import ROOT, assert_clean_error, run_cli
 
 # 7 px per lens (m̂ = 7: 49 views), Bayer, 12-bit: small and fast, yet the whole pipeline
 CAMERA_TOML = """name = "batch-test"
@@ -106,6 +107,19 @@ def without_timing(entries: dict) -> dict:
     return {src: {k: v for k, v in e.items() if k != "seconds"} for src, e in entries.items()}
 
 
+def run_cli_with_faults(argv, spec, popen=False):
+    """``python -m lfproc ARGV`` with tests/faults.py's ``spec`` installed in it and in every process it
+    starts; ``popen``: started in its own process group (as a shell job) and returned running."""
+    env = dict(os.environ, PYTHONUNBUFFERED="1", LFPROC_FAULTS=json.dumps(spec),
+               PYTHONPATH=os.pathsep.join([str(ROOT / "tests" / "fault_site"), str(ROOT),
+                                           os.environ.get("PYTHONPATH", "")]))
+    command = [sys.executable, "-m", "lfproc", *map(str, argv)]
+    if popen:
+        return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                start_new_session=True)
+    return subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
+
+
 def partial_files(outdir) -> list:
     return [name for name in os.listdir(outdir) if ".part" in name]
 
@@ -127,7 +141,8 @@ def reference(data):
 @pytest.fixture(scope="module")
 def cluster():
     import distributed  # a test dependency (pyproject [test]): never skipped
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as lc, \
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as lc, \
             distributed.Client(lc) as client:
         yield lc, client
 
@@ -158,71 +173,35 @@ def test_dask_cluster_gives_byte_identical_outputs(data, reference, cluster, tmp
     assert without_timing(manifest(tmp_path)["captures"]) == without_timing(manifest(reference[0])["captures"])
 
 
-def _kill_a_busy_dask_worker(client, timeout_s=20.0):
-    """SIGKILL a worker process that holds lfproc tasks; returns (its address, the keys it held)."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        for address, keys in client.processing().items():
-            keys = [k for k in keys if str(k).startswith("lfproc-")]
-            if keys:
-                pid = client.run(os.getpid, workers=[address])[address]
-                os.kill(pid, signal.SIGKILL)
-                return address, keys
-        time.sleep(0.005)
-    raise AssertionError("no worker was processing an lfproc task")
+# ----------------------------------------------------------------------------- lost workers (tests/faults.py)
+def test_a_dask_worker_killed_mid_capture_still_completes(data, reference, cluster, tmp_path):
+    """A worker SIGKILLs itself just before its 10th file of cap1 (temporary files of cap1 exist): the
+    scheduler reruns the task elsewhere, the batch exits 0 and its outputs are the local run's, file for file."""
+    lc, client = cluster
+    marker = tmp_path / "killed"
+    client.run(faults.install, {"kill": {"stem": "cap1", "after": 10, "marker": str(marker)}})
+    try:
+        proc = run_cli(*batch_argv(data, tmp_path / "out", "--scheduler", lc.scheduler_address), timeout=300)
+    finally:
+        client.run(faults.uninstall)
+    assert proc.returncode == 0, proc.stderr
+    assert marker.is_file()
+    victim = int(marker.read_text())
+    assert victim not in client.run(os.getpid).values()  # that worker process is gone (its nanny started another)
+    assert statuses(tmp_path / "out") == {f"cap{i}.png": ("done", "done") for i in range(4)}
+    assert tree_bytes(tmp_path / "out") == reference[1]  # and nothing the killed worker had half-written remains
 
 
-def test_a_dask_worker_killed_mid_run_still_completes(data, reference, cluster, tmp_path, monkeypatch):
-    _, client = cluster
-    killed = []
-    run_dask = batch.run_dask
-
-    def run_dask_killing_a_worker(jobs, scheduler, on_result, **kwargs):
-        def on_result_then_kill(job, result):
-            on_result(job, result)
-            if not killed:  # after the first result, while the others run
-                killed.append(_kill_a_busy_dask_worker(client))
-        return run_dask(jobs, client, on_result_then_kill, **kwargs)  # one Client (event loop) in this process
-
-    monkeypatch.setattr(batch, "run_dask", run_dask_killing_a_worker)
-    assert main(batch_argv(data, tmp_path, "--scheduler", client.scheduler.address)) == 0
-    assert killed
-    address, keys = killed[0]
-    # the scheduler took the killed worker's tasks back from it and ran them elsewhere
-    story = [record for record in client.story(*keys) if record[0] == "scheduler"]
-    assert any(record[2:4] == ("processing", "released") for record in story), story
-    assert address not in client.scheduler_info()["workers"]
-    assert statuses(tmp_path) == {f"cap{i}.png": ("done", "done") for i in range(4)}
-    assert tree_bytes(tmp_path) == reference[1]  # and nothing half-written by the killed worker remains
-
-
-def test_a_local_worker_process_killed_mid_run_still_completes(data, reference, tmp_path, monkeypatch):
-    killed, pools = [], []
-    run_local = batch.run_local
-
-    class CountedPool(concurrent.futures.ProcessPoolExecutor):
-        def __init__(self, *args, **kwargs):
-            pools.append(self)
-            super().__init__(*args, **kwargs)
-
-    def run_local_killing_a_worker(jobs, workers, on_result, **kwargs):
-        others = {p.pid for p in multiprocessing.active_children()}  # e.g. the Dask cluster's processes
-
-        def on_result_then_kill(job, result):
-            on_result(job, result)
-            if not killed:
-                victim = next(p for p in multiprocessing.active_children() if p.pid not in others)
-                os.kill(victim.pid, signal.SIGKILL)
-                killed.append(victim.pid)
-        return run_local(jobs, workers, on_result_then_kill, **kwargs)
-
-    monkeypatch.setattr(batch, "run_local", run_local_killing_a_worker)
-    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", CountedPool)
-    assert main(batch_argv(data, tmp_path, "--workers", "2")) == 0
-    assert killed
-    assert len(pools) >= 2  # the kill broke the first pool; the captures it held ran again in fresh ones
-    assert statuses(tmp_path) == {f"cap{i}.png": ("done", "done") for i in range(4)}
-    assert tree_bytes(tmp_path) == reference[1]
+def test_a_local_worker_process_killed_mid_capture_still_completes(data, reference, tmp_path):
+    """The same for a local worker process: its capture is retried in a fresh process, the others are not charged."""
+    marker = tmp_path / "killed"
+    proc = run_cli_with_faults(batch_argv(data, tmp_path / "out", "--workers", "2"),
+                               {"kill": {"stem": "cap1", "after": 10, "marker": str(marker)}})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    assert marker.is_file()  # a worker died (the batch itself exited 0)
+    assert statuses(tmp_path / "out") == {f"cap{i}.png": ("done", "done") for i in range(4)}
+    assert tree_bytes(tmp_path / "out") == reference[1]
 
 
 # ----------------------------------------------------------------------------- resumability
@@ -276,6 +255,175 @@ def test_an_interrupted_run_leaves_no_partial_file_and_a_rerun_completes(data, r
     assert main(batch_argv(data, out, "--workers", "1")) == 0
     again = manifest(out)
     assert (again["summary"]["skipped"], again["summary"]["done"]) == (len(done_first), 4 - len(done_first))
+    assert tree_bytes(out) == reference[1]
+
+
+# ----------------------------------------------------------------------------- real interrupts (issue 23)
+def journal_done(outdir) -> set:
+    """Stems of the captures recorded done so far (the journal, then the manifest once saved)."""
+    done = set()
+    for path in (outdir / batch.MANIFEST_NAME, outdir / batch.JOURNAL_NAME):
+        with contextlib.suppress(FileNotFoundError, ValueError):
+            if path.name == batch.MANIFEST_NAME:
+                entries = json.loads(path.read_text())["captures"].items()
+            else:
+                entries = [json.loads(line) for line in path.read_text().splitlines() if line.endswith("}]")]
+            done |= {os.path.basename(src)[:-4] for src, e in entries if e["status"] == "done"}
+    return done
+
+
+def poll(condition, proc=None, timeout_s=180.0, what=""):
+    """Wait (bounded) until ``condition()``; fail at once if ``proc`` exits first."""
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if proc is not None and proc.poll() is not None:
+            raise AssertionError(f"exited before {what}: {proc.communicate()}")
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+def live_processes(pgid) -> list:
+    """pids of the processes of group ``pgid`` that are still running (zombies are gone already)."""
+    alive = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            with contextlib.suppress(OSError):
+                stat = open(f"/proc/{entry}/stat").read()
+                fields = stat[stat.rindex(")") + 2:].split()
+                if int(fields[2]) == pgid and fields[0] != "Z":
+                    alive.append(int(entry))
+    return alive
+
+
+def assert_only_recorded_outputs(outdir, data):
+    """Every file in OUTDIR belongs to a capture recorded done, all of its files: a stopped capture left
+    nothing."""
+    done = journal_done(outdir)
+    names = [n for n in os.listdir(outdir) if n not in BOOKKEEPING]
+    assert not partial_files(outdir)
+    assert {n.split("_")[0] for n in names} == done, (sorted(names)[:5], done)
+    assert len(names) == len(done) * files_per_capture(data)
+
+
+SLOW = {"stems": ["cap1", "cap2", "cap3"], "seconds": 0.15}
+
+
+def test_ctrl_c_stops_a_local_batch_at_once_and_the_rerun_does_only_the_rest(data, reference, tmp_path):
+    """SIGINT to the process group (what Ctrl-C does) while cap0 is recorded and cap1 is being written:
+    one stderr line, exit 130, every lfproc process gone within 2 s, cap0 in the manifest, nothing of
+    cap1, no lock; the rerun skips cap0 and does the rest, and the outputs are the reference's."""
+    out, announced = tmp_path / "out", tmp_path / "announced"
+    announced.mkdir()
+    proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"), {"announce": str(announced), "slow": SLOW},
+                               popen=True)
+    try:
+        poll(lambda: "cap0" in journal_done(out) and (announced / "cap1").exists(), proc, what="cap0 done, cap1 begun")
+        os.killpg(proc.pid, signal.SIGINT)
+        signalled = time.monotonic()
+        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
+        gone_s = time.monotonic() - signalled
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stderr
+    assert len(stderr.splitlines()) == 1 and "interrupted" in stderr and "Traceback" not in stderr, stderr
+    assert gone_s < 2.0, gone_s
+    assert "cap1" not in journal_done(out) and not (out / batch.JOURNAL_NAME).exists()
+    assert_only_recorded_outputs(out, data)
+    assert not (out / batch.LOCK_NAME).exists()
+    done_first = journal_done(out)
+
+    assert main(batch_argv(data, out, "--workers", "2")) == 0
+    again = manifest(out)["summary"]
+    assert (again["skipped"], again["done"]) == (len(done_first), 4 - len(done_first))
+    assert tree_bytes(out) == reference[1]
+
+
+def test_ctrl_c_while_the_workers_start_is_one_line_too(data, tmp_path):
+    """The tracebacks of issue 23 came from workers hit by Ctrl-C while their interpreter started
+    (multiprocessing/spawn.py … KeyboardInterrupt): SIGINT to the group exactly then."""
+    out, starting = tmp_path / "out", tmp_path / "starting"
+    starting.mkdir()
+    proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"),
+                               {"starting": {"dir": str(starting), "seconds": 0.3}}, popen=True)
+    try:
+        poll(lambda: any(starting.iterdir()), proc, what="a worker to start")
+        os.killpg(proc.pid, signal.SIGINT)
+        signalled = time.monotonic()
+        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
+        gone_s = time.monotonic() - signalled
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130, stderr
+    assert len(stderr.splitlines()) == 1 and "interrupted" in stderr, stderr
+    assert gone_s < 2.0, gone_s
+    assert_only_recorded_outputs(out, data)
+
+
+def test_a_killed_batch_resumes_from_its_journal_and_takes_over_its_lock(data, reference, tmp_path):
+    """SIGKILL to the batch process itself (no chance to save anything): its workers end with it, the
+    captures it had recorded are skipped by the rerun, which takes the dead process's lock over with one
+    line and removes what the workers left half-written."""
+    out, announced = tmp_path / "out", tmp_path / "announced"
+    announced.mkdir()
+    proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"), {"announce": str(announced), "slow": SLOW},
+                               popen=True)
+    try:
+        poll(lambda: "cap0" in journal_done(out) and (announced / "cap1").exists(), proc, what="cap0 done, cap1 begun")
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=60)
+        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="the workers to end with their parent")
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert not (out / batch.MANIFEST_NAME).exists() and (out / batch.LOCK_NAME).exists()
+    assert journal_done(out) == {"cap0"}
+
+    rerun = run_cli(*batch_argv(data, out, "--workers", "2"))
+    assert rerun.returncode == 0, rerun.stderr
+    assert rerun.stderr.splitlines() == [f"lfproc batch: note: took over the lock of process {proc.pid} on "
+                                         f"{socket.gethostname()}, since {rerun.stderr.split('since ')[1].split(',')[0]}, "
+                                         f"which is no longer running (interrupted or killed); resuming"]
+    summary = manifest(out)["summary"]
+    assert (summary["skipped"], summary["done"]) == (1, 3)
+    assert tree_bytes(out) == reference[1] and not (out / batch.LOCK_NAME).exists()
+
+
+def _busy_threads(dask_worker):
+    return len(dask_worker.active_threads)
+
+
+def test_ctrl_c_stops_a_dask_batch_and_its_tasks_write_nothing_more(data, reference, cluster, tmp_path):
+    """SIGINT to a batch running on a real scheduler (two workers on 127.0.0.1): one stderr line, exit 130;
+    the tasks still computing abandon their capture (nothing of it lands in OUTDIR, even later); the rerun
+    does only the rest."""
+    lc, client = cluster
+    out, announced = tmp_path / "out", tmp_path / "announced"
+    announced.mkdir()
+    client.run(faults.install, {"announce": str(announced), "slow": SLOW})
+    try:
+        proc = subprocess.Popen([sys.executable, "-m", "lfproc", *batch_argv(data, out, "--scheduler",
+                                                                              lc.scheduler_address)],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        poll(lambda: journal_done(out) and any(p.name not in journal_done(out) for p in announced.iterdir()), proc,
+             what="a capture done and another begun")
+        os.killpg(proc.pid, signal.SIGINT)
+        _, stderr = proc.communicate(timeout=60)
+        poll(lambda: not any(client.run(_busy_threads).values()), timeout_s=120, what="the workers to go idle")
+    finally:
+        client.run(faults.uninstall)
+    assert proc.returncode == 130, stderr
+    assert len(stderr.splitlines()) == 1 and "interrupted" in stderr, stderr
+    done_first = journal_done(out)
+    assert 1 <= len(done_first) < 4
+    assert_only_recorded_outputs(out, data)
+
+    assert run_cli(*batch_argv(data, out, "--scheduler", lc.scheduler_address)).returncode == 0
+    again = manifest(out)["summary"]
+    assert (again["skipped"], again["done"]) == (len(done_first), 4 - len(done_first))
     assert tree_bytes(out) == reference[1]
 
 

@@ -10,19 +10,23 @@ The manifest ``OUTDIR/lfproc-manifest.json`` (:class:`Manifest`) records, per ca
 (the capture file's size and modification time, those of the white image and grid file, the camera
 file's text, the lfproc version and every parameter that shapes the outputs), the parameters, the
 outputs (names relative to OUTDIR), status and error. A rerun skips captures whose fingerprint matches
-a ``done`` entry whose outputs and sidecars all still exist, and redoes the rest. The manifest is
-rewritten atomically as results arrive (at most every :data:`MANIFEST_SAVE_INTERVAL_S` seconds, and
-always at the end or on interruption), so an interrupted batch resumes where it stopped: at worst the
-captures of the last few seconds are redone, overwriting their complete outputs with identical ones.
+a ``done`` entry whose outputs and sidecars all still exist, and redoes the rest. Each result is
+recorded as it arrives (a line in a journal, folded into the manifest at the end), and a capture's
+outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`), so an interrupted or
+killed batch resumes exactly where it stopped: the rerun does only the captures that were not recorded,
+and none of those left an output behind.
 
 One batch at a time may write to an OUTDIR: :func:`lock_outdir` holds an advisory lock on
-``OUTDIR/.lfproc-batch.lock`` for the duration of a run.
+``OUTDIR/.lfproc-batch.lock`` for the duration of a run; a lock left by a killed run is taken over.
+Interrupts (SIGINT to the process group, SIGTERM) stop a batch within about a second: see
+:mod:`._local` and :mod:`._signals`; docs/reliability.md lists every guarantee and its test.
 """
 
 from ._dask import run_dask
 from ._jobs import CAPTURE_EXTENSIONS, Job, JobResult, expand_inputs, file_stamp
 from ._local import run_local
 from ._manifest import (
+           JOURNAL_NAME,
            LOCK_NAME,
            MANIFEST_NAME,
            MANIFEST_VERSION,
@@ -37,6 +41,7 @@ from ._resources import (
            available_memory_bytes,
            default_workers,
 )
+from ._signals import Cancelled
 from ._worker import (
            _GRID_SEEDS,
            decode_setup,
@@ -46,7 +51,8 @@ from ._worker import (
            setup_key,
 )
 
-__all__ = ["CAPTURE_EXTENSIONS", "Job", "JobResult", "expand_inputs", "file_stamp", "LOCK_NAME", "MANIFEST_NAME",
+__all__ = ["CAPTURE_EXTENSIONS", "Job", "JobResult", "expand_inputs", "file_stamp", "LOCK_NAME", "JOURNAL_NAME", "MANIFEST_NAME",
            "MANIFEST_VERSION", "Manifest", "lock_outdir", "read_manifest", "remove_stale_partial_files",
            "available_memory_bytes", "default_workers", "decode_setup", "init_pool_worker", "run_job", "seed_grids",
-           "setup_key", "_GRID_SEEDS", "run_local", "run_dask", "BYTES_PER_SENSOR_PIXEL", "PROCESS_BASE_BYTES"]
+           "setup_key", "_GRID_SEEDS", "run_local", "run_dask", "BYTES_PER_SENSOR_PIXEL", "PROCESS_BASE_BYTES",
+           "Cancelled"]

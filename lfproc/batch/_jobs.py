@@ -68,7 +68,7 @@ class JobResult:
     """What became of one capture: ``outputs`` are image paths (each with its sidecar ``NAME.json``)."""
 
     source: str
-    status: str                 # "done" | "failed" | "skipped"
+    status: str                 # "done" | "failed" | "skipped" | "cancelled" (stopped by an interrupt: nothing written)
     outputs: tuple = ()
     error: str | None = None
     seconds: float = 0.0

@@ -8,6 +8,7 @@ import time
 
 from ..errors import LfprocError
 from ._jobs import Job, JobResult, file_stamp
+from ._signals import Cancelled
 
 #: per process: setup key -> DecodeSetup (the calibrated grid and white image), oldest first
 _SETUP_CACHE: dict = {}
@@ -54,46 +55,53 @@ def _portable_setups(jobs: list[Job]) -> dict:
     return {key: dataclasses.replace(setup, _decoders={}) for key, setup in _SETUP_CACHE.items() if key in keys}
 
 
-def run_job(job: Job) -> JobResult:
+def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     """Process one capture; any error becomes a ``failed`` result (with its message), never an exception.
 
-    Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching them
-    here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
+    The capture's outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`):
+    ``before_commit()`` runs when all are written, before the first is renamed into place, and may
+    raise :class:`Cancelled` to abandon them (the batch was interrupted); that gives a ``cancelled``
+    result. ``checkpoint()`` runs before each output file is begun and may raise it too. Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching
+    them here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
     """
+    from ..atomic import all_or_nothing
     from ..lightfield import LightField, is_lightfield_file
     from ..outputs import write_slices, write_view_set
     from ..pipeline import load_lightfield
 
     start = time.perf_counter()
     try:
-        lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
-            load_lightfield(job.source, decode_setup(job))
-        if lf.camera is None:
-            raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
-        outputs = []
-        if job.refocus_a:
-            from .. import geometry
-            from ..refocus import check_refocused_area, refocus
-            from ..viewpoints import with_aperture
+        with all_or_nothing(before_commit, checkpoint):
+            lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
+                load_lightfield(job.source, decode_setup(job))
+            if lf.camera is None:
+                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
+            outputs = []
+            if job.refocus_a:
+                from .. import geometry
+                from ..refocus import check_refocused_area, refocus
+                from ..viewpoints import with_aperture
 
-            summed = with_aperture(lf, job.aperture)
-            check_refocused_area(job.refocus_a, lf.camera.m_hat if summed.view_mask is None else summed.view_mask,
-                                 lf.lens_shape, job.source, lambda a: geometry.slice_distance_mm(lf.camera, a))
-            stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
-            outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
-                                    view_mask=summed.view_mask)
-            if job.stack:
-                from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack
+                summed = with_aperture(lf, job.aperture)
+                check_refocused_area(job.refocus_a, lf.camera.m_hat if summed.view_mask is None else summed.view_mask,
+                                     lf.lens_shape, job.source, lambda a: geometry.slice_distance_mm(lf.camera, a))
+                stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
+                outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
+                                        view_mask=summed.view_mask)
+                if job.stack:
+                    from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack
 
-                outputs.append(write_focal_stack(stack_path(job.outdir, job.stem, job.stack), stack,
-                                                 slice_metadata(job.source, lf.camera, job.refocus_a,
-                                                                summed.view_mask),
-                                                 kind=job.stack, lens_um=lateral_um_per_lens(lf.camera),
-                                                 upsample=job.upsample))
-        if job.views:
-            outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
-                                      gif=job.gif, inside_aperture=job.inside_aperture)
+                    outputs.append(write_focal_stack(stack_path(job.outdir, job.stem, job.stack), stack,
+                                                     slice_metadata(job.source, lf.camera, job.refocus_a,
+                                                                    summed.view_mask),
+                                                     kind=job.stack, lens_um=lateral_um_per_lens(lf.camera),
+                                                     upsample=job.upsample))
+            if job.views:
+                outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
+                                          gif=job.gif, inside_aperture=job.inside_aperture)
         return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start)
+    except Cancelled:
+        return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start)
     except LfprocError as exc:
         return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start)
     except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
@@ -104,11 +112,7 @@ def run_job(job: Job) -> JobResult:
 
 def init_pool_worker(setups: dict | None = None) -> None:
     """Set up a local pool process: the parent's decode setups (no second calibration), one thread for
-    numba and OpenCV (parallelism comes from the processes), and Ctrl-C left to the parent, which lets
-    the captures in progress finish."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    numba and OpenCV (parallelism comes from the processes)."""
     _SETUP_CACHE.update(setups or {})
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # read when numba is first imported, later in run_job
     try:
@@ -116,4 +120,3 @@ def init_pool_worker(setups: dict | None = None) -> None:
         cv2.setNumThreads(1)
     except ImportError:  # pragma: no cover
         pass
-

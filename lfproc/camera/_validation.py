@@ -60,6 +60,9 @@ def validate_camera(camera) -> int:
         raise LfprocError(f"{where}: white_level {camera.white_level} must exceed black_level {camera.black_level}")
     _validate_provenance(camera.provenance, where)
     ratio = camera.mla_pitch_mm / camera.lenslet_pixel_pitch_mm
+    if not math.isfinite(ratio):  # e.g. 1e300 mm over 1e-10 mm
+        raise LfprocError(f"{where}: mla.pitch_mm / sensor.pixel_pitch_mm = {camera.mla_pitch_mm} / "
+                          f"{camera.pixel_pitch_mm} is not a finite number of pixels; check both pitches")
     if camera.micro_image_px is None:
         if ratio < 1.0 - ODD_TOLERANCE:
             raise LfprocError(f"{where}: the micro lens pitch {camera.mla_pitch_mm} mm is smaller than one pixel "

@@ -139,7 +139,10 @@ def run(args) -> int:
     except OSError as exc:
         raise LfprocError(f"{args.outdir}: cannot create the output folder ({exc.strerror}); check the path") \
             from None
-    with batch.lock_outdir(outdir), _sigterm_as_interrupt():
+    with batch.lock_outdir(outdir) as stale_lock, _sigterm_as_interrupt():
+        if stale_lock:
+            print(f"lfproc batch: note: took over the lock of {stale_lock}, which is no longer running "
+                  f"(interrupted or killed); resuming", file=sys.stderr)
         batch.remove_stale_partial_files(outdir)
         manifest = batch.Manifest(outdir, {
             "camera": _abs(args.camera), "calib": _abs(args.calib), "white": white,
@@ -177,6 +180,7 @@ def _process(args, jobs, manifest, camera) -> int:
                         view_mask=None if args.aperture is None else aperture_views(camera, args.aperture))
     start = time.perf_counter()
     interrupted = False
+    tqdm.monitor_interval = 0  # no monitor thread: signals reach the main thread's handler (batch._signals)
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
@@ -199,7 +203,7 @@ def _process(args, jobs, manifest, camera) -> int:
         batch.remove_stale_partial_files(manifest.outdir)
     except KeyboardInterrupt:
         interrupted = True
-        if not args.scheduler:  # the local captures in progress have finished: nothing writes any more
+        if not args.scheduler:  # the local workers have ended: their abandoned temporary files are garbage
             batch.remove_stale_partial_files(manifest.outdir)
     finally:
         summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
@@ -210,16 +214,16 @@ def _process(args, jobs, manifest, camera) -> int:
     if interrupted:
         left = len(jobs) - counts["done"] - counts["skipped"] - counts["failed"]
         print(f"lfproc batch: interrupted with {counts['done']} done, {counts['skipped']} skipped, "
-              f"{counts['failed']} failed and {left} not started of {len(jobs)} captures; finished outputs are "
-              f"complete and nothing partial was written; rerun the same command to resume", file=sys.stderr)
+              f"{counts['failed']} failed and {left} not done of {len(jobs)} captures (recorded in the manifest; "
+              f"the captures not done left no output); rerun the same command to resume", file=sys.stderr)
         return 130
     return 2 if failures else 0
 
 
 @contextlib.contextmanager
 def _sigterm_as_interrupt():
-    """SIGTERM (kill, a job scheduler's time limit) stops a batch like Ctrl-C: partial writes removed,
-    captures in progress in local worker processes finished, the manifest saved."""
+    """SIGTERM (kill, a job scheduler's time limit) stops a batch like Ctrl-C: captures in progress
+    abandoned (nothing of them written), those finished recorded, the manifest saved."""
     def interrupt(signum, frame):
         raise KeyboardInterrupt
 

@@ -33,3 +33,26 @@ def require_finite_pixels(pixels: np.ndarray, path: str) -> None:
 
 def one_line(text: str) -> str:
     return " ".join(str(text or "").split())
+
+
+def library_error(geterror) -> str:
+    """A C library's error message (``geterror()`` of OpenImageIO) as one line; its bytes may not be
+    UTF-8 when they quote a corrupt file, and that must not become a UnicodeDecodeError."""
+    try:
+        return one_line(geterror())
+    except UnicodeDecodeError:
+        return "the library's message is not readable text"
+
+
+#: an image may decode to at most this many bytes per byte of file (deflate tops out near 1032:1, LZW
+#: near 2730:1) plus :data:`MAX_DECODED_SLACK`: a header declaring more is corrupt or hostile
+MAX_DECODED_PER_FILE_BYTE = 4096
+MAX_DECODED_SLACK = 64 << 20
+
+
+def check_declared_size(path: str, declared_bytes: int, what: str) -> None:
+    """Refuse before allocating when a header declares more data than the file's size can hold."""
+    size = os.path.getsize(path)
+    if declared_bytes > MAX_DECODED_PER_FILE_BYTE * size + MAX_DECODED_SLACK:
+        raise LfprocError(f"{path}: the header declares {what} ({declared_bytes / 1e6:.0f} MB of pixels) that a "
+                          f"{size}-byte file cannot hold; the file is corrupt, re-copy or re-export it")

@@ -13,7 +13,7 @@ import math
 import os
 
 from ..errors import LfprocError
-from ._checks import _NotThisFormat, existing_file
+from ._checks import _NotThisFormat, existing_file, library_error
 
 
 def describe_file(path: str | os.PathLike) -> dict:
@@ -194,7 +194,7 @@ def _describe_image(path: str) -> dict:
 
     inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise _NotThisFormat(" ".join(str(oiio.geterror()).split()) or "OpenImageIO: unknown format")
+        raise _NotThisFormat(library_error(oiio.geterror) or "OpenImageIO: unknown format")
     try:
         spec = inp.spec()
         info = {"path": path, "format": "image", "file_format": inp.format_name(),

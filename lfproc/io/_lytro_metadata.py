@@ -74,6 +74,9 @@ def frame_metadata(document: dict, where: str) -> tuple[dict, dict | None, bool 
     """
     from ._lytro_container import modulation_flag
 
+    if not isinstance(document, dict):
+        raise LfprocError(f"{where}: not Lytro frame metadata (not a JSON object); pass the .txt/.json written "
+                          f"with the raw image")
     if isinstance(document.get("image"), dict):
         return document, _dict_or_none(document.get("privateMetadata")), None
     try:
@@ -96,12 +99,16 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
     packing = _get(raw, "pixelPacking", source, dict, "image.rawDetails.")
     width = _get(image, "width", source, int, "image.")
     height = _get(image, "height", source, int, "image.")
-    if width <= 0 or height <= 0:
+    if width <= 0 or height <= 0 or width * height > 1 << 40:  # no sensor has a trillion pixels
         raise LfprocError(f"{source}: image.width/height {width} x {height} is not a sensor size; "
                           f"the metadata is corrupt, re-copy it")
     bits = _get(packing, "bitsPerPixel", source, int, "image.rawDetails.pixelPacking.")
+    if not 1 <= bits <= 32:  # before 2 ** bits below: an absurd value would take for ever
+        raise LfprocError(f"{source}: image.rawDetails.pixelPacking.bitsPerPixel {bits} is not a sensor's bit "
+                          f"depth; the metadata is corrupt, re-copy it")
     endianness = str(_get(packing, "endianness", source, str, "image.rawDetails.pixelPacking.")).lower()
     mosaic = raw.get("mosaic") or _nested(metadata, "devices", "sensor", "mosaic") or {}
+    mosaic = mosaic if isinstance(mosaic, dict) else {}
     cfa, channels = _bayer_layout(mosaic, source)
     pixel_format = raw.get("pixelFormat") if isinstance(raw.get("pixelFormat"), dict) else {}
     if pixel_format.get("rightShift", 0) not in (0, None):
@@ -109,9 +116,9 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
                           f"supported; only unshifted raw data can be read")
     black = _channel_levels(pixel_format.get("black"), channels, 0.0, source, "black")
     white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source, "white")
-    if any(w <= b for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
-        raise LfprocError(f"{source}: white level {white} is not above the black level {black}; "
-                          f"the metadata is corrupt, re-copy it")
+    if any(not 0 <= b < w <= 2 ** bits for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
+        raise LfprocError(f"{source}: white level {white} is not above the black level {black} within "
+                          f"0..{2 ** bits} ({bits}-bit data); the metadata is corrupt, re-copy it")
     devices = metadata.get("devices") if isinstance(metadata.get("devices"), dict) else {}
     sensor, mla, lens = (devices.get(k) if isinstance(devices.get(k), dict) else {} for k in ("sensor", "mla", "lens"))
     return LytroMetadata(
@@ -156,7 +163,7 @@ def _bayer_layout(mosaic: dict, source: str) -> tuple[str, tuple]:
 def _channel_levels(levels, channels, default: float, source: str, what: str) -> tuple:
     if levels is None:
         return tuple(tuple(default for _ in row) for row in channels)
-    if isinstance(levels, (int, float)) and not isinstance(levels, bool):
+    if isinstance(levels, (int, float)) and not isinstance(levels, bool) and _number(levels) is not None:
         return tuple(tuple(float(levels) for _ in row) for row in channels)
     if not isinstance(levels, dict) or any(_number(levels.get(name)) is None for row in channels for name in row):
         raise LfprocError(f"{source}: image.rawDetails.pixelFormat.{what} must give a number for each of "

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..errors import LfprocError
 from ._capture import Capture
-from ._checks import _NotThisFormat, existing_file, one_line, require_finite_pixels
+from ._checks import (_NotThisFormat, check_declared_size, existing_file, library_error, one_line,
+                      require_finite_pixels)
 
 
 def read_image(path: str | os.PathLike) -> np.ndarray:
@@ -47,17 +48,19 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
     config.attribute("oiio:UnassociatedAlpha", 1)      # colour as stored, not multiplied by alpha
     inp = oiio.ImageInput.open(path, config)
     if inp is None:
-        raise _NotThisFormat(one_line(oiio.geterror()) or "OpenImageIO: unknown format")
+        raise _NotThisFormat(library_error(oiio.geterror) or "OpenImageIO: unknown format")
     try:
         spec = inp.spec()
         if spec.width <= 0 or spec.height <= 0 or spec.nchannels <= 0:
             raise LfprocError(f"{path}: the image has zero size; pass a real capture")
         if spec.depth > 1:
             raise LfprocError(f"{path}: volume images are not supported; pass a 2-D image")
+        check_declared_size(path, spec.width * spec.height * spec.nchannels * max(1, spec.channel_bytes()),
+                            f"{spec.width} x {spec.height} x {spec.nchannels}")
         with _native_stderr_captured() as native:   # libpng & co. print their own errors to fd 2
             pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN)
         failed = pixels is None or inp.has_error
-        message = one_line(inp.geterror() or native.text()) if failed else ""
+        message = (library_error(inp.geterror) or one_line(native.text())) if failed else ""
     finally:
         inp.close()
     if failed:

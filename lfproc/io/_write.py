@@ -25,7 +25,7 @@ import numpy as np
 
 from ..atomic import atomic_path, json_safe, python_scalar
 from ..errors import LfprocError
-from ._checks import existing_file, one_line
+from ._checks import existing_file, library_error
 
 #: output formats of `write_image`
 FORMATS = ("tiff", "png16", "jpeg", "exr", "uint16")
@@ -108,15 +108,15 @@ def write_image(path: str | os.PathLike, image: np.ndarray, metadata: Mapping | 
         with atomic_path(path) as tmp:
             out = oiio.ImageOutput.create(tmp)
             if out is None:
-                raise LfprocError(f"{path}: OpenImageIO cannot write this format ({one_line(oiio.geterror())}); "
+                raise LfprocError(f"{path}: OpenImageIO cannot write this format ({library_error(oiio.geterror)}); "
                                   f"use .tif, .png, .exr or .jpg")
             if not out.open(tmp, spec):
-                raise LfprocError(f"{path}: cannot write ({one_line(out.geterror())}); "
+                raise LfprocError(f"{path}: cannot write ({library_error(out.geterror)}); "
                                   f"check that the folder exists and is writable")
             written = out.write_image(pixels)
             closed = out.close()
             if not (written and closed):
-                raise LfprocError(f"{path}: writing failed ({one_line(out.geterror())}); "
+                raise LfprocError(f"{path}: writing failed ({library_error(out.geterror)}); "
                                   f"check the free disk space and permissions")
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write ({exc.strerror or exc}); check the folder and permissions") from None
@@ -205,10 +205,12 @@ def read_metadata(path: str | os.PathLike) -> dict:
     path = existing_file(path)
     inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise LfprocError(f"{path}: not a readable image ({one_line(oiio.geterror())}); pass a TIFF, PNG, EXR "
+        raise LfprocError(f"{path}: not a readable image ({library_error(oiio.geterror)}); pass a TIFF, PNG, EXR "
                           f"or JPEG written by lfproc")
     try:
         description = inp.spec().get_string_attribute("ImageDescription")
+    except UnicodeDecodeError:  # not lfproc's (UTF-8 JSON) description
+        description = ""
     finally:
         inp.close()
     try:

@@ -181,7 +181,7 @@ def _parse_plane(table, index: int, source: str, base_dir: str) -> Plane:
             raise LfprocError(f"{where}: name must be a string")
         where = f"{source} [[plane]] {table['name']!r}"
     kind = table.get("texture")
-    if kind not in _TEXTURE_KEYS:
+    if not isinstance(kind, str) or kind not in _TEXTURE_KEYS:
         raise LfprocError(f"{where}: texture must be one of {', '.join(sorted(_TEXTURE_KEYS))}, got {kind!r}")
     unknown = set(table) - _PLANE_COMMON - _TEXTURE_KEYS[kind]
     if unknown:
