@@ -74,9 +74,10 @@ def cell_classes(grid: LensGrid, sensor_shape, y0: int = 0, x0: int = 0) -> np.n
     return out
 
 
-def masked(image: np.ndarray, classes: np.ndarray, cls: int) -> np.ndarray:
-    """``image`` with every pixel outside the cells of lens class ``cls`` set to 0."""
+def masked(image: np.ndarray, classes: np.ndarray, cls: int, fill=0) -> np.ndarray:
+    """``image`` with every pixel outside the cells of lens class ``cls`` set to ``fill`` (0; for a
+    quantized mosaic the value that stands for 0)."""
     keep = classes == cls
     if image.ndim == 3:
         keep = keep[:, :, None]
-    return np.where(keep, image, np.zeros((), dtype=image.dtype))
+    return np.where(keep, image, np.asarray(fill, dtype=image.dtype))

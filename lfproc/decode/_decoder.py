@@ -8,7 +8,8 @@ import numpy as np
 
 from ..errors import LfprocError
 from ..grid import LensGrid
-from ._demosaic import DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, to_channels
+from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_quantized, quantize,
+                        quantized_zero, to_channels)
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
@@ -73,6 +74,15 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
         return out
     classes = cells[y0:y1]
     raw = sensor[y0:y1]
+    if raw.ndim == 2 and cfa != "none":   # quantize the band's mosaic once, demosaic each class's cells
+        as_u16, low, scale = quantize(raw)
+        zero = quantized_zero(low, scale)
+
+        def class_channels(cls):
+            return demosaic_quantized(masked(as_u16, classes, cls, zero), low, scale, cfa, demosaic_method)
+    else:
+        def class_channels(cls):
+            return to_channels(masked(raw, classes, cls), cfa, demosaic_method)
     for cls in range(CLASSES):
         first_row = rows.start + ((cls // 2 - rows.start) % 2)      # the band's first row of this class
         first_col = cls % 2
@@ -80,7 +90,7 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
             continue
         rsel = slice(first_row - rows.start, None, 2)
         qsel = slice(first_col, None, 2)
-        strip = np.ascontiguousarray(to_channels(masked(raw, classes, cls), cfa, demosaic_method))
+        strip = np.ascontiguousarray(class_channels(cls))
         for ky, kx0, kx1 in runs:
             map_x, map_y = maps[ky]
             mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])

@@ -25,34 +25,55 @@ def check_method(method: str) -> None:
         raise LfprocError(f"unknown demosaic method {method!r}; use one of {', '.join(DEMOSAIC_METHODS)}")
 
 
-def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
-    """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
+def quantize(mosaic: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """A linear mosaic as OpenCV's demosaicing needs it: ``(uint16 data, low, scale)`` with
+    ``linear = data / scale + low`` (the data shifted by the minimum, so negative values survive, and
+    scaled to 16 bits).
 
-    ``"fast"`` is bilinear interpolation (linear, so a ratio of two demosaiced images stays an exact
-    weighted average); ``"careful"`` is OpenCV's edge-aware (EA) variant. The data are shifted and
-    scaled into 16 bits for OpenCV (its demosaicing works on integers) and back, so linear values keep
-    1/65535 of their range as precision; negative values (noise below the black level) are kept.
+    Raises
+    ------
+    LfprocError
+        NaN or infinite pixels (the 16-bit conversion would turn them into silent zeros).
     """
-    if cfa not in _CV_BAYER:
-        raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
-    check_method(method)
-    import cv2
-
     data = np.asarray(mosaic, dtype=np.float32)
-    if not np.all(np.isfinite(data)):   # the 16-bit conversion below would turn them into silent zeros
+    if not np.all(np.isfinite(data)):
         raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
                           "(e.g. numpy.nan_to_num) before decoding")
-    # offset by the minimum so negative (noise below black) values survive: bilinear weights sum to 1,
-    # so adding the offset back afterwards is exact
     low = min(float(data.min()), 0.0) if data.size else 0.0
     top = float(data.max()) - low if data.size else 0.0
     scale = 65535.0 / top if top > 0 else 1.0
-    as_u16 = np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16)
+    return np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16), low, scale
+
+
+def quantized_zero(low: float, scale: float) -> int:
+    """The 16-bit value :func:`quantize` gives a linear 0."""
+    return int(min(max((0.0 - low) * scale + 0.5, 0), 65535))
+
+
+def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, method: str = "fast") -> np.ndarray:
+    """:func:`demosaic` of a mosaic already :func:`quantize`\ d: ``(H, W, 3)`` RGB float32, linear."""
+    import cv2
+
     code = getattr(cv2, f"COLOR_{_CV_BAYER[cfa]}2RGB" + ("_EA" if method == "careful" else ""))
     rgb = cv2.cvtColor(as_u16, code).astype(np.float32)
     rgb *= np.float32(1.0 / scale)
     rgb += np.float32(low)
     return rgb
+
+
+def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
+    """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
+
+    ``"fast"`` is bilinear interpolation (linear, so a ratio of two demosaiced images stays an exact
+    weighted average); ``"careful"`` is OpenCV's edge-aware (EA) variant. The data are shifted and
+    scaled into 16 bits for OpenCV (its demosaicing works on integers; :func:`quantize`) and back, so
+    linear values keep 1/65535 of their range as precision; negative values (noise below the black
+    level) are kept: bilinear weights sum to 1, so adding the offset back afterwards is exact.
+    """
+    if cfa not in _CV_BAYER:
+        raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
+    check_method(method)
+    return demosaic_quantized(*quantize(mosaic), cfa, method)
 
 
 def to_channels(image: np.ndarray, cfa: str, method: str) -> np.ndarray:
