@@ -51,7 +51,7 @@ def quantized_zero(low: float, scale: float) -> int:
 
 
 def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, method: str = "fast") -> np.ndarray:
-    """:func:`demosaic` of a mosaic already :func:`quantize`\ d: ``(H, W, 3)`` RGB float32, linear."""
+    """:func:`demosaic` of a mosaic that :func:`quantize` made: ``(H, W, 3)`` RGB float32, linear."""
     import cv2
 
     code = getattr(cv2, f"COLOR_{_CV_BAYER[cfa]}2RGB" + ("_EA" if method == "careful" else ""))
