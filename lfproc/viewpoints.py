@@ -73,14 +73,15 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
 class ViewpointGeometry:
     """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x].
 
-    A microscope's views are orthographic: they carry their object-space angles ``angle_deg``
-    (sine condition, :func:`lfproc.geometry.microscope_views`) and whether they lie inside the NA,
-    instead of positions, tilts and baselines (then ``None``).
+    A microscope's views are orthographic: ``position_mm`` is where each crosses the objective's pupil
+    (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg`` its object-space angle
+    (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it lies inside the
+    NA; it has no baselines (``None``).
     """
 
     view: tuple            # (ky, kx)
     offset: tuple          # (iy, ix) = (ky − c, kx − c)
-    position_mm: tuple | None     # (F_iy, F_ix), Eq. 17
+    position_mm: tuple | None     # (F_iy, F_ix), Eq. 17 (a microscope: in the objective's pupil)
     tilt_deg: tuple | None        # (Φ_iy, Φ_ix), Eq. 33
     baseline_to_center_mm: float | None   # |F_i − F_0| in the focal plane, Eq. 34 in 2-D
     baseline_to_neighbour_mm: float | None  # ΔB_1, Eq. 34 with g = 1
@@ -88,9 +89,11 @@ class ViewpointGeometry:
     inside_na: bool | None = None   # microscope: the view lies inside the objective's NA
 
     def metadata(self) -> dict:
-        """The contract's sidecar fields (plus the baselines); a microscope view's angles instead."""
-        if self.angle_deg is not None:
-            return {"view": list(self.view), "angle_deg": list(self.angle_deg), "inside_na": self.inside_na}
+        """The contract's sidecar fields (plus the baselines); a microscope view's: ``position_mm`` in the
+        objective's pupil, ``tilt_deg`` its object-space angle (also as ``angle_deg``) and ``inside_na``."""
+        if self.angle_deg is not None:   # a microscope: position in the objective's pupil, tilt = the angle
+            return {"view": list(self.view), "position_mm": list(self.position_mm), "tilt_deg": list(self.tilt_deg),
+                    "angle_deg": list(self.angle_deg), "inside_na": self.inside_na}
         return {"view": list(self.view), "position_mm": list(self.position_mm), "tilt_deg": list(self.tilt_deg),
                 "baseline_to_center_mm": self.baseline_to_center_mm,
                 "baseline_to_neighbour_mm": self.baseline_to_neighbour_mm}
@@ -102,7 +105,9 @@ def viewpoint_geometry(camera) -> list[list[ViewpointGeometry]]:
     if getattr(camera, "microscope", None) is not None:
         angles = geometry.microscope_views(camera).angle_deg
         inside = geometry.views_inside_na(camera)
-        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), None, None, None, None,
+        pupil = geometry.pupil_positions_mm(camera)
+        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), (float(pupil[ky]), float(pupil[kx])),
+                                   (_finite(angles[ky]), _finite(angles[kx])), None, None,
                                    angle_deg=(_finite(angles[ky]), _finite(angles[kx])),
                                    inside_na=bool(inside[ky, kx]))
                  for kx, ix in enumerate(offsets)] for ky, iy in enumerate(offsets)]

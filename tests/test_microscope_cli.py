@@ -112,7 +112,10 @@ def test_views_carry_object_space_angles(lfm):
     assert ky < 3
     tag = json.loads((lfm / "views" / f"capture_view_{ky:02d}_03.json").read_text())
     assert tag["view"] == [ky, 3] and tag["angle_deg"][1] == 0.0 and tag["angle_deg"][0] > 0
-    assert "position_mm" not in tag
+    assert tag["tilt_deg"] == tag["angle_deg"]
+    # the contract's position_mm: where the view crosses the objective's pupil, f_obj·n·sin θ (Abbe sine condition)
+    assert tag["position_mm"][1] == 0.0
+    assert tag["position_mm"][0] == pytest.approx(180.0 / 20 * 1.33 * math.sin(math.radians(tag["angle_deg"][0])))
     sines = math.sin(math.radians(tag["angle_deg"][0])) * 1.33 / 20       # back to the image side (sine condition)
     u = (3 - ky) * 0.0475 / 7
     assert sines == pytest.approx(u / math.hypot(u, 0.95), rel=1e-9)

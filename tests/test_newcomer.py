@@ -84,7 +84,8 @@ def test_refocus_preview_and_jpeg_use_the_display_range(sample_lf, tmp_path):
     low, high = np.percentile(np.stack(jpegs), [0.5, 99.5])
     assert low < 25 and high > 230, (low, high)
     # a preview in JPEG on request
-    assert run_cli("refocus", sample_lf, "--a", "1", "--preview", "jpeg", "-o", tmp_path / "j").returncode == 0
+    assert run_cli("refocus", "--preview", sample_lf, "--a", "1", "--preview-format", "jpeg",
+                   "-o", tmp_path / "j").returncode == 0     # --preview before the input: a flag, it takes no value
     assert (tmp_path / "j" / "sample_a+1.000_preview.jpg").is_file()
 
 

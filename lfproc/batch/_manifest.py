@@ -66,6 +66,13 @@ def _journal_entries(path: str):
             yield item[0], item[1]
 
 
+def has_sidecar(path: str) -> bool:
+    """Whether an output comes with a ``NAME.json`` sidecar: every data product does; animations, display
+    previews (``NAME_preview.png``/``.jpg``) and the focal stack (its slices' records are inside it) do not."""
+    name = os.path.basename(path).lower()
+    return not (name.endswith(".gif") or "_preview." in name or name.endswith(("_stack.tif", "_stack.ome.tif")))
+
+
 class Manifest:
     """The manifest of one output folder: read at start, updated as results arrive, saved atomically.
 
@@ -96,7 +103,7 @@ class Manifest:
 
     def is_complete(self, job: Job, fingerprint: str) -> bool:
         """True when ``job`` needs no rerun: same fingerprint, done, every output and sidecar still there
-        (animations have no sidecar)."""
+        (pictures for people have none: :func:`has_sidecar`)."""
         entry = self.entry(job.source)
         if not (isinstance(entry, dict) and entry.get("fingerprint") == fingerprint and entry.get("status") == "done"):
             return False
@@ -104,7 +111,7 @@ class Manifest:
         if not (isinstance(outputs, list) and all(isinstance(name, str) and name for name in outputs)):
             return False  # an entry edited by hand or damaged: the capture is redone
         images = [os.path.join(self.outdir, name) for name in outputs]
-        return all(os.path.isfile(p) and (p.endswith(".gif") or os.path.isfile(sidecar_path(p))) for p in images)
+        return all(os.path.isfile(p) and (not has_sidecar(p) or os.path.isfile(sidecar_path(p))) for p in images)
 
     def record(self, job: Job, result: JobResult, fingerprint: str) -> None:
         """Note one capture's result, durably at once (a line in the journal); :meth:`save` folds it in."""

@@ -40,6 +40,8 @@ def default_workers(sample_path: str | None, memory_fraction: float = 0.5) -> in
                 spec = inp.spec()
                 pixels = float(spec.width * spec.height)
                 inp.close()
+            else:   # retrieve the error: OpenImageIO prints a pending one when the process exits
+                oiio.geterror()
     per_process = PROCESS_BASE_BYTES + pixels * BYTES_PER_SENSOR_PIXEL
     return max(1, min(cores, int(memory_fraction * available_memory_bytes() // per_process)))
 

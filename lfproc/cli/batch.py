@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import os
 import signal
 import sys
@@ -134,6 +135,14 @@ def run(args) -> int:
     if not os.path.isdir(outdir) and first_to_decode is not None:
         # a first run: check the camera, white image and grid before anything is written (exit 2, nothing left)
         batch.decode_setup(first_to_decode)
+    summed = _summed_views(camera, args.aperture, first_to_decode) if a_values else None
+    from ..geometry import summed_view_extent
+    if summed is not None and (args.depth_range is not None or args.at is not None or args.z_range is not None):
+        # planned again for the DOF of the views the slices will really sum (those that carry light), as refocus does
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
+                                          max_slices=args.max_slices, z_range=args.z_range,
+                                          view_extent=summed_view_extent(summed)))
+        jobs = [dataclasses.replace(job, refocus_a=a_values) for job in jobs]
     try:
         os.makedirs(outdir, exist_ok=True)
     except OSError as exc:
@@ -151,10 +160,29 @@ def run(args) -> int:
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
             "stack": args.stack, "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
-        return _process(args, jobs, manifest, camera)
+        return _process(args, jobs, manifest, camera, summed)
 
 
-def _process(args, jobs, manifest, camera) -> int:
+def _summed_views(camera, aperture, job):
+    """The views the slices will sum: those the decoder delivers (from the batch's one decode setup), within
+    ``--aperture``; None where that is every view (or no white image says which carry light)."""
+    from .. import batch
+    from ..geometry import aperture_views
+
+    import numpy as np
+
+    mask = None
+    if job is not None:
+        setup = batch.decode_setup(job)
+        if setup.has_white:
+            mask = np.asarray(setup.decoder_for((), "none").views_delivered, dtype=bool)
+    if aperture is not None:
+        keep = aperture_views(camera, aperture)
+        mask = keep if mask is None else keep & mask
+    return None if mask is None or mask.all() else mask
+
+
+def _process(args, jobs, manifest, camera, summed=None) -> int:
     """Skip what is complete, run the rest, keep the manifest current; returns the exit status."""
     from tqdm import tqdm
 
@@ -173,11 +201,8 @@ def _process(args, jobs, manifest, camera) -> int:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
         batch.decode_setup(first_to_decode)
     if jobs[0].refocus_a:
-        from ..geometry import aperture_views
-
         describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
-                        integer=args.integer, max_slices=args.max_slices,
-                        view_mask=None if args.aperture is None else aperture_views(camera, args.aperture))
+                        integer=args.integer, max_slices=args.max_slices, view_mask=summed)
     start = time.perf_counter()
     interrupted = False
     tqdm.monitor_interval = 0  # no monitor thread: signals reach the main thread's handler (batch._signals)

@@ -276,7 +276,14 @@ def _looks_negative(text: str) -> bool:
 
 
 def add_preview_option(p, what: str) -> None:
-    """``--preview [png|jpeg]``: display-ready pictures beside the data products (refocus, views)."""
-    p.add_argument("--preview", nargs="?", const="png", default=None, choices=("png", "jpeg"),
-                   help=f"also a display-ready picture of {what} (NAME_preview.png, or .jpg with 'jpeg'): "
-                        f"tone-mapped sRGB with one exposure for all, enlarged to at least 512 px and labelled")
+    """``--preview`` (and ``--preview-format``): display-ready pictures beside the data products (refocus, views)."""
+    p.add_argument("--preview", action="store_true",
+                   help=f"also a display-ready picture of {what} (NAME_preview.png): tone-mapped sRGB with one "
+                        f"exposure for all, enlarged to at least 512 px and labelled")
+    p.add_argument("--preview-format", choices=("png", "jpeg"), default="png",
+                   help="with --preview: png (default) or jpeg (NAME_preview.jpg)")
+
+
+def preview_format(args) -> str | None:
+    """The format of ``--preview`` pictures, or None without ``--preview``."""
+    return args.preview_format if args.preview else None

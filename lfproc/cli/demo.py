@@ -39,12 +39,12 @@ def run(args) -> int:
     from ..camera import Camera
     from ..atomic import write_json_atomic
     from ..io import read_capture
-    from ..outputs import write_mosaic_preview, write_slice_gif, write_slices, write_view_gif, write_view_mosaic
+    from ..outputs import (shown_views, write_mosaic_preview, write_slice_gif, write_slices, write_view_gif,
+                           write_view_mosaic)
     from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
     from ..refocus import refocus
     from ..depth import depth, summary_line, write_depth_outputs
     from ..viewer import build_page, calibration_summary
-    from ..viewpoints import viewpoints
 
     sample = Path(args.sample) if args.sample else default_sample_dir()
     missing = [name for name in SAMPLE_FILES if not (sample / name).is_file()]
@@ -95,14 +95,13 @@ def run(args) -> int:
                 if lo <= d <= hi]
         step(f"  plane at {d:.0f} mm is in focus in slice {', '.join(hits) or '(none)'}")
 
-    inside = viewpoints(lf, inside_aperture=True)  # views outside the main lens stop are black
-    keep = geometry.views_inside_aperture(camera)
-    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, inside, "tiff", keep)
-    preview = write_mosaic_preview(str(out), "sample", inside, keep)
-    view_gif = write_view_gif(str(out), "sample", inside, keep, camera)
-    carried = m * m if lf.view_mask is None else int(lf.view_mask.sum())
-    step(f"views: {int(keep.sum())} of {m * m} inside the aperture, {carried} decoded with light; mosaic {mosaic_path} (preview {preview}), "
-         f"animation {view_gif}")
+    inside = geometry.views_inside_aperture(camera)
+    keep = shown_views(lf, inside_aperture=True).keep   # the views with light inside the main lens stop
+    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, lf.views, "tiff", keep)
+    preview = write_mosaic_preview(str(out), "sample", lf.views, keep, camera=camera)
+    view_gif = write_view_gif(str(out), "sample", lf.views, keep, camera)
+    step(f"views: {int(inside.sum())} of {m * m} inside the aperture, {int(keep.sum())} decoded with light; mosaic "
+         f"{mosaic_path} (preview {preview}), animation {view_gif}")
     depth_map = depth(lf)   # the whole default search (from infinity nearer): the planes sit near near..far's ends
     written = write_depth_outputs(str(out / "depth"), "sample", lf, depth_map, source=source)
     step(f"depth: {summary_line(depth_map)} -> {written['depth']} (preview {written['preview']})")

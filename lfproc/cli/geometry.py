@@ -116,13 +116,13 @@ def format_microscope_table(camera, slices, views, path) -> str:
            f"(n = {s['immersion_index']:g}), m = {camera.m_hat} samples per lens "
            f"({camera.pitch_px:.3f} sensor px), {s['lateral_sampling_um']:.4g} um per lens in the object, "
            f"{s['z_per_a_um']:.4g} um per unit of a",
-           f"refocusing: {'aplanatic (sine condition)' if s['aplanatic'] else 'paraxial'} per-view shifts; the "
-           f"paraxial map is off by {100 * s['paraxial_depth_error']:.1f} % of z "
-           f"(wave DOF term at {s['wavelength_nm']:.0f} nm)",
+           f"refocusing: {'aplanatic (sine condition)' if s['aplanatic'] else 'paraxial'} per-view shifts (a "
+           f"paraxial z would be off by up to {100 * s['paraxial_depth_error']:.1f} % at this NA); the DOF adds the "
+           f"wave term at {s['wavelength_nm']:.0f} nm",
            "depths from the native object plane [um], positive towards the objective",
            f"{'a':>8} {'z_far':>11} {'z':>11} {'z_near':>11} {'DOF':>11}"]
     for r in slices.records():
-        out.append(f"{r['a']:>8g} {r['z_far_um']:>11.3f} {r['z_um']:>11.3f} {r['z_near_um']:>11.3f} "
+        out.append(f"{r['a']:>+8.4f} {r['z_far_um']:>11.3f} {r['z_um']:>11.3f} {r['z_near_um']:>11.3f} "
                    f"{r['dof_um']:>11.3f}")
     out += ["", f"views: orthographic, object-space angle (sine condition); {s['na_views']} views either side of "
                 f"the centre lie inside the NA", f"{'i':>5} {'angle [deg]':>12} {'inside NA':>10}"]

@@ -89,7 +89,7 @@ def run(args) -> int:
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
                                args.format, view_mask=lf.view_mask)
         if args.preview:
-            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview,
+            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview_format,
                                  view_mask=lf.view_mask)
         if args.stack:
             write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,

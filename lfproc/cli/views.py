@@ -6,7 +6,7 @@ import os
 
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
-from .common import FORMAT_HELP, add_preview_option
+from .common import FORMAT_HELP, add_preview_option, preview_format
 
 
 def register(sub) -> None:
@@ -59,7 +59,7 @@ def run(args) -> int:
         check_view_options(args, lf.camera)
         written = write_view_set(args.outdir, stems[path], os.path.abspath(path), lf, args.format,
                                  mosaic=args.mosaic, gif=args.gif, inside_aperture=args.inside_aperture,
-                                 preview=args.preview)
+                                 preview=preview_format(args))
         progress.update(per_capture)
         shown = shown_views(lf, args.inside_aperture)
         print(f"{path}: {shown.summary()}; {len(written)} file(s) -> {args.outdir}/{stems[path]}_*")

@@ -17,7 +17,7 @@ from ._aperture import aperture_limits, aperture_views, equivalent_f_number, sum
 from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
 from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
                           na_views, plan_z_range, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
-                          views_inside_na, z_per_a_um)
+                          views_inside_na, z_per_a_um, pupil_positions_mm)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._ray_model import RayModel
 from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
@@ -36,6 +36,7 @@ __all__ = [
     "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
     "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
     "plan_z_range",    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
+    "pupil_positions_mm",
     "z_per_a_um",
     "ViewGeometry", "baseline_mm", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
     "view_tilts_deg", "views_inside_aperture",

@@ -69,6 +69,14 @@ def image_sines(camera):
     return u / np.hypot(u, camera.mla_focal_length_mm)
 
 
+def pupil_positions_mm(camera) -> np.ndarray:
+    """Where each view offset i = −c…c crosses the objective's back focal plane (its pupil), in mm: a
+    microscope view's ``position_mm``, as F_i (Eq. 17) is a camera's. By the sine condition a ray leaving the
+    sample at n·sin θ crosses it at f_obj·n·sin θ (f_obj = f_tube / M), which is −f_tube times the view's
+    image-side sine; the sign follows the view's object-space angle."""
+    return -_scope(camera).tube_lens_focal_length_mm * image_sines(camera) + 0.0
+
+
 def na_views(camera) -> int:
     """c_NA: the largest view offset |i| whose image-side ray sine is within the objective's NA/M (≤ c)."""
     scope = _scope(camera)
