@@ -33,7 +33,9 @@ def read_toml(path: str | os.PathLike, kind: str, usage: str) -> dict:
         raise LfprocError(f"{path}: is a directory, not a {kind}; pass {usage}") from None
     except tomllib.TOMLDecodeError as exc:
         raise LfprocError(f"{path}: not valid TOML ({exc}); fix the syntax of the {kind}") from None
-    except (OSError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError:
+        raise LfprocError(f"{path}: not a {kind} (not text: an image or other binary file?); pass {usage}") from None
+    except OSError as exc:
         raise LfprocError(f"{path}: cannot read {kind} ({exc}); check the path and permissions") from None
 
 

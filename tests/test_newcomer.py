@@ -153,3 +153,7 @@ def test_geometry_plot_says_where_it_went(tmp_path):
 
 def test_lightfield_load_is_documented():
     assert "Returns" in (lfproc.LightField.load.__doc__ or "")
+
+
+def test_a_capture_given_as_the_camera_file_is_named_as_such():
+    assert_clean_error(run_cli("geometry", "--camera", SAMPLE / "capture.png"), "capture.png", "not a camera file")
