@@ -295,6 +295,22 @@ def live_processes(pgid) -> list:
     return alive
 
 
+def ctrl_c_when(proc, ready, what: str):
+    """Once ``ready()``, Ctrl-C the batch's whole process group; returns (its stderr, seconds until every one
+    of its processes was gone). Whatever happens, nothing of the group outlives the test."""
+    try:
+        poll(ready, proc, what=what)
+        os.killpg(proc.pid, signal.SIGINT)
+        signalled = time.monotonic()
+        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
+        gone_s = time.monotonic() - signalled
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    return stderr, gone_s
+
+
 def assert_only_recorded_outputs(outdir, data):
     """Every file in OUTDIR belongs to a capture recorded done, all of its files: a stopped capture left
     nothing."""
@@ -316,16 +332,8 @@ def test_ctrl_c_stops_a_local_batch_at_once_and_the_rerun_does_only_the_rest(dat
     announced.mkdir()
     proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"), {"announce": str(announced), "slow": SLOW},
                                popen=True)
-    try:
-        poll(lambda: "cap0" in journal_done(out) and (announced / "cap1").exists(), proc, what="cap0 done, cap1 begun")
-        os.killpg(proc.pid, signal.SIGINT)
-        signalled = time.monotonic()
-        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
-        gone_s = time.monotonic() - signalled
-        _, stderr = proc.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGKILL)
+    stderr, gone_s = ctrl_c_when(proc, lambda: "cap0" in journal_done(out) and (announced / "cap1").exists(),
+                                 "cap0 done, cap1 begun")
     assert proc.returncode == 130, stderr
     assert len(stderr.splitlines()) == 1 and "interrupted" in stderr and "Traceback" not in stderr, stderr
     assert gone_s < 2.0, gone_s
@@ -347,16 +355,7 @@ def test_ctrl_c_while_the_workers_start_is_one_line_too(data, tmp_path):
     starting.mkdir()
     proc = run_cli_with_faults(batch_argv(data, out, "--workers", "2"),
                                {"starting": {"dir": str(starting), "seconds": 0.3}}, popen=True)
-    try:
-        poll(lambda: any(starting.iterdir()), proc, what="a worker to start")
-        os.killpg(proc.pid, signal.SIGINT)
-        signalled = time.monotonic()
-        poll(lambda: not live_processes(proc.pid), timeout_s=60, what="every process to end")
-        gone_s = time.monotonic() - signalled
-        _, stderr = proc.communicate(timeout=60)
-    finally:
-        with contextlib.suppress(ProcessLookupError):
-            os.killpg(proc.pid, signal.SIGKILL)
+    stderr, gone_s = ctrl_c_when(proc, lambda: any(starting.iterdir()), "a worker to start")
     assert proc.returncode == 130, stderr
     assert len(stderr.splitlines()) == 1 and "interrupted" in stderr, stderr
     assert gone_s < 2.0, gone_s
