@@ -16,11 +16,11 @@ and the white image times each pixel's offset from the lens centre with the deco
 cell, demosaicing, interpolation); the kernel's own centroid (a flat image read the same way) is taken
 off, so that nearest-neighbour reading is not counted against the white image:
 
-1. **The lit disc.** The white-weighted centre of each lens's own cell, averaged over lenses, is
-   measured (:attr:`ViewSampling.centre_offset_px`). Reading the views around it when it is off the
-   grid's centres (:data:`CENTRE_DECODING`) is written but off: on hexagonal Bayer white images the
-   raw mosaic's centre is biased by the colour channels' gains (−0.25 px on the Lytro sample, whose
-   discs are centred), so an off-centre disc is reported, not corrected.
+1. **The lit disc.** Its centre off the grid's lens centres is fitted to its edge, per Bayer phase
+   on the phase's own pixels (:mod:`._disc_centre`: unbiased by channel gains and by cells that cut
+   the disc), :attr:`ViewSampling.centre_offset_px`. Where it is off by more than
+   :data:`CENTRE_TOLERANCE` effective pixels (and three standard errors), every view is read around
+   it (:data:`CENTRE_DECODING`): the delivered set is centred on the disc, not on the lens centre.
 2. **Views inside it.** View k is lit at a lens where its white sample at the nominal position is at
    least :data:`LIT_FRACTION` of the central view's (channel mean). The edge of a blurred disc reads
    half its interior, so this keeps the views whose ray passes through the aperture (or the
@@ -50,6 +50,7 @@ import numpy as np
 from ..grid import LensGrid
 from ._cells import cell_classes, lens_class
 from ._demosaic import to_channels
+from ._disc_centre import measure_disc_centre
 from ._positions import view_offsets_px
 from ._resample import cv_flag
 
@@ -63,8 +64,8 @@ REQUIRED_FRACTION = 0.9
 LIT_FRACTION = 0.4
 #: the lit disc is decoded centred when its centre is further than this (effective pixels) off the grid's
 CENTRE_TOLERANCE = 0.1
-#: decode around a measured off-centre disc (off: the measurement is biased on hexagonal Bayer whites, see docs)
-CENTRE_DECODING = False
+#: decode around a measured off-centre disc (its centre fitted to its edge, :mod:`._disc_centre`)
+CENTRE_DECODING = True
 #: the furthest (effective pixels) a view's samples are moved off their nominal position
 MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
@@ -205,13 +206,6 @@ def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag):
     return mean_x, mean_y, n / np.maximum(lit.sum(axis=0), 1)
 
 
-def disc_centre(probe: _Probe) -> tuple[float, float]:
-    """Mean white-weighted centre (x, y) of the probed lenses' own cells, relative to their lens centres."""
-    total, mx, my = probe.moments.T
-    ok = total > 0
-    return (float(np.mean(mx[ok] / total[ok])), float(np.mean(my[ok] / total[ok]))) if ok.any() else (0.0, 0.0)
-
-
 def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
     """Per-view shifts moving the mean white-weighted centroid onto nominal, and the residual (eff. px)."""
     m_hat = nom_x.shape[0]
@@ -251,10 +245,13 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
         level, _, _ = _centroids(planes, nom_x, nom_y, flag)
         lit = np.all(level.min(axis=-1) > 0, axis=0)
         lit[c, c] = True
-        return ViewSampling(symmetric(lit), np.zeros((m_hat, m_hat, 2)), disc_centre(planes), False,
+        centre = measure_disc_centre(white, grid, cfa, probe_lenses(grid) if lenses is None else lenses).offset_px
+        return ViewSampling(symmetric(lit), np.zeros((m_hat, m_hat, 2)), centre, False,
                             np.zeros((m_hat, m_hat)), lit.astype(float))
-    centre = disc_centre(planes)
-    centred = CENTRE_DECODING and math.hypot(*centre) > CENTRE_TOLERANCE * eff
+    disc = measure_disc_centre(white, grid, cfa, probe_lenses(grid) if lenses is None else lenses)
+    centre = disc.offset_px
+    centred = CENTRE_DECODING and disc.measured and math.hypot(*centre) > max(CENTRE_TOLERANCE * eff,
+                                                                              3.0 * disc.sigma_px)
     tx, ty = (nom_x + centre[0], nom_y + centre[1]) if centred else (nom_x, nom_y)
     shift = np.zeros((m_hat, m_hat, 2))
     shift[..., 0], shift[..., 1] = tx - nom_x, ty - nom_y

@@ -111,19 +111,24 @@ def _scope(camera: Camera):
     return camera.microscope
 
 
-def object_rays(camera: Camera, t_mm: np.ndarray, u_tan: np.ndarray):
+def object_rays(camera: Camera, t_mm: np.ndarray, u_tan: np.ndarray, na_offset=(0.0, 0.0)):
     """Object-space rays of image-side rays at the native image plane: ``(x0_um (…, 2), dir (…, 3), inside)``.
 
     ``t_mm`` (…, 2): where the ray crosses the micro lens array, mm from the optical axis; ``u_tan``
     (…, 2): its image-side direction tangents. ``x0_um`` is the ray's point on the native object plane,
     ``dir`` its unit direction (α, β, γ) in the medium (sine condition), ``inside`` whether it passes
-    the objective's aperture (n·sin θ ≤ NA).
+    the objective's aperture (n·sin θ ≤ NA). ``na_offset`` (x, y), in units of n·sin θ, moves the
+    aperture's centre off the axis (an objective pupil off the axis, a tilted illumination cone):
+    ``inside`` is then |n·(α, β) − na_offset| ≤ NA, and the white image's discs move by
+    −f_s·tan θ' with sin θ' = na_offset/M at the lenslets.
     """
     scope = _scope(camera)
     norm = np.sqrt(1.0 + (u_tan ** 2).sum(axis=-1, keepdims=True))
     sines = -(scope.objective_magnification / scope.immersion_index) * u_tan / norm
     radial2 = (sines ** 2).sum(axis=-1)
-    inside = radial2 * scope.immersion_index ** 2 <= scope.numerical_aperture ** 2 * (1.0 + 1e-12)
+    off = np.asarray(na_offset, dtype=np.float64) / scope.immersion_index
+    aperture2 = ((sines - off) ** 2).sum(axis=-1)
+    inside = aperture2 * scope.immersion_index ** 2 <= scope.numerical_aperture ** 2 * (1.0 + 1e-12)
     gamma = np.sqrt(np.clip(1.0 - radial2, 1e-12, None))
     x0_um = -t_mm / scope.objective_magnification / MM_PER_UM
     return x0_um, np.concatenate([sines, gamma[..., None]], axis=-1), inside
@@ -164,10 +169,11 @@ def lens_of_point(camera: Camera, lens_shape, x_um: float, y_um: float) -> tuple
 
 
 def render_microscope_views(camera: Camera, scene: MicroscopeScene, lens_shape, *, pixel_samples: int = 2,
-                            aperture_samples: int = 3) -> tuple[np.ndarray, np.ndarray]:
+                            aperture_samples: int = 3, na_offset=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
     """Ideal decoded views ``(m̂, m̂, Ny, Nx, 1)`` float32 and the fraction of their rays inside the NA (m̂, m̂).
 
-    Views outside the NA (fraction 0) are delivered as 0, as the decoder delivers them.
+    Views outside the NA (fraction 0) are delivered as 0, as the decoder delivers them; ``na_offset``:
+    see :func:`object_rays`.
     """
     _scope(camera)
     m, c = camera.m_hat, camera.center_index
@@ -183,7 +189,7 @@ def render_microscope_views(camera: Camera, scene: MicroscopeScene, lens_shape, 
             u = np.broadcast_to((offset / camera.mla_focal_length_mm)[:, None, None, :],
                                 (len(sub), len(ap), 1, 2))
             t = lenses[None, None, :, :] + ap[None, :, None, :]                   # (1, A, L, 2)
-            x0, direction, inside = object_rays(camera, t, u)
+            x0, direction, inside = object_rays(camera, t, u, na_offset)
             rays = (len(sub), len(ap), lenses.shape[0])
             inside = np.broadcast_to(inside, rays)
             passed = inside.sum(axis=(0, 1))
@@ -197,12 +203,13 @@ def render_microscope_views(camera: Camera, scene: MicroscopeScene, lens_shape, 
 
 
 def render_microscope_sensor(camera: Camera, scene: MicroscopeScene | None, sensor_shape, *,
-                             pixel_samples: int = 2, aperture_samples: int = 3) -> np.ndarray:
+                             pixel_samples: int = 2, aperture_samples: int = 3, na_offset=(0.0, 0.0)) -> np.ndarray:
     """Sensor irradiance (H, W) float64 of a microscope capture; ``scene=None``: the white image.
 
     The lens lattice is rectangular with a lens centred on the sensor centre; pixel (y, x) sits at
     ((x − (W−1)/2), (y − (H−1)/2))·p/R at the lenslets' focal plane (p the camera pixel, R the relay).
-    The white image is uniform emission: each pixel holds the fraction of its rays inside the NA.
+    The white image is uniform emission: each pixel holds the fraction of its rays inside the NA
+    (``na_offset``: an aperture off the axis, see :func:`object_rays`).
     """
     _scope(camera)
     height, width = (int(v) for v in sensor_shape)
@@ -218,7 +225,7 @@ def render_microscope_sensor(camera: Camera, scene: MicroscopeScene | None, sens
         lens = np.floor(p_mm / camera.mla_pitch_mm + 0.5) * camera.mla_pitch_mm  # the cell's lens (baffles)
         u = (p_mm - lens) / camera.mla_focal_length_mm
         for a in ap:
-            x0, direction, inside = object_rays(camera, lens + a, u)
+            x0, direction, inside = object_rays(camera, lens + a, u, na_offset)
             if scene is None:
                 out += inside
             else:
