@@ -78,22 +78,29 @@ class SweepLuminance:
 
     ``y`` is ``(n, n, Ny, Nx)`` float32 for the views ``picked`` (:func:`picked_views`), ``weight`` their
     ``(n, n)`` weights (``None`` = all 1), and a sweep at refocus parameter ``a`` shifts them by
-    ``view_step·a`` per step of the sub-lattice.
+    ``view_step·a`` per step of the sub-lattice; ``slopes``, where given, is the per-view shift table
+    (σ_y, σ_x) of the picked views in units of that step (a microscope's sine-condition shifts,
+    :func:`lfproc.geometry.refocus_slopes`, divided by the step): the sweep's slice ``a`` is then exactly
+    the refocused slice ``a`` of the light field, whose depth the geometry tags.
     """
 
     y: np.ndarray
     weight: np.ndarray | None
     view_step: int
+    slopes: tuple | None = None
 
 
 def sweep_luminance(views: np.ndarray, view_step: int = 1, reach: int | None = None,
-                    view_weight: np.ndarray | None = None) -> SweepLuminance:
-    """Luminance and weights of the views ``c + step·t``, ``|step·t| ≤ reach`` (:func:`picked_views`)."""
+                    view_weight: np.ndarray | None = None, view_slopes=None) -> SweepLuminance:
+    """Luminance and weights of the views ``c + step·t``, ``|step·t| ≤ reach`` (:func:`picked_views`);
+    ``view_slopes`` (σ_y, σ_x) ``(m̂, m̂)`` each: the light field's per-view shift table (``None``: Eq. 9)."""
     picked = picked_views(views.shape[0], view_step, reach)
     weight = None if view_weight is None else np.asarray(view_weight, dtype=np.float32)[np.ix_(picked, picked)]
     if weight is not None and np.all(weight == 1):
         weight = None
-    return SweepLuminance(luminance(views[np.ix_(picked, picked)]), weight, int(view_step))
+    slopes = None if view_slopes is None else tuple(np.asarray(t, dtype=np.float64)[np.ix_(picked, picked)] / view_step
+                                                    for t in view_slopes)
+    return SweepLuminance(luminance(views[np.ix_(picked, picked)]), weight, int(view_step), slopes)
 
 
 def binned(y: np.ndarray, bin_lenses: int) -> np.ndarray:
@@ -145,7 +152,7 @@ def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear
     shift = a * sweep.view_step / bin_lenses
     mask = None if sweep.weight is None else sweep.weight > 0
     stack = refocus(LightField.from_views(sweep_views(sweep, bin_lenses), view_mask=mask), shift,
-                    interpolation=interpolation)
+                    interpolation=interpolation, view_shifts=sweep.slopes)
     mean, mean_sq = stack[..., 0], stack[..., 1]
     cost = mean_sq
     cost -= mean * mean
@@ -204,7 +211,8 @@ def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str
             channels[..., 3 * slot] = w
             np.multiply(y, w, out=channels[..., 3 * slot + 1])
             np.multiply(channels[..., 3 * slot + 1], y, out=channels[..., 3 * slot + 2])
-        stack = refocus(LightField.from_views(channels, view_mask=union), shift, interpolation=interpolation)
+        stack = refocus(LightField.from_views(channels, view_mask=union), shift, interpolation=interpolation,
+                        view_shifts=sweep.slopes)
         del channels
         for slot, h in enumerate(pair):
             share = stack[..., 3 * slot]

@@ -306,7 +306,9 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["plan"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    sweep = sweep_luminance(views, view_step, reach, weight)
+    # a microscope that refocuses by the sine condition sweeps with the same per-view shifts (exact z_um)
+    slopes = geometry.refocus_slopes(camera) if camera.is_microscope else None
+    sweep = sweep_luminance(views, view_step, reach, weight, slopes)
     timings["luminance of the views"] = time.perf_counter() - t0
 
     if coarse_pass and len(a_values) > COARSE_PASS_MIN_SLICES:
@@ -349,7 +351,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["metric distance"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    sharp = allfocus(views, minimum.a, c, interpolation)
+    sharp = allfocus(views, minimum.a, c, interpolation, slopes)
     timings["all-in-focus"] = time.perf_counter() - t0
 
     f32 = lambda x: None if x is None else np.asarray(x, dtype=np.float32)

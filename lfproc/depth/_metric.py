@@ -9,9 +9,9 @@ paraxial formula gives far below a_∞.
 
 A microscope's estimates are depths z in µm from the native object plane (positive towards the
 objective, :func:`lfproc.geometry.microscope_slices`), bounded the same way: z_near = max(z_near(a),
-z(a_high)), z_far = min(z_far(a), z(a_low)). The sweep refocuses paraxially; for a camera that
-refocuses by the sine condition (:func:`lfproc.geometry.uses_aplanatic`) its ``a`` is first mapped to
-the depth sharp in that paraxial slice, a/(1 + e) (:func:`lfproc.geometry.paraxial_depth_error`).
+z(a_high)), z_far = min(z_far(a), z(a_low)). The sweep refocuses with the shifts refocusing uses (the
+sine condition's per-view shifts where the camera refocuses aplanatically,
+:func:`lfproc.geometry.refocus_slopes`), so its slice ``a`` is the plane z(a): no correction factor.
 """
 
 from __future__ import annotations
@@ -75,9 +75,6 @@ def _microscope_depth(camera, a, a_safe, known, a_low, a_high) -> MetricDepth:
     from .. import geometry
 
     zeta = geometry.z_per_a_um(camera)
-    if geometry.uses_aplanatic(camera):   # the sweep's paraxial slices overstate depth by 1 + e
-        a_safe, a_low, a_high = (np.asarray(x, dtype=np.float64) / (1.0 + geometry.paraxial_depth_error(camera))
-                                 for x in (a_safe, a_low, a_high))
     geo = geometry.slice_geometry(camera, a_safe)
     upper = np.maximum(geo.z_near_um, zeta * np.where(known, a_high, 0.0))
     lower = np.minimum(geo.z_far_um, zeta * np.where(known, a_low, 0.0))
