@@ -41,12 +41,19 @@ class LightField:
     outside the main lens aperture or too close to a micro image's rim at 0 (see :mod:`lfproc.decode`),
     and refocusing averages over the marked views only, so slices keep the scene's brightness. ``None``:
     every view carries light. The views it leaves out must be 0 (:meth:`from_views` sets them so).
+
+    ``view_centre`` (c_y, c_x), optional: where the decoder read the central view, in samples (p_m/m̂) off
+    each lens centre along the lattice's v and u axes. The decoder reads the views around the lit disc's
+    centre (:mod:`lfproc.decode._disc_centre`); where that is off the lens centre (an objective pupil off
+    the axis, a tilted illumination) view k stands for the ray at (k − c + view_centre)·p_m/m̂ under its
+    lens, and the views' angles and the sine condition's shifts follow it. ``None``: at the lens centres.
     """
 
     views: np.ndarray
     camera: Camera | None = None
     grid: LensGrid | None = None
     view_mask: np.ndarray | None = None
+    view_centre: tuple | None = None
 
     def __post_init__(self):
         v = self.views
@@ -63,13 +70,21 @@ class LightField:
                 raise LfprocError("light field views that view_mask leaves out must be 0 (refocusing sums every "
                                   "view); build it with LightField.from_views, which zeroes them")
             object.__setattr__(self, "view_mask", None if mask.all() else mask)
+        if self.view_centre is not None:
+            try:
+                centre = tuple(float(x) for x in self.view_centre)
+            except (TypeError, ValueError):
+                centre = ()
+            if len(centre) != 2 or not all(np.isfinite(centre)):
+                raise LfprocError(f"light field view_centre must be two finite numbers (c_y, c_x), got {self.view_centre!r}")
+            object.__setattr__(self, "view_centre", None if centre == (0.0, 0.0) else centre)
         if self.camera is not None and self.camera.m_hat != v.shape[0]:
             raise LfprocError(f"light field has {v.shape[0]}x{v.shape[0]} views but the camera's micro_image_px "
                               f"is {self.camera.m_hat}; decode with that camera or fix decode.micro_image_px")
 
     @classmethod
     def from_views(cls, views, camera: Camera | None = None, grid: LensGrid | None = None,
-                   view_mask=None) -> "LightField":
+                   view_mask=None, view_centre=None) -> "LightField":
         """Wrap an array shaped ``(m̂, m̂, Ny, Nx, C)``; it is converted to float32 (no copy if it already is)."""
         arr = np.asarray(views)
         if arr.dtype != np.float32:
@@ -84,7 +99,7 @@ class LightField:
             if unmarked.shape == arr.shape[:2] and unmarked.any() and _any_nonzero(arr, unmarked):
                 arr = arr.copy() if arr is views else arr
                 arr[unmarked] = 0.0
-        return cls(arr, camera, grid, view_mask)
+        return cls(arr, camera, grid, view_mask, view_centre)
 
     @property
     def m_hat(self) -> int:
@@ -116,7 +131,7 @@ class LightField:
         if self.camera is None or self.camera.microscope is None or self.camera.m_hat != self.m_hat:
             return None
         from .geometry import refocus_slopes     # numpy only: stays light
-        return refocus_slopes(self.camera)
+        return refocus_slopes(self.camera, centre=self.view_centre)
 
     # ------------------------------------------------------------------ file format
     def save(self, path: str | os.PathLike) -> None:
@@ -126,6 +141,8 @@ class LightField:
         with atomic_path(path, suffix=".npz") as tmp:
             with open(tmp, "wb") as fh:
                 extra = {} if self.view_mask is None else {"view_mask": self.view_mask}
+                if self.view_centre is not None:
+                    extra["view_centre"] = np.array(self.view_centre, dtype=np.float64)
                 np.savez(fh, views=self.views, camera_toml=np.array(camera_toml),
                          grid_json=np.array(grid_json), format=np.array(FILE_FORMAT), **extra)
 
@@ -158,14 +175,16 @@ class LightField:
             type; pickled objects are never loaded).
         """
         path = os.fspath(path)
-        members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask",))
+        members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask", "view_centre"))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
         if views.dtype.kind not in "fiub":
             raise LfprocError(f"{path}: its views are {views.dtype} data, not numbers; write it again with "
                               f"'lfproc decode'")
-        return cls.from_views(views, camera, grid, members.get("view_mask"))
+        centre = members.get("view_centre")
+        return cls.from_views(views, camera, grid, members.get("view_mask"), None if centre is None else
+                              tuple(np.asarray(centre, dtype=np.float64).reshape(-1)))
 
 
 def _any_nonzero(views: np.ndarray, which: np.ndarray) -> bool:

@@ -384,7 +384,8 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
     except LfprocError as exc:
         raise LfprocError(f"{path}: {exc}") from None
     check_capture_is_not_white(path, views, decoder.views_delivered)
-    return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered)
+    return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered,
+                                 decoder.view_centre)
 
 
 def output_stem(path: str) -> str:

@@ -99,28 +99,35 @@ class ViewpointGeometry:
                 "baseline_to_neighbour_mm": self.baseline_to_neighbour_mm}
 
 
-def viewpoint_geometry(camera) -> list[list[ViewpointGeometry]]:
-    """Virtual camera of every view as an m̂ × m̂ nested list indexed ``[ky][kx]``."""
+def viewpoint_geometry(camera, centre=None) -> list[list[ViewpointGeometry]]:
+    """Virtual camera of every view as an m̂ × m̂ nested list indexed ``[ky][kx]``.
+
+    ``centre`` (c_y, c_x): where the decoder read the central view, in samples off the lens centres
+    (:attr:`lfproc.LightField.view_centre`, the lit disc's centre); the tags are those of the rays the
+    views were read at, view k at offset k − c + centre. ``None``: at the lens centres.
+    """
     offsets = geometry.view_offsets(camera)
+    cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
     if getattr(camera, "microscope", None) is not None:
-        angles = geometry.microscope_views(camera).angle_deg
+        angles_y = geometry.microscope_views(camera, cy).angle_deg
+        angles_x = geometry.microscope_views(camera, cx).angle_deg
         inside = geometry.views_inside_na(camera)
-        pupil = geometry.pupil_positions_mm(camera)
-        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), (float(pupil[ky]), float(pupil[kx])),
-                                   (_finite(angles[ky]), _finite(angles[kx])), None, None,
-                                   angle_deg=(_finite(angles[ky]), _finite(angles[kx])),
+        pupil_y, pupil_x = geometry.pupil_positions_mm(camera, cy), geometry.pupil_positions_mm(camera, cx)
+        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), (float(pupil_y[ky]), float(pupil_x[kx])),
+                                   (_finite(angles_y[ky]), _finite(angles_x[kx])), None, None,
+                                   angle_deg=(_finite(angles_y[ky]), _finite(angles_x[kx])),
                                    inside_na=bool(inside[ky, kx]))
                  for kx, ix in enumerate(offsets)] for ky, iy in enumerate(offsets)]
-    positions = geometry.view_positions_mm(camera)
-    tilts = geometry.view_tilts_deg(camera)
+    pos_y, pos_x = geometry.view_positions_mm(camera, offsets + cy), geometry.view_positions_mm(camera, offsets + cx)
+    tilt_y, tilt_x = geometry.view_tilts_deg(camera, offsets + cy), geometry.view_tilts_deg(camera, offsets + cx)
     neighbour = geometry.baseline_mm(camera, 1)
     table = []
     for ky, iy in enumerate(offsets):
         row = []
         for kx, ix in enumerate(offsets):
             row.append(ViewpointGeometry(
-                (ky, kx), (int(iy), int(ix)), (float(positions[ky]), float(positions[kx])),
-                (float(tilts[ky]), float(tilts[kx])), float(math.hypot(positions[ky], positions[kx])),
+                (ky, kx), (int(iy), int(ix)), (float(pos_y[ky]), float(pos_x[kx])),
+                (float(tilt_y[ky]), float(tilt_x[kx])), float(math.hypot(pos_y[ky], pos_x[kx])),
                 float(neighbour)))
         table.append(row)
     return table

@@ -120,3 +120,40 @@ def test_lytro_sample_discs_are_centred():
     sampling = view_sampling(white.data, setup.grid, camera.m_hat, white.cfa, "fast", "linear", 0.1)
     assert not sampling.centred
     assert math.hypot(*sampling.centre_offset_px) < 0.1 * setup.grid.pitch_px / camera.m_hat
+
+
+def test_view_tags_follow_the_centred_sampling(tmp_path):
+    """A light field decoded around an off-axis NA disc carries where its central view was read
+    (``view_centre``), through a saved file too; its views' object-space angles are those of the rays read
+    (the central view looks along the aperture's axis, n·sin θ = na_offset), and the sine condition's shifts
+    are those of the rays read, relative to the central view."""
+    from lfproc import Camera, LightField, geometry
+    from lfproc.decode import decode_capture
+    from lfproc.io import Capture
+    from lfproc.viewpoints import viewpoint_geometry
+
+    camera = microscope(60, 1.0, 1.333, 0.1, 2.5, 15)
+    size = 301
+    grid = square_grid(camera, size)
+    na_offset = (0.12, -0.08)
+    white = render_microscope_sensor(camera, None, (size, size), pixel_samples=2, aperture_samples=1,
+                                     na_offset=na_offset).astype(np.float32)
+    lf = decode_capture(Capture(white, "none", "capture"), Capture(white, "none", "white"), grid, camera)
+    step = grid.pitch_px / camera.m_hat
+    sines = np.array(na_offset) / camera.microscope.objective_magnification
+    expected = -camera.mla_focal_length_mm * sines / np.sqrt(1 - sines ** 2) / camera.lenslet_pixel_pitch_mm
+    assert lf.view_centre == pytest.approx((expected[1] / step, expected[0] / step), abs=0.03)
+    lf.save(tmp_path / "lf.lfp.npz")
+    assert LightField.load(tmp_path / "lf.lfp.npz").view_centre == pytest.approx(lf.view_centre, abs=1e-12)
+    c = camera.center_index
+    central = viewpoint_geometry(camera, lf.view_centre)[c][c]
+    n = camera.microscope.immersion_index
+    along = np.degrees(np.arcsin(np.array([na_offset[1], na_offset[0]]) / n))      # (y, x)
+    # 0.03 px of the disc's 0.75 px offset (the measurement's tolerance above) is 0.2° of its 5.2°
+    assert central.angle_deg == pytest.approx(tuple(along), abs=0.2)
+    assert viewpoint_geometry(camera)[c][c].angle_deg == (0.0, 0.0)
+    forced = Camera.from_toml_string(camera.to_toml().replace("[decode]", "aplanatic = true\n[decode]"))
+    sy, sx = LightField.from_views(lf.views, forced, lf.grid, lf.view_mask, lf.view_centre).refocus_slopes
+    assert sy[c, c] == 0.0 and sx[c, c] == 0.0
+    assert np.array_equal(sx, geometry.refocus_slopes(forced, centre=lf.view_centre)[1])
+    assert not np.allclose(sx, geometry.refocus_slopes(forced)[1])

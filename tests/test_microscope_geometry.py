@@ -215,3 +215,29 @@ def test_the_relay_enters_only_through_m_hat():
     assert g.z_per_a_um(strong) / g.z_per_a_um(relay) == pytest.approx(49 / 27, rel=1e-12)
     # while the depth of a view's one-sample parallax (z(1)/m̂ per lens shift of one sample) stays the same
     assert g.z_per_a_um(strong) / strong.m_hat == pytest.approx(g.z_per_a_um(relay) / relay.m_hat, rel=1e-12)
+
+
+def test_aplanatic_shifts_around_an_off_centre_disc_match_the_trace():
+    """Views read around a disc centre off the lens centre (c_y, c_x samples) stand for the rays at
+    u = (k − c + centre)·p_p; their shifts relative to the central view are those of an exact sine-condition
+    trace of those rays."""
+    cam = LFM60
+    m, n = cam.microscope.objective_magnification, cam.microscope.immersion_index
+    centre = (-0.6, 0.9)
+    sigma_y, sigma_x = g.refocus_slopes(cam, aplanatic=True, centre=centre)
+    c, p = cam.center_index, cam.sample_pitch_mm
+    z_mm = g.slice_geometry(cam, 0.3).z_um * 1e-3
+
+    def lens_offset(ky, kx):
+        d = np.array([(kx - c + centre[1]) * p, (ky - c + centre[0]) * p, cam.mla_focal_length_mm])
+        d /= np.linalg.norm(d)
+        sx, sy = d[0] * m / n, d[1] * m / n
+        cz = math.sqrt(1 - sx * sx - sy * sy)
+        return m * z_mm * sy / cz / cam.mla_pitch_mm, m * z_mm * sx / cz / cam.mla_pitch_mm
+
+    y0, x0 = lens_offset(c, c)
+    inside = g.views_inside_na(cam)
+    for ky, kx in zip(*np.nonzero(inside)):
+        ly, lx = lens_offset(ky, kx)
+        assert 0.3 * sigma_x[ky, kx] == pytest.approx(-(lx - x0), abs=1e-9)
+        assert 0.3 * sigma_y[ky, kx] == pytest.approx(-(ly - y0), abs=1e-9)

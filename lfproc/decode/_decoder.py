@@ -121,6 +121,7 @@ class Decoder:
     views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
     view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
     cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
+    view_centre: tuple = None            # (c_y, c_x) samples: the central view read off the lens centres, or None
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -245,10 +246,11 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
     if centroid_tolerance is None:
-        delivered, shift, cells = np.ones((m_hat, m_hat), dtype=bool), None, None
+        delivered, shift, cells, view_centre = np.ones((m_hat, m_hat), dtype=bool), None, None, None
     else:
         sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
         delivered, shift = sampling.delivered, sampling.shift_px
+        view_centre = centre_in_samples(sampling.centre_offset_px, grid, m_hat) if sampling.centred else None
     if whole_lenses:
         grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
     if grid.kind == "hexagonal":
@@ -264,7 +266,15 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre)
+
+
+def centre_in_samples(offset_px, grid: LensGrid, m_hat: int) -> tuple:
+    """A sensor offset (x, y) px as (c_y, c_x) samples (pitch/m̂) along the lattice's v and u axes."""
+    u, v = grid.axes
+    step = grid.pitch_px / m_hat
+    x, y = float(offset_px[0]), float(offset_px[1])
+    return (x * v[0] + y * v[1]) / step, (x * u[0] + y * u[1]) / step
 
 
 def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):
@@ -281,4 +291,4 @@ def decode_capture(capture, white, grid: LensGrid, camera, **options):
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
         raise LfprocError(f"{capture.source}: {exc}") from None
-    return LightField.from_views(views, camera, decoder.output_grid, decoder.views_delivered)
+    return LightField.from_views(views, camera, decoder.output_grid, decoder.views_delivered, decoder.view_centre)

@@ -62,19 +62,21 @@ def lateral_sampling_um(camera) -> float:
     return camera.mla_pitch_mm / _scope(camera).objective_magnification * UM_PER_MM
 
 
-def image_sines(camera):
-    """(u_x, u_y per view offset i) → image-side direction sines of the views along one axis, i = −c…c."""
+def image_sines(camera, centre: float = 0.0):
+    """Image-side direction sines of the views along one axis, i = −c…c, sampled at (i + ``centre``)·p_p
+    under their lens (``centre``: where the decoder read the central view, in samples off the lens centre:
+    the lit disc's centre, :attr:`lfproc.LightField.view_centre`)."""
     c = camera.center_index
-    u = np.arange(-c, c + 1) * camera.sample_pitch_mm
+    u = (np.arange(-c, c + 1) + float(centre)) * camera.sample_pitch_mm
     return u / np.hypot(u, camera.mla_focal_length_mm)
 
 
-def pupil_positions_mm(camera) -> np.ndarray:
+def pupil_positions_mm(camera, centre: float = 0.0) -> np.ndarray:
     """Where each view offset i = −c…c crosses the objective's back focal plane (its pupil), in mm: a
     microscope view's ``position_mm``, as F_i (Eq. 17) is a camera's. By the sine condition a ray leaving the
     sample at n·sin θ crosses it at f_obj·n·sin θ (f_obj = f_tube / M), which is −f_tube times the view's
-    image-side sine; the sign follows the view's object-space angle."""
-    return -_scope(camera).tube_lens_focal_length_mm * image_sines(camera) + 0.0
+    image-side sine; the sign follows the view's object-space angle. ``centre``: see :func:`image_sines`."""
+    return -_scope(camera).tube_lens_focal_length_mm * image_sines(camera, centre) + 0.0
 
 
 def na_views(camera) -> int:
@@ -85,11 +87,12 @@ def na_views(camera) -> int:
     return int(inside[-1])
 
 
-def _view_grid(camera):
-    """(u_x, u_y, ρ) on the (m̂, m̂) view grid: image-side offsets under the lens and ρ = |(u_x, u_y, f_s)|."""
+def _view_grid(camera, centre=(0.0, 0.0)):
+    """(u_x, u_y, ρ) on the (m̂, m̂) view grid: image-side offsets under the lens and ρ = |(u_x, u_y, f_s)|;
+    ``centre`` (c_y, c_x): where the central view was read, in samples off the lens centre."""
     c = camera.center_index
-    u = np.arange(-c, c + 1) * camera.sample_pitch_mm
-    ux, uy = np.meshgrid(u, u)
+    k = np.arange(-c, c + 1, dtype=np.float64)
+    ux, uy = np.meshgrid((k + float(centre[1])) * camera.sample_pitch_mm, (k + float(centre[0])) * camera.sample_pitch_mm)
     return ux, uy, np.sqrt(ux * ux + uy * uy + camera.mla_focal_length_mm ** 2)
 
 
@@ -100,26 +103,29 @@ def views_inside_na(camera) -> np.ndarray:
     return (ux * ux + uy * uy) <= (limit * rho) ** 2 * (1.0 + 1e-12)
 
 
-def _view_directions(camera):
+def _view_directions(camera, centre=(0.0, 0.0)):
     """(α, β, γ, ρ) on the (m̂, m̂) view grid: object-space direction sines, cosine, and |(u, f_s)|.
 
-    Views outside the objective's NA carry no light; their sines are clipped to the NA so γ stays real.
+    Views outside the objective's NA carry no light; their sines are clipped to the NA so γ stays real
+    (around an off-centre disc, ``centre``, to the largest sine of the views inside it: those are exact).
     """
     scope = _scope(camera)
-    ux, uy, rho = _view_grid(camera)
+    ux, uy, rho = _view_grid(camera, centre)
     scale = scope.objective_magnification / (scope.immersion_index * rho)
     alpha, beta = ux * scale, uy * scale
     radial = np.hypot(alpha, beta)
-    limit = scope.numerical_aperture / scope.immersion_index
+    limit = min(max(scope.numerical_aperture / scope.immersion_index, float(radial[views_inside_na(camera)].max())),
+                1.0 - 1e-9)
     clip = np.where(radial > limit, limit / np.where(radial > 0, radial, 1.0), 1.0)
     alpha, beta = alpha * clip, beta * clip
     gamma = np.sqrt(1.0 - alpha * alpha - beta * beta)
     return alpha, beta, gamma, rho
 
 
-def aplanatic_gain(camera) -> np.ndarray:
-    """g = f_s/(ρ·γ) per view (m̂, m̂): the sine condition's shift of view k over the paraxial a·(c − k)."""
-    _, _, gamma, rho = _view_directions(camera)
+def aplanatic_gain(camera, centre=(0.0, 0.0)) -> np.ndarray:
+    """g = f_s/(ρ·γ) per view (m̂, m̂): the sine condition's shift of view k over the paraxial a·(c − k)
+    (``centre``: see :func:`refocus_slopes`)."""
+    _, _, gamma, rho = _view_directions(camera, centre)
     return camera.mla_focal_length_mm / (rho * gamma)
 
 
@@ -146,12 +152,15 @@ def uses_aplanatic(camera) -> bool:
     return paraxial_depth_error(camera) * z_per_a_um(camera) > float(microscope_slices(camera, 1.0).dof_um)
 
 
-def refocus_slopes(camera, aplanatic: bool | None = None):
+def refocus_slopes(camera, aplanatic: bool | None = None, centre=None):
     """Per-view shift multipliers (σ_y, σ_x), each (m̂, m̂): view (ky, kx) moves a·σ lenses in slice a.
 
     Paraxially σ = (c − ky, c − kx) (Eq. 9, centred); aplanatic σ = g·(c − k) (module docstring).
     ``aplanatic=None`` follows :func:`uses_aplanatic`. Returns ``None`` for a photographic camera or a
-    paraxial microscope, meaning the refocus kernel's own a·(c − k).
+    paraxial microscope, meaning the refocus kernel's own a·(c − k). ``centre`` (c_y, c_x): where the
+    decoder read the central view, in samples off the lens centre (the lit disc's centre): view k then
+    sits at u = (k − c + centre)·p_p and its shift is that of u less that of the central view, so that
+    the central view stays put and z(a) is unchanged (paraxially the table is still c − k).
     """
     if getattr(camera, "microscope", None) is None:
         return None
@@ -159,8 +168,10 @@ def refocus_slopes(camera, aplanatic: bool | None = None):
         return None
     c = camera.center_index
     base = (c - np.arange(camera.m_hat)).astype(np.float64)
-    g = aplanatic_gain(camera)
-    return g * base[:, None], g * base[None, :]
+    cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
+    g = aplanatic_gain(camera, (cy, cx))
+    sy, sx = g * (base[:, None] - cy), g * (base[None, :] - cx)   # −g·u/p_p per view
+    return sy - sy[c, c], sx - sx[c, c]
 
 
 def _limit_parameters(camera, a, view_extent=None):
@@ -223,11 +234,15 @@ class MicroscopeViews:
                 for i, t, k in zip(self.i, self.angle_deg, self.inside_na)]
 
 
-def microscope_views(camera) -> MicroscopeViews:
-    """Object-space angles of the views (sine condition) and which lie inside the objective's NA."""
+def microscope_views(camera, centre: float = 0.0) -> MicroscopeViews:
+    """Object-space angles of the views (sine condition) and which lie inside the objective's NA.
+
+    ``centre``: where the decoder read the central view along this axis, in samples off the lens centre
+    (the lit disc's centre, :attr:`lfproc.LightField.view_centre`): the angles are those of the rays the
+    views were read at. The NA is the disc's, so which views lie inside it does not change."""
     scope = _scope(camera)
     c = camera.center_index
-    sines = -scope.objective_magnification * image_sines(camera) / scope.immersion_index   # sign of m_i = −i·p_p/f_s
+    sines = -scope.objective_magnification * image_sines(camera, centre) / scope.immersion_index   # m_i = −i·p_p/f_s
     with np.errstate(invalid="ignore"):
         angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
     inside = np.abs(np.arange(-c, c + 1)) <= na_views(camera)

@@ -84,8 +84,10 @@ def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: 
 
 
 def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, fmt: str = "tiff",
-                keep: np.ndarray | None = None) -> list[str]:
+                keep: np.ndarray | None = None, centre=None) -> list[str]:
     """Write each view (or those ``keep[ky, kx]`` marks) with the contract's sidecar; returns the paths.
+
+    ``centre``: where the decoder read the central view (``LightField.view_centre``): the tags follow it.
 
     Two files are written at a time (OpenImageIO releases the GIL while it encodes and writes), which
     keeps the disk busy between one file's open and the next: 225 Illum views reach about half the
@@ -97,7 +99,7 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
 
     jobs = []
     tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
-    for row in viewpoint_geometry(camera):
+    for row in viewpoint_geometry(camera, centre):
         for vg in row:
             ky, kx = vg.view
             if keep is None or keep[ky, kx]:
@@ -138,7 +140,7 @@ def mosaic_of_shown(views: np.ndarray, keep: np.ndarray | None, gap: int = 0) ->
 
 
 def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.ndarray, fmt: str = "tiff",
-                      keep: np.ndarray | None = None) -> str:
+                      keep: np.ndarray | None = None, centre=None) -> str:
     """The views ``keep`` marks (all without it) tiled into one image, with a sidecar of every view shown.
 
     ``keep`` (m̂ × m̂ booleans: the views that carry light, e.g. ``LightField.view_mask``, possibly
@@ -151,7 +153,7 @@ def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.nda
 
     tiled, (ky0, kx0) = mosaic_of_shown(views, keep)
     tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
-    listed = [vg.metadata() for row in viewpoint_geometry(camera) for vg in row
+    listed = [vg.metadata() for row in viewpoint_geometry(camera, centre) for vg in row
               if keep is None or keep[vg.view[0], vg.view[1]]]
     meta = {"source": source, "layout": "block (by, bx) holds view [ky0 + by, kx0 + bx]",
             "first_view": [ky0, kx0], "views_per_side": int(views.shape[0]), "views_shown": len(listed), **tone_meta}
