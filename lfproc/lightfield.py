@@ -7,8 +7,9 @@ coordinate like the lens index j; the central view is k = c = (m̂ − 1)/2.
 File format (``.lfp.npz``, written by :meth:`LightField.save`): an uncompressed numpy ``.npz``
 archive with the members ``views`` (the array above), ``camera_toml`` (the camera file, a string;
 empty if none) and ``grid_json`` (the lens grid as written by ``lfproc calibrate``; empty if none),
-optionally ``view_mask`` ((m̂, m̂) bool, the views that carry light; absent when all do),
-plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it: ``np.load(path)["views"]``.
+optionally ``view_mask`` ((m̂, m̂) bool, the views that carry light; absent when all do) and
+``view_centre`` (2 float64 (c_y, c_x): where the central view was read, in samples off the lens centres;
+absent when at them), plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it: ``np.load(path)["views"]``.
 """
 
 from __future__ import annotations
