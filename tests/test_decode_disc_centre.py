@@ -80,12 +80,15 @@ def square_grid(camera, size):
     return LensGrid("rectangular", p, 0.0, (centre - n * p, centre - n * p), 2 * n + 1, 2 * n + 1)
 
 
-def test_microscope_pupil_off_axis():
-    """60x/1.0 water objective on 100 µm f/25 lenslets, 15 px per lens; its aperture moved by
-    (0.12, −0.08) in n·sin θ: the discs move by (−0.75, +0.50) px. The NA disc's centre is measured to
-    0.03 px, and the decoder delivers a symmetric set centred on it, as many views as for the centred disc
-    (before: 89 of them, 20 fewer, centred on the lens centre)."""
-    camera = microscope(60, 1.0, 1.333, 0.1, 2.5, 15)
+@pytest.mark.parametrize("na, tolerance_px, share", [(1.0, 0.03, 1.0), (1.2, 0.04, 0.9)])
+def test_microscope_pupil_off_axis(na, tolerance_px, share):
+    """60x water objective on 100 µm f/25 lenslets, 15 px per lens; its aperture moved by (0.12, −0.08) in
+    n·sin θ: the discs move by (−0.75, +0.50) px. At NA 1.0 (discs 83 % of the pitch) the centre is measured
+    to 0.03 px and the decoder delivers a symmetric set centred on it, as many views as for the centred disc
+    (before: 89, 20 fewer, centred on the lens centre). At NA 1.2 (the issue's 60x/1.2 capture: discs as
+    wide as the pitch, so the moved disc is cut by its cell on one side) to 0.04 px, and a symmetric set
+    of at least 90 % of the centred disc's views (153 of 161)."""
+    camera = microscope(60, na, 1.333, 0.1, 2.5, 15)
     size = 301
     grid = square_grid(camera, size)
     na_offset = (0.12, -0.08)
@@ -95,16 +98,16 @@ def test_microscope_pupil_off_axis():
     shifted = render_microscope_sensor(camera, None, (size, size), pixel_samples=2, aperture_samples=1,
                                        na_offset=na_offset)
     disc = measure_disc_centre(shifted, grid, "none", _view_mask.probe_lenses(grid))
-    assert disc.offset_px == pytest.approx(tuple(expected), abs=0.03)
+    assert disc.offset_px == pytest.approx(tuple(expected), abs=tolerance_px)
     assert measure_disc_centre(centred, grid, "none", _view_mask.probe_lenses(grid)).offset_px == \
         pytest.approx((0.0, 0.0), abs=0.01)
     reference = make_decoder(centred.astype(np.float32), grid, camera.m_hat).views_delivered
     decoder = make_decoder(shifted.astype(np.float32), grid, camera.m_hat)
     d = decoder.views_delivered
     assert np.array_equal(d, d[::-1]) and np.array_equal(d, d[:, ::-1])
-    assert d.sum() >= reference.sum()
+    assert d.sum() >= share * reference.sum()
     c = camera.center_index
-    assert decoder.view_shift_px[c, c] == pytest.approx(tuple(expected), abs=0.03)
+    assert decoder.view_shift_px[c, c] == pytest.approx(tuple(expected), abs=tolerance_px)
 
 
 def test_lytro_sample_discs_are_centred():
