@@ -8,6 +8,7 @@ with the objective's aperture moved off the axis (``na_offset``, n·sin θ units
 """
 
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -155,6 +156,12 @@ def test_view_tags_follow_the_centred_sampling(tmp_path):
     # 0.03 px of the disc's 0.75 px offset (the measurement's tolerance above) is 0.2° of its 5.2°
     assert central.angle_deg == pytest.approx(tuple(along), abs=0.2)
     assert viewpoint_geometry(camera)[c][c].angle_deg == (0.0, 0.0)
+    # the views' sidecars carry the same tags
+    from lfproc.io import sidecar_path
+    from lfproc.outputs import write_view_set
+    written = write_view_set(str(tmp_path), "s", "capture", lf)
+    sidecar = [p for p in written if p.endswith(f"s_view_{c:02d}_{c:02d}.tif")][0]
+    assert json.loads(open(sidecar_path(sidecar)).read())["angle_deg"] == pytest.approx(list(central.angle_deg))
     forced = Camera.from_toml_string(camera.to_toml().replace("[decode]", "aplanatic = true\n[decode]"))
     sy, sx = LightField.from_views(lf.views, forced, lf.grid, lf.view_mask, lf.view_centre).refocus_slopes
     assert sy[c, c] == 0.0 and sx[c, c] == 0.0

@@ -307,7 +307,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
 
     t0 = time.perf_counter()
     # a microscope that refocuses by the sine condition sweeps with the same per-view shifts (exact z_um)
-    slopes = geometry.refocus_slopes(camera) if camera.is_microscope else None
+    slopes = geometry.refocus_slopes(camera, centre=getattr(lf, "view_centre", None)) if camera.is_microscope else None
     sweep = sweep_luminance(views, view_step, reach, weight, slopes)
     timings["luminance of the views"] = time.perf_counter() - t0
 
