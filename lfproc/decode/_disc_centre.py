@@ -18,8 +18,10 @@ This module fits the disc's *edge* instead. Every probed lens contributes the pi
 lit level in that lens, so gains cancel; pixels at the cell's border are left out, so a cut disc is
 fitted on the edge it shows. All lenses are pooled around their own centres, whose sub-pixel phases
 differ, so the pooled profile samples the edge finely. The model is a disc of radius R at offset
-(x₀, y₀), its edge blurred by σ: level(ρ) = ½·erfc((ρ − R)/(√2·σ)), ρ = |(dx − x₀, dy − y₀)|, fitted
-by least squares (:func:`scipy.optimize.least_squares`), with the offset's standard error from the fit.
+(x₀, y₀), its edge blurred over a width s: level(ρ) = 1/(1 + exp((ρ − R)/s)), ρ = |(dx − x₀, dy − y₀)|
+(any edge profile symmetric about R leaves the centre unbiased), fitted by least squares
+(Levenberg–Marquardt with the analytic Jacobian, numpy only: importing scipy.optimize alone took
+longer than the fit), with the offset's standard error from the fit.
 
 A disc that fills its cell shows no edge: its centre is not measurable and is taken as the grid's
 (``measured`` false): a lens grid fitted to such a white image is centred on its micro images anyway.
@@ -101,12 +103,44 @@ def _lens_pixels(image, grid, cfa, r, q):
     return np.concatenate(out, axis=0)
 
 
+def _model(p, dx, dy):
+    """The blurred disc at ``p`` = (x₀, y₀, R, s): levels and their Jacobian ``(N, 4)``."""
+    ex, ey = dx - p[0], dy - p[1]
+    rho = np.maximum(np.hypot(ex, ey), 1e-9)
+    f = 1.0 / (1.0 + np.exp(np.clip((rho - p[2]) / p[3], -60.0, 60.0)))
+    slope = f * (1.0 - f) / p[3]
+    jac = np.stack([slope * ex / rho, slope * ey / rho, slope, slope * (rho - p[2]) / p[3]], axis=-1)
+    return f, jac
+
+
+def _fit(p, dx, dy, level, low, high, iterations: int = 60):
+    """Levenberg–Marquardt for :func:`_model` within the bounds ``low``, ``high``: (parameters, residuals, Jacobian)."""
+    p = np.clip(np.asarray(p, dtype=np.float64), low, high)
+    f, jac = _model(p, dx, dy)
+    r = f - level
+    cost, damping = float(r @ r), 1e-3
+    for _ in range(iterations):
+        normal = jac.T @ jac
+        step = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-12), -(jac.T @ r))
+        trial = np.clip(p + step, low, high)
+        f_t, jac_t = _model(trial, dx, dy)
+        r_t = f_t - level
+        cost_t = float(r_t @ r_t)
+        if cost_t < cost:
+            converged = cost - cost_t < 1e-12 * max(cost, 1e-30) and np.max(np.abs(trial - p)) < 1e-7
+            p, r, jac, cost, damping = trial, r_t, jac_t, cost_t, max(damping / 3.0, 1e-9)
+            if converged:
+                break
+        else:
+            damping *= 4.0
+            if damping > 1e9:
+                break
+    return p, r, jac
+
+
 def measure_disc_centre(white: np.ndarray, grid: LensGrid, cfa: str, lenses) -> DiscCentre:
     """The lit disc's centre off the lens centres of ``lenses`` ((r, q) pairs), fitted to its edge (module
     docstring). Pure function of the white image (linear, dark frame subtracted) and the grid."""
-    from scipy.optimize import least_squares
-    from scipy.special import erfc
-
     white = np.asarray(white)
     pooled = [p for p in (_lens_pixels(white, grid, cfa, r, q) for r, q in lenses) if p is not None]
     none = DiscCentre((0.0, 0.0), 0.0, 0.0, 0.0, False, len(pooled))
@@ -117,22 +151,17 @@ def measure_disc_centre(white: np.ndarray, grid: LensGrid, cfa: str, lenses) -> 
     if data.shape[0] < MIN_PIXELS or np.mean(level < 0.5) < MIN_DARK_SHARE:
         return none
     lit = level >= 0.5
-    start_x, start_y = float(np.mean(dx[lit])), float(np.mean(dy[lit]))
-    start_r = math.sqrt(np.mean(lit) * np.mean(np.hypot(dx, dy) ** 2) * 2.0)   # area share of the pooled cell
-
-    def residual(p):
-        rho = np.hypot(dx - p[0], dy - p[1])
-        return 0.5 * erfc((rho - p[2]) / (math.sqrt(2.0) * p[3])) - level
-
-    fit = least_squares(residual, [start_x, start_y, max(start_r, 1.0), 0.7],
-                        bounds=([-grid.pitch_px, -grid.pitch_px, 0.5, 0.2],
-                                [grid.pitch_px, grid.pitch_px, 2.0 * grid.pitch_px, grid.pitch_px]))
-    dof = max(1, data.shape[0] - 4)
-    s2 = float(np.sum(fit.fun ** 2)) / dof
+    start = [float(np.mean(dx[lit])), float(np.mean(dy[lit])),
+             max(1.0, math.sqrt(np.mean(lit) * np.mean(np.hypot(dx, dy) ** 2) * 2.0)),   # the lit share's radius
+             0.4]
+    low = np.array([-grid.pitch_px, -grid.pitch_px, 0.5, 0.05])
+    high = np.array([grid.pitch_px, grid.pitch_px, 2.0 * grid.pitch_px, grid.pitch_px])
+    p, r, jac = _fit(start, dx, dy, level, low, high)
+    s2 = float(r @ r) / max(1, data.shape[0] - 4)
     try:
-        cov = np.linalg.inv(fit.jac.T @ fit.jac) * s2
+        cov = np.linalg.inv(jac.T @ jac) * s2
         sigma = float(math.sqrt(max(cov[0, 0], 0.0) + max(cov[1, 1], 0.0)))
     except np.linalg.LinAlgError:
         sigma = math.inf
-    x, y, radius, blur = (float(v) for v in fit.x)
+    x, y, radius, blur = (float(v) for v in p)
     return DiscCentre((x, y), sigma, radius, blur, True, len(pooled))
