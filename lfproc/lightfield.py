@@ -77,7 +77,8 @@ class LightField:
             except (TypeError, ValueError):
                 centre = ()
             if len(centre) != 2 or not all(np.isfinite(centre)):
-                raise LfprocError(f"light field view_centre must be two finite numbers (c_y, c_x), got {self.view_centre!r}")
+                raise LfprocError(f"light field view_centre must be two finite numbers (c_y, c_x), "
+                                  f"got {self.view_centre!r}")
             object.__setattr__(self, "view_centre", None if centre == (0.0, 0.0) else centre)
         if self.camera is not None and self.camera.m_hat != v.shape[0]:
             raise LfprocError(f"light field has {v.shape[0]}x{v.shape[0]} views but the camera's micro_image_px "

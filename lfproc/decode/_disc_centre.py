@@ -114,7 +114,8 @@ def _model(p, dx, dy):
 
 
 def _fit(p, dx, dy, level, low, high, iterations: int = 60):
-    """Levenberg–Marquardt for :func:`_model` within the bounds ``low``, ``high``: (parameters, residuals, Jacobian)."""
+    """Levenberg–Marquardt for :func:`_model` within the bounds ``low``, ``high``: (parameters, residuals,
+    Jacobian)."""
     p = np.clip(np.asarray(p, dtype=np.float64), low, high)
     f, jac = _model(p, dx, dy)
     r = f - level

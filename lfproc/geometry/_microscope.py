@@ -94,7 +94,8 @@ def _view_grid(camera, centre=(0.0, 0.0)):
     ``centre`` (c_y, c_x): where the central view was read, in samples off the lens centre."""
     c = camera.center_index
     k = np.arange(-c, c + 1, dtype=np.float64)
-    ux, uy = np.meshgrid((k + float(centre[1])) * camera.sample_pitch_mm, (k + float(centre[0])) * camera.sample_pitch_mm)
+    p = camera.sample_pitch_mm
+    ux, uy = np.meshgrid((k + float(centre[1])) * p, (k + float(centre[0])) * p)
     return ux, uy, np.sqrt(ux * ux + uy * uy + camera.mla_focal_length_mm ** 2)
 
 

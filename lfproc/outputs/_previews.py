@@ -104,19 +104,24 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
             for name, frame in zip(slice_names(stem, a_values), frames)]
 
 
-def view_label(camera, ky: int, kx: int) -> str:
+def view_label(camera, ky: int, kx: int, centre=None) -> str:
     """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17); a
-    microscope's view: its angle in the object (sine condition)."""
+    microscope's view: its angle in the object (sine condition). ``centre``: where the central view was
+    read (``LightField.view_centre``), as in the views' tags."""
+    cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
     if camera.is_microscope:
-        angles = geometry.microscope_views(camera).angle_deg
-        return f"view [{ky}, {kx}] | {np.hypot(angles[ky], angles[kx]):.1f} deg in the object"
-    positions = geometry.view_positions_mm(camera)
-    return f"view [{ky}, {kx}] | {np.hypot(positions[ky], positions[kx]):.2f} mm from the centre"
+        ay = geometry.microscope_views(camera, cy).angle_deg[ky]
+        ax = geometry.microscope_views(camera, cx).angle_deg[kx]
+        return f"view [{ky}, {kx}] | {np.hypot(ay, ax):.1f} deg in the object"
+    offsets = geometry.view_offsets(camera)
+    py = geometry.view_positions_mm(camera, offsets + cy)[ky]
+    px = geometry.view_positions_mm(camera, offsets + cx)[kx]
+    return f"view [{ky}, {kx}] | {np.hypot(py, px):.2f} mm from the centre"
 
 
 def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None, camera,
                         fmt: str = "png", *, min_long_side: int = MIN_LONG_SIDE_PX,
-                        method: str = "nearest") -> list[str]:
+                        method: str = "nearest", centre=None) -> list[str]:
     """Display-ready pictures of the views ``keep`` marks: ``OUTDIR/STEM_view_KY_KX_preview.png``, one exposure."""
     m = views.shape[0]
     chosen = [(ky, kx) for ky in range(m) for kx in range(m) if keep is None or keep[ky, kx]]
@@ -125,7 +130,8 @@ def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndar
     tone = ToneMap.for_images(np.stack([views[k] for k in chosen]))
     paths = []
     for ky, kx in chosen:
-        frame = display_frames(views[ky, kx][None], tone, min_long_side, method, [view_label(camera, ky, kx)])[0]
+        label = view_label(camera, ky, kx, centre)
+        frame = display_frames(views[ky, kx][None], tone, min_long_side, method, [label])[0]
         paths.append(write_png_preview(os.path.join(outdir, f"{view_name(stem, ky, kx)}_preview{PREVIEW_FORMATS[fmt]}"),
                                        frame))
     return paths
@@ -148,7 +154,7 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
 
 
 def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray | None = None, camera=None, *,
-                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", centre=None) -> str:
     """An animation walking the views along a circle inside the aperture: ``OUTDIR/STEM_views.gif``.
 
     With ``camera`` each frame is labelled with its view and its virtual camera's distance from the
@@ -156,7 +162,7 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
     """
     walk = circular_walk(views.shape[0], mask=mask)
     frames = np.stack([views[k] for k in walk])
-    labels = [view_label(camera, ky, kx) for ky, kx in walk] if camera is not None else None
+    labels = [view_label(camera, ky, kx, centre) for ky, kx in walk] if camera is not None else None
     tone = ToneMap.for_images(frames)
     shown = display_frames(frames, tone, min_long_side, method, labels)
     return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS)

@@ -63,11 +63,11 @@ def write_view_set(outdir: str, stem: str, source: str, lf, fmt: str = "tiff", *
     shown = shown_views(lf, inside_aperture)
     written = write_views(outdir, stem, source, lf.camera, lf.views, fmt, shown.keep, lf.view_centre)
     if preview:
-        written += write_view_previews(outdir, stem, lf.views, shown.keep, lf.camera, preview)
+        written += write_view_previews(outdir, stem, lf.views, shown.keep, lf.camera, preview, centre=lf.view_centre)
     if mosaic:
         written.append(write_view_mosaic(outdir, stem, source, lf.camera, lf.views, fmt, shown.keep,
                                          lf.view_centre))
         written.append(write_mosaic_preview(outdir, stem, lf.views, shown.keep, camera=lf.camera))
     if gif:
-        written.append(write_view_gif(outdir, stem, lf.views, shown.keep, lf.camera))
+        written.append(write_view_gif(outdir, stem, lf.views, shown.keep, lf.camera, centre=lf.view_centre))
     return written

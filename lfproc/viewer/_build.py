@@ -80,7 +80,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         for k, record in enumerate(apertures[-1]["slices"]):
             jobs.append((os.path.join(outdir, record["image"]), lambda k=k, s=aperture_stack: tone(s[k])))
     slices = apertures[0]["slices"]
-    views = _view_records(camera, stem, extension, getattr(lf, "view_mask", None))
+    views = _view_records(camera, stem, extension, getattr(lf, "view_mask", None), getattr(lf, "view_centre", None))
     for item in views["items"]:
         ky, kx = item["view"]
         jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
@@ -141,7 +141,7 @@ def _aperture_record(camera, view_mask, f_number, a_values, stem: str, folder: s
             "summed_views": summed, "slices": slices}
 
 
-def _view_records(camera, stem: str, extension: str, view_mask=None) -> dict:
+def _view_records(camera, stem: str, extension: str, view_mask=None, view_centre=None) -> dict:
     """The views inside the aperture (and, with ``view_mask``, carrying light) with their virtual cameras
     (Eqs. 17, 33, 34) and image paths.
 
@@ -161,7 +161,7 @@ def _view_records(camera, stem: str, extension: str, view_mask=None) -> dict:
         return [-y + 0.0, -x + 0.0]
 
     items = [dict(meta, image=f"views/{view_name(stem, *vg.view)}{extension}", marker_mm=marker(meta))
-             for row in viewpoint_geometry(camera) for vg in row if keep[vg.view]
+             for row in viewpoint_geometry(camera, view_centre) for vg in row if keep[vg.view]
              for meta in (vg.metadata(),)]
     if camera.is_microscope:   # orthographic views, placed by their object-space angles
         scope = camera.microscope
