@@ -193,3 +193,31 @@ def test_bad_lytro_inputs_exit_2_with_one_line_and_write_nothing(tmp_path, paper
         proc = run_cli("decode", path, "--camera", paper_camera, "--calib", tmp_path / "grid.json", "-o", out)
         assert_clean_error(proc, str(path), fragment)
         assert not out.exists() and not list(tmp_path.glob("*.tmp*"))
+
+
+def test_camera_refuses_a_bad_output_before_reading_the_capture(tmp_path, illum_file):
+    """`lfproc camera -o` is checked first, as every command's output: a folder, a path under a file, a folder
+    that cannot be created; one line naming the path and the fix, nothing written."""
+    (tmp_path / "plain").write_text("not a folder")
+    cases = [(tmp_path, tmp_path, "is a folder", "camera.toml"),
+             (tmp_path / "plain" / "camera.toml", tmp_path / "plain", "cannot write there", "-o CAMERA.toml"),
+             (tmp_path / "plain" / "sub" / "camera.toml", tmp_path / "plain", "cannot write there", "-o CAMERA.toml")]
+    for out, *mention in cases:
+        assert_clean_error(run_cli("camera", illum_file, "-o", out), *mention)
+    # the output is refused before the input is opened: a file that is no Lytro file is not even looked at
+    assert_clean_error(run_cli("camera", tmp_path / "plain", "-o", tmp_path / "plain" / "c.toml"), "cannot write there")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["IMG_0001.LFR", "plain"]
+    # a missing folder that can be created is fine
+    assert run_cli("camera", illum_file, "-o", tmp_path / "new" / "camera.toml").returncode == 0
+
+
+def test_export_refuses_a_bad_output_before_reading_the_pictures(tmp_path):
+    import lytropics
+
+    picture = lytropics.write(tmp_path / "IMG_0001-stk.lfp", lytropics.first_gen_stack())
+    (tmp_path / "plain").write_text("not a folder")
+    for out in (tmp_path / "plain", tmp_path / "plain" / "sub"):
+        assert_clean_error(run_cli("export", picture, "-o", out), str(out), "cannot write there", "-o OUTDIR")
+    # checked before any input: a text file given as the picture is not looked at yet
+    assert_clean_error(run_cli("export", tmp_path / "plain", "-o", tmp_path / "plain" / "x"), "cannot write there")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["IMG_0001-stk.lfp", "plain"]
