@@ -221,3 +221,29 @@ def test_export_refuses_a_bad_output_before_reading_the_pictures(tmp_path):
     # checked before any input: a text file given as the picture is not looked at yet
     assert_clean_error(run_cli("export", tmp_path / "plain", "-o", tmp_path / "plain" / "x"), "cannot write there")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["IMG_0001-stk.lfp", "plain"]
+
+
+def test_camera_file_numbers_carry_no_binary_noise(tmp_path):
+    """Metadata in metres written in millimetres: 3e-05 m is 0.03 mm in the file, not 0.030000000000000002
+    (3e-05 * 1e3); every digit the metadata has stays; the notes print the metadata's float32 numbers rounded."""
+    meta = lytrogen.f01_metadata(6, 4)
+    devices = meta["devices"]
+    devices["sensor"]["pixelPitch"] = 9e-06                         # 9e-06 * 1e3 = 0.009000000000000001
+    devices["mla"]["lensPitch"] = 6e-05                             # 0.060000000000000005
+    devices["mla"]["sensorOffset"]["z"] = 3e-05                     # 0.030000000000000002
+    devices["lens"]["focalLength"] = 0.0064499998092651363          # float32 digits: kept as they are
+    devices["lens"]["exitPupilOffset"]["z"] = 0.07
+    devices["lens"]["infinityLambda"] = 7.300000190734863           # float32 7.3
+    pair = lytrogen.write_raw_pair(tmp_path / "frame.RAW", np.full((4, 6), 1000), 12, "big", meta, ".json")
+    out = tmp_path / "camera.toml"
+    proc = run_cli("camera", pair, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    text = out.read_text()
+    for line in ("pixel_pitch_mm = 0.009\n", "pitch_mm = 0.06\n", "focal_length_mm = 0.03\n",
+                 "focal_length_mm = 6.449999809265136\n",                 # 0.006449999809265136 m, shifted
+                 "exit_pupil_distance_mm = 70.0\n", "infinityLambda = 7.3\n"):
+        assert line in text, (line, text)
+    cam = Camera.from_toml(out)
+    assert cam.main_focal_length_mm == pytest.approx(0.0064499998092651363 * 1e3, rel=1e-15)
+    assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.009, 0.06, 0.03)
+    assert "0000000" not in proc.stdout and "9999999" not in proc.stdout
