@@ -60,6 +60,22 @@ def test_view_and_mosaic_previews_say_which_views(small_lf, tmp_path):
     assert mosaic["tags"]["label"].startswith("121 of 11x11 views")
 
 
+def test_animations_are_preview_pictures(small_lf, tmp_path):
+    proc = run_cli("views", small_lf, "--gif", "-o", tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    info = info_json(tmp_path / "small_views.gif")
+    assert info["product"] == "preview picture" and info["preview_of"] == "view animation"
+    assert info["raw_light_field"] is False and info["tags"]["views_per_side"] == 11
+    from lfproc.outputs import write_slice_gif
+
+    stack = np.random.default_rng(4).random((3, 12, 16, 1)).astype(np.float32)
+    camera = Camera.from_toml(SAMPLE / "camera.toml")
+    path = write_slice_gif(str(tmp_path), "s", stack, camera, [1.0, 0.5, 0.0])
+    info = describe_file(path)
+    assert info["preview_of"] == "refocus animation" and info["tags"]["a"] == [1.0, 0.5, 0.0]
+    assert info["tags"]["frames"] == 3 and "software" not in info["tags"]
+
+
 def test_depth_preview_is_a_preview_picture(tmp_path):
     from lfproc.depth._preview import write_preview
 
@@ -113,7 +129,8 @@ def test_foreign_pictures_are_described_as_before(tmp_path):
     tagged.add_text("Software", "GIMP")
     tagged.add_text("Description", json.dumps({"preview": "refocused slice"}))
     Image.fromarray(pixels).save(tmp_path / "gimp.png", pnginfo=tagged)
-    for name in ("plain.png", "gimp.png"):
+    Image.fromarray(pixels).save(tmp_path / "commented.gif", comment=json.dumps({"preview": "view animation"}))
+    for name in ("plain.png", "gimp.png", "commented.gif"):
         info = info_json(tmp_path / name)
         assert info["format"] == "image" and info["raw_light_field"] is True, info
         assert (info["width"], info["height"]) == (11, 9) and "product" not in info

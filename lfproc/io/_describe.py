@@ -233,16 +233,20 @@ def _is_stack_header(spec) -> bool:
 
 def _lfproc_tags(spec) -> dict | None:
     """The metadata lfproc embedded in an image it wrote (``Software`` "lfproc", JSON in
-    ``ImageDescription``), or None for any other image."""
+    ``ImageDescription``; a GIF, which has no Software tag, says ``"software": "lfproc"`` in its JSON
+    comment), or None for any other image."""
     import json
 
-    if spec.get_string_attribute("Software") != "lfproc":
+    software = spec.get_string_attribute("Software")
+    if software not in ("lfproc", ""):
         return None
     try:
         tags = json.loads(spec.get_string_attribute("ImageDescription") or "{}")
-    except ValueError:
+    except (ValueError, UnicodeDecodeError):
         return None
-    return tags if isinstance(tags, dict) else None
+    if not isinstance(tags, dict) or (software != "lfproc" and tags.pop("software", None) != "lfproc"):
+        return None
+    return tags
 
 
 def lfproc_product(tags: dict) -> str | None:

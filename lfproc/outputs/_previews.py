@@ -38,18 +38,23 @@ def display_frames(images, tone: ToneMap | None = None, min_long_side: int = MIN
     return frames
 
 
-def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float) -> str:
-    """An endlessly looping GIF of 8-bit RGB frames (Pillow), written atomically."""
+def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float, tags: dict | None = None) -> str:
+    """An endlessly looping GIF of 8-bit RGB frames (Pillow), written atomically.
+
+    ``tags`` go into the GIF comment as JSON with ``"software": "lfproc"`` (GIF has no Software tag), for
+    ``lfproc info``.
+    """
     from PIL import Image
 
     path = os.fspath(path)
     if not frames:
         raise LfprocError(f"{path}: no frames to write; pass at least one image")
     images = [Image.fromarray(np.ascontiguousarray(frame)) for frame in frames]
+    comment = {} if tags is None else {"comment": _tag_text(dict(tags, software="lfproc"))}
     try:
         with atomic_path(path, suffix=".gif") as tmp:
             images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                           duration=int(round(duration_ms)), loop=0)
+                           duration=int(round(duration_ms)), loop=0, **comment)
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and "
                           f"permissions") from None
@@ -90,11 +95,9 @@ def _embedded(tags: dict | None, jpeg: bool) -> dict:
     strict ASCII JSON as the image description)."""
     if tags is None:
         return {}
-    import json
-
     from PIL import Image, PngImagePlugin
 
-    text = json.dumps(json_safe(dict(tags)), allow_nan=False)
+    text = _tag_text(tags)
     if jpeg:
         exif = Image.Exif()
         exif[0x0131], exif[0x010E] = "lfproc", text       # EXIF Software, ImageDescription
@@ -103,6 +106,12 @@ def _embedded(tags: dict | None, jpeg: bool) -> dict:
     info.add_text("Software", "lfproc")
     info.add_text("Description", text)
     return {"pnginfo": info}
+
+
+def _tag_text(tags: dict) -> str:
+    import json
+
+    return json.dumps(json_safe(dict(tags)), allow_nan=False)
 
 
 def slice_labels(camera, a_values, view_mask=None) -> list[str]:
@@ -170,9 +179,12 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
     images = np.asarray(images)
     labels = slice_labels(camera, a_values, view_mask) if camera is not None and a_values is not None else None
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
+    tags = {"preview": "refocus animation", "frames": len(frames)}
+    if a_values is not None:
+        tags["a"] = [float(a) for a in np.atleast_1d(a_values)]
     if len(frames) > 2:
         frames = frames + frames[-2:0:-1]
-    return write_gif_frames(os.path.join(outdir, f"{stem}_refocus.gif"), frames, SLICE_FRAME_MS)
+    return write_gif_frames(os.path.join(outdir, f"{stem}_refocus.gif"), frames, SLICE_FRAME_MS, tags)
 
 
 def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray | None = None, camera=None, *,
@@ -187,7 +199,8 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
     labels = [view_label(camera, ky, kx) for ky, kx in walk] if camera is not None else None
     tone = ToneMap.for_images(frames)
     shown = display_frames(frames, tone, min_long_side, method, labels)
-    return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS)
+    return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS,
+                            {"preview": "view animation", "frames": len(walk), "views_per_side": int(views.shape[0])})
 
 
 def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None = None, *,
