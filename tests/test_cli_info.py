@@ -106,6 +106,10 @@ def test_microscope_stack_is_a_z_stack_with_its_spacing(tmp_path, kind, name, un
     text = run_cli("info", path).stdout
     assert "focal stack (z-stack)" in text and "slices (4):" in text and "z 1.5" in text
     assert "z_um -1.5" in text
+    # a cut stack: no log lines from the TIFF library, described as far as its header goes
+    (tmp_path / "cut.tif").write_bytes(open(path, "rb").read()[:2000])
+    cut = run_cli("info", tmp_path / "cut.tif")
+    assert cut.returncode == 0 and cut.stderr == "", cut.stderr
     # a z-stack is no capture: refused with one line where a capture is read
     assert_clean_error(run_cli("decode", path, "--camera", SAMPLES / "cameras" / "lfm-20x.toml", "--white",
                                path, "-o", tmp_path / "x.lfp.npz"), "no raw light field")

@@ -22,8 +22,13 @@ def is_stack_header(description: str) -> bool:
 def describe_stack(path: str) -> dict | None:
     """The stack's slice count, size, channels, x/y/z spacing and embedded records; None for an ImageJ or
     OME TIFF that lfproc did not write (described as a plain image)."""
+    import logging
+
     import tifffile
 
+    log = logging.getLogger("tifffile")      # it logs what it finds wrong in a file; the answer says enough
+    level = log.level
+    log.setLevel(logging.CRITICAL + 1)
     try:
         with tifffile.TiffFile(path) as tif:
             series = tif.series[0]
@@ -36,6 +41,8 @@ def describe_stack(path: str) -> dict | None:
                 return None
     except (OSError, ValueError, KeyError, IndexError, TypeError, tifffile.TiffFileError) as exc:
         raise LfprocError(f"{path}: unreadable ImageJ/OME TIFF ({exc}); re-copy the file") from None
+    finally:
+        log.setLevel(level)
     if not isinstance(tags, dict) or not isinstance(tags.get("slices"), list):
         return None
     size = dict(zip(axes, shape))
