@@ -23,6 +23,8 @@ def describe_stack(path: str) -> dict | None:
     """The stack's slice count, size, channels, x/y/z spacing and embedded records; None for an ImageJ or
     OME TIFF that lfproc did not write (described as a plain image)."""
     import logging
+    import struct
+    from xml.etree.ElementTree import ParseError
 
     import tifffile
 
@@ -39,7 +41,8 @@ def describe_stack(path: str) -> dict | None:
                 kind, (tags, spacing) = "ome", _ome(tif.ome_metadata)
             else:
                 return None
-    except (OSError, ValueError, KeyError, IndexError, TypeError, tifffile.TiffFileError) as exc:
+    except (OSError, ValueError, KeyError, IndexError, TypeError, AttributeError, struct.error, ParseError,
+            tifffile.TiffFileError) as exc:
         raise LfprocError(f"{path}: unreadable ImageJ/OME TIFF ({exc}); re-copy the file") from None
     finally:
         log.setLevel(level)
