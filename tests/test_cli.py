@@ -135,6 +135,7 @@ def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_
     views = sorted(tmp_path.glob("capture_view_*.tif"))
     vy, vx = read_image(views[0]).shape[:2]
     assert (ny, nx) == (2 * vy - 1, 2 * vx - 1)                       # --upsample 2
+    assert json.loads(slices[0].with_suffix(".json").read_text())["upsample"] == 2   # and its sidecar says so
     inside = geometry.views_inside_aperture(camera)                  # --inside-aperture: lit views inside only
     written = {tuple(int(k) for k in p.stem.split("_")[-2:]) for p in views}
     c = camera.m_hat // 2
@@ -325,3 +326,29 @@ def test_a_truncated_png_is_one_line_without_the_libraries_own_messages(sample, 
                        str(cut), "truncated or corrupt")
     assert_clean_error(run_cli("calibrate", cut, "--camera", sample / "camera.toml", "-o", tmp_path / "g.json"),
                        str(cut))
+
+
+def test_slices_on_a_finer_grid_say_so_in_their_sidecars(tmp_path):
+    """`--upsample S` refocuses on the (N − 1)·S + 1 grid: the sidecar, the embedded tags and the z-stack's
+    records carry ``upsample``; slices on the lens grid carry no such key (the contract's sidecar unchanged)."""
+    from lfproc import LightField
+    from lfproc.io import read_image, read_metadata
+
+    camera = Camera.from_toml(SAMPLES / "sample" / "camera.toml")
+    views = np.random.default_rng(2).random((camera.m_hat, camera.m_hat, 20, 24, 1)).astype(np.float32)
+    LightField.from_views(views, camera).save(tmp_path / "lit.lfp.npz")
+    for upsample in ("1", "3"):
+        out = tmp_path / f"u{upsample}"
+        proc = run_cli("refocus", tmp_path / "lit.lfp.npz", "--a", "0.5", "--upsample", upsample, "--stack", "imagej",
+                       "-o", out)
+        assert proc.returncode == 0, proc.stderr
+        image = out / "lit_a+0.500.tif"
+        sidecar = json.loads(image.with_suffix(".json").read_text())
+        s = int(upsample)
+        assert read_image(image).shape[:2] == ((20 - 1) * s + 1, (24 - 1) * s + 1)
+        assert sidecar.get("upsample") == (None if s == 1 else s)
+        assert read_metadata(image) == sidecar
+        import tifffile
+        with tifffile.TiffFile(out / "lit_stack.tif") as tif:
+            record = json.loads(tif.imagej_metadata["Info"])["slices"][0]
+        assert record == sidecar

@@ -86,3 +86,60 @@ def test_missing_camera_file(tmp_path):
 @pytest.mark.parametrize("a_list", ["x", "0:5:0", "5:0:1", ""])
 def test_bad_a_list(paper_camera, a_list):
     assert_clean_error(run_cli("geometry", "--camera", paper_camera, "--a", a_list), "--a")
+
+
+def _all_lit_light_field(camera_path, path, lenses=(24, 32), channels=1):
+    """Random texture with every view lit: refocus's sidecars then carry the DOF of --aperture's views alone."""
+    import numpy as np
+
+    from lfproc import Camera, LightField
+
+    camera = Camera.from_toml(camera_path)
+    m = camera.m_hat
+    views = np.random.default_rng(5).random((m, m, *lenses, channels)).astype(np.float32)
+    LightField.from_views(views, camera).save(path)
+    return path
+
+
+@pytest.mark.parametrize("camera_path,f_number,a_list", [
+    (SAMPLES / "sample" / "camera.toml", "8", "0,0.5,1"),
+    (SAMPLES / "cameras" / "lfm-20x.toml", "40", "-0.5,0,0.5"),
+])
+def test_geometry_aperture_gives_the_dof_refocus_tags(tmp_path, camera_path, f_number, a_list):
+    """`lfproc geometry --aperture F` prints the near/far/DOF that `lfproc refocus --aperture F` writes into its
+    sidecars for the same camera and a (and narrower than without it: the synthetic aperture is deeper)."""
+    lf = _all_lit_light_field(camera_path, tmp_path / "lit.lfp.npz")
+    proc = run_cli("refocus", lf, "--a", a_list, "--aperture", f_number, "-o", tmp_path / "r")
+    assert proc.returncode == 0, proc.stderr
+    sidecars = [json.loads(p.read_text()) for p in sorted((tmp_path / "r").glob("lit_a*.json"), key=lambda p:
+                                                          json.loads(p.read_text())["a"])]
+    proc = run_cli("geometry", "--camera", camera_path, "--a", a_list, "--aperture", f_number, "--json")
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(proc.stdout)
+    assert len(data["slices"]) == len(sidecars) == 3
+    for got, tags in zip(data["slices"], sidecars):
+        for key, value in got.items():
+            assert tags[key] == value, (key, got, tags)           # the same numbers, to the last bit
+    full = json.loads(run_cli("geometry", "--camera", camera_path, "--a", a_list, "--json").stdout)["slices"]
+    dof = "dof_um" if "dof_um" in full[1] else "dof_mm"
+    assert data["slices"][1][dof] > 1.2 * full[1][dof]
+    assert data["aperture"]["f_number"] == float(f_number)
+    assert data["aperture"]["views_summed"] == sidecars[0]["views_summed"]
+    table = run_cli("geometry", "--camera", camera_path, "--a", a_list, "--aperture", f_number).stdout
+    assert f"synthetic aperture f/{f_number}: {sidecars[0]['views_summed']} views summed" in table
+    near = "z_near_um" if "z_near_um" in full[1] else "near_mm"
+    assert f"{sidecars[1][near]:.3f}" in table
+
+
+def test_geometry_aperture_is_checked_and_light(tmp_path):
+    camera = SAMPLES / "sample" / "camera.toml"
+    assert_clean_error(run_cli("geometry", "--camera", camera, "--aperture", "2"), "wider than the main lens")
+    assert_clean_error(run_cli("geometry", "--camera", camera, "--aperture", "100"), "narrower than one view")
+    import subprocess
+    import sys
+    code = (f"import sys, io, contextlib; from lfproc.cli import main\n"
+            f"with contextlib.redirect_stdout(io.StringIO()): main(['geometry', '--camera', {str(camera)!r}, "
+            f"'--aperture', '8', '--json'])\n"
+            f"print([m for m in ('numba', 'cv2', 'OpenImageIO', 'rawpy', 'matplotlib') if m in sys.modules])")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip() == "[]"

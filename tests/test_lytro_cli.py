@@ -193,3 +193,57 @@ def test_bad_lytro_inputs_exit_2_with_one_line_and_write_nothing(tmp_path, paper
         proc = run_cli("decode", path, "--camera", paper_camera, "--calib", tmp_path / "grid.json", "-o", out)
         assert_clean_error(proc, str(path), fragment)
         assert not out.exists() and not list(tmp_path.glob("*.tmp*"))
+
+
+def test_camera_refuses_a_bad_output_before_reading_the_capture(tmp_path, illum_file):
+    """`lfproc camera -o` is checked first, as every command's output: a folder, a path under a file, a folder
+    that cannot be created; one line naming the path and the fix, nothing written."""
+    (tmp_path / "plain").write_text("not a folder")
+    cases = [(tmp_path, tmp_path, "is a folder", "camera.toml"),
+             (tmp_path / "plain" / "camera.toml", tmp_path / "plain", "cannot write there", "-o CAMERA.toml"),
+             (tmp_path / "plain" / "sub" / "camera.toml", tmp_path / "plain", "cannot write there", "-o CAMERA.toml")]
+    for out, *mention in cases:
+        assert_clean_error(run_cli("camera", illum_file, "-o", out), *mention)
+    # the output is refused before the input is opened: a file that is no Lytro file is not even looked at
+    assert_clean_error(run_cli("camera", tmp_path / "plain", "-o", tmp_path / "plain" / "c.toml"), "cannot write there")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["IMG_0001.LFR", "plain"]
+    # a missing folder that can be created is fine
+    assert run_cli("camera", illum_file, "-o", tmp_path / "new" / "camera.toml").returncode == 0
+
+
+def test_export_refuses_a_bad_output_before_reading_the_pictures(tmp_path):
+    import lytropics
+
+    picture = lytropics.write(tmp_path / "IMG_0001-stk.lfp", lytropics.first_gen_stack())
+    (tmp_path / "plain").write_text("not a folder")
+    for out in (tmp_path / "plain", tmp_path / "plain" / "sub"):
+        assert_clean_error(run_cli("export", picture, "-o", out), str(out), "cannot write there", "-o OUTDIR")
+    # checked before any input: a text file given as the picture is not looked at yet
+    assert_clean_error(run_cli("export", tmp_path / "plain", "-o", tmp_path / "plain" / "x"), "cannot write there")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["IMG_0001-stk.lfp", "plain"]
+
+
+def test_camera_file_numbers_carry_no_binary_noise(tmp_path):
+    """Metadata in metres written in millimetres: 3e-05 m is 0.03 mm in the file, not 0.030000000000000002
+    (3e-05 * 1e3); every digit the metadata has stays; the notes print the metadata's float32 numbers rounded."""
+    meta = lytrogen.f01_metadata(6, 4)
+    devices = meta["devices"]
+    devices["sensor"]["pixelPitch"] = 9e-06                         # 9e-06 * 1e3 = 0.009000000000000001
+    devices["mla"]["lensPitch"] = 6e-05                             # 0.060000000000000005
+    devices["mla"]["sensorOffset"]["z"] = 3e-05                     # 0.030000000000000002
+    devices["lens"]["focalLength"] = 0.0064499998092651363          # float32 digits: kept as they are
+    devices["lens"]["exitPupilOffset"]["z"] = 0.07
+    devices["lens"]["infinityLambda"] = 7.300000190734863           # float32 7.3
+    pair = lytrogen.write_raw_pair(tmp_path / "frame.RAW", np.full((4, 6), 1000), 12, "big", meta, ".json")
+    out = tmp_path / "camera.toml"
+    proc = run_cli("camera", pair, "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    text = out.read_text()
+    for line in ("pixel_pitch_mm = 0.009\n", "pitch_mm = 0.06\n", "focal_length_mm = 0.03\n",
+                 "focal_length_mm = 6.449999809265136\n",                 # 0.006449999809265136 m, shifted
+                 "exit_pupil_distance_mm = 70.0\n", "infinityLambda = 7.3\n"):
+        assert line in text, (line, text)
+    cam = Camera.from_toml(out)
+    assert cam.main_focal_length_mm == pytest.approx(0.0064499998092651363 * 1e3, rel=1e-15)
+    assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.009, 0.06, 0.03)
+    assert "0000000" not in proc.stdout and "9999999" not in proc.stdout

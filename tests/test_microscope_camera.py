@@ -7,24 +7,11 @@ import pytest
 
 from lfproc import LfprocError
 from lfproc.camera import Camera
+from scopefile import microscope_toml
 
 SAMPLES = Path(__file__).resolve().parents[1] / "lfproc" / "samples" / "cameras"
 
-CONTRACT = """name = "lfm-20x"
-[sensor]
-pixel_pitch_mm = 0.0065
-[mla]
-pitch_mm = 0.125
-focal_length_mm = 2.433
-grid = "rectangular"
-[microscope]
-objective_magnification = 20.0
-numerical_aperture = 0.5
-immersion_index = 1.33
-tube_lens_focal_length_mm = 180.0
-relay_magnification = 1.4286
-wavelength_nm = 510
-"""
+CONTRACT = microscope_toml(relay=1.4286, wavelength=510)     # the contract's example, line for line
 
 
 def _cam(text):

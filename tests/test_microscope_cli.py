@@ -14,21 +14,10 @@ import tifffile
 
 from conftest import SAMPLES, assert_clean_error, run_cli
 from test_browser_viewer import _click_lens, browser  # noqa: F401  (the browser fixture)
+from scopefile import microscope_toml
 from whitegen import covering_grid, white_image
 
-CAMERA = """name = "tiny-lfm"
-[sensor]
-pixel_pitch_mm = 0.0065
-[mla]
-pitch_mm = 0.0475
-focal_length_mm = 0.95
-[microscope]
-objective_magnification = 20.0
-numerical_aperture = 0.5
-immersion_index = 1.33
-tube_lens_focal_length_mm = 180.0
-wavelength_nm = 510
-"""
+CAMERA = microscope_toml(name="tiny-lfm", pitch=0.0475, f_s=0.95, grid=None, wavelength=510)
 SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um", "refocus_shifts"}
 SUMMED = {"views_summed"}   # where decoding delivers fewer than all views, their count (the DOF is theirs)
 

@@ -12,26 +12,14 @@ from lfproc import Camera
 from lfproc.simulate import render_microscope_sensor
 
 from conftest import run_cli
+from scopefile import microscope_toml
 
 SENSOR = (280, 280)
 RELAY = 0.7          # lens pitch 0.125 mm · 0.7 / 6.5 µm = 13.46 px
 
 
 def camera_text(relay):
-    return f"""name = "lfm-white-test"
-[sensor]
-pixel_pitch_mm = 0.0065
-[mla]
-pitch_mm = 0.125
-focal_length_mm = 2.433
-grid = "rectangular"
-[microscope]
-objective_magnification = 20.0
-numerical_aperture = 0.5
-immersion_index = 1.33
-tube_lens_focal_length_mm = 180.0
-relay_magnification = {relay}
-"""
+    return microscope_toml(name="lfm-white-test", relay=relay)
 
 
 @pytest.fixture(scope="module")

@@ -87,13 +87,13 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
                                      lf.lens_shape, job.source, lambda a: geometry.slice_distance_mm(lf.camera, a))
                 stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
                 outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
-                                        view_mask=summed.view_mask)
+                                        view_mask=summed.view_mask, upsample=job.upsample)
                 if job.stack:
                     from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack
 
                     outputs.append(write_focal_stack(stack_path(job.outdir, job.stem, job.stack), stack,
                                                      slice_metadata(job.source, lf.camera, job.refocus_a,
-                                                                    summed.view_mask),
+                                                                    summed.view_mask, job.upsample),
                                                      kind=job.stack, lens_um=lateral_um_per_lens(lf.camera),
                                                      upsample=job.upsample))
             if job.views:

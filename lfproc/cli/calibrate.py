@@ -31,11 +31,11 @@ def run(args) -> int:
     from ..inputs import (ImageFacts, check_same_sensor, check_white_is_white, file_hash, made_from, probe_image,
                           read_dark, subtract_dark)
     from ..io import read_capture
-    from .capture_loop import require_output_folder
+    from .capture_loop import require_output_file, require_output_folder
 
     camera = Camera.from_toml(args.camera)
     # cheap checks first: where the grid goes, the white image's and the dark frame's headers
-    require_output_file(args.output)
+    require_output_file(args.output, "-o GRID.json", "grid.json")
     if args.plot:  # fail before any work (and before any output) when matplotlib is missing
         from ..plots import require_matplotlib
         require_matplotlib()
@@ -73,17 +73,6 @@ def run(args) -> int:
           f"({int(estimate.inlier.sum())} lenses fitted), {grid.model} lattice, "
           f"micro image scale {pupil.scale:.6f}, exit pupil {pupil.describe()}")
     return 0
-
-
-def require_output_file(path: str) -> None:
-    """Fail before any work when the grid file cannot be written there: its folder is a file or not writable,
-    or the path is a folder."""
-    from ..errors import LfprocError
-    from .capture_loop import require_output_folder
-
-    if os.path.isdir(path):
-        raise LfprocError(f"{path}: is a folder; give the grid file's name, e.g. -o {os.path.join(path, 'grid.json')}")
-    require_output_folder(os.path.dirname(os.path.abspath(path)), "-o GRID.json")
 
 
 def grid_json_text(record: dict) -> str:

@@ -28,7 +28,9 @@ def run(args) -> int:
     from ..io import is_lytro_file, lytro_camera
     from ..io._checks import existing_file
     from ..io import camera_metadata
+    from .capture_loop import require_output_file
 
+    require_output_file(args.output, "-o CAMERA.toml", "camera.toml")   # before any input is read
     path = existing_file(args.file)
     if not is_lytro_file(path):
         raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata); only Lytro "

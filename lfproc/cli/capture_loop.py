@@ -153,6 +153,16 @@ def require_output_folder(path: str, option: str = "-o OUTDIR") -> None:
                           f"choose another {option}")
 
 
+def require_output_file(path: str, option: str, example: str) -> None:
+    """Fail before any work when the output file ``path`` (``option``, e.g. ``"-o GRID.json"``) cannot be written:
+    it is a folder, its folder is a file or not writable, or a missing parent cannot be created
+    (:func:`require_output_folder`). ``example``: a file name to suggest inside a folder given by mistake."""
+    if os.path.isdir(path):
+        flag = option.split()[0]
+        raise LfprocError(f"{path}: is a folder; give the file's name, e.g. {flag} {os.path.join(path, example)}")
+    require_output_folder(os.path.dirname(os.path.abspath(path)), option)
+
+
 def _can_create_files_in(folder: str) -> bool:
     """Whether a file can be created in ``folder`` (tried for real: permission bits say nothing to root, nor
     about a read-only file system)."""

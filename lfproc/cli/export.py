@@ -31,12 +31,12 @@ def run(args) -> int:
     from ..pipeline import unique_stems
     from .capture_loop import require_output_folder
 
+    require_output_folder(args.outdir)   # before any input is read
     for path in args.pictures:   # cheap checks on every input before any work
         existing_file(path)
         if not (has_container_extension(path) or is_container(path)):
             raise LfprocError(f"{path}: not a Lytro picture (.lfp/.lfr container); lfproc export reads processed "
                               f"Lytro pictures, use lfproc refocus/views/depth for captures")
-    require_output_folder(args.outdir)
     stems = unique_stems(args.pictures)
     for path in args.pictures:
         written = export_picture(path, args.outdir, stems[path], tiff=args.tiff)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import sys
 
-from .common import dumps_strict, parse_number_list
+from .common import add_aperture_option, dumps_strict, parse_number_list
 
 
 def register(sub) -> None:
@@ -32,6 +32,7 @@ def register(sub) -> None:
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
     p.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM",
                    help="wavelength for the Airy limit (default 550)")
+    add_aperture_option(p)
     p.set_defaults(func=run)
 
 
@@ -52,26 +53,58 @@ def run(args) -> int:
     if args.gap == 0:
         raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
+    aperture = synthetic_aperture(camera, args.aperture)
     if camera.is_microscope:
-        return _run_microscope(args, camera, a_values, disparities)
-    slices = geometry.slice_geometry(camera, a_values)
+        return _run_microscope(args, camera, a_values, disparities, aperture)
+    slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.view_geometry(camera)
     check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
-    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()])
+    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()], aperture["extent"])
     tri = None if disparities is None else geometry.triangulate(camera, disparities, args.gap)
     if args.plot:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
     plotted = f"plot of each slice's distance and DOF -> {args.plot}\n" if args.plot else ""
     if args.json:
-        print(dumps_strict(json_report(camera, slices, views, gaps, check, tri)))
+        print(dumps_strict(with_aperture_tags(json_report(camera, slices, views, gaps, check, tri), aperture)))
         sys.stderr.write(plotted)   # stdout holds exactly one JSON object
         return 0
-    sys.stdout.write(format_table(camera, slices, views, gaps, check, args.camera, tri) + plotted)
+    sys.stdout.write(aperture_line(aperture) + format_table(camera, slices, views, gaps, check, args.camera, tri)
+                     + plotted)
     return 0
 
 
-def _run_microscope(args, camera, a_values, disparities) -> int:
+def synthetic_aperture(camera, f_number) -> dict:
+    """``--aperture F``: the views inside it (:func:`lfproc.geometry.aperture_views`, checked there), their DOF
+    extent and the tags refocus's sidecars carry for them (``aperture_f_number``, ``views_summed``); without
+    one, the full micro image (extent ``None``, no tags)."""
+    if f_number is None:
+        return {"f_number": None, "extent": None, "tags": {}}
+    from .. import geometry
+    from ..outputs import summed_views_metadata
+
+    extent, tags = summed_views_metadata(camera, geometry.aperture_views(camera, f_number))
+    return {"f_number": float(f_number), "extent": extent, "tags": tags}
+
+
+def with_aperture_tags(report: dict, aperture: dict) -> dict:
+    """The report with each slice carrying the aperture's tags, as refocus's sidecars do, and ``"aperture"``."""
+    if aperture["f_number"] is not None:
+        report["slices"] = [dict(record, **aperture["tags"]) for record in report["slices"]]
+        report["aperture"] = dict(f_number=aperture["f_number"], **aperture["tags"])
+    return report
+
+
+def aperture_line(aperture: dict) -> str:
+    tags = aperture["tags"]
+    if aperture["f_number"] is None:
+        return ""
+    equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
+    summed = f"{tags['views_summed']} views summed{equivalent}" if tags else "all views summed"
+    return f"synthetic aperture f/{aperture['f_number']:g}: {summed}; the DOF follows them\n"
+
+
+def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
     """A light-field microscope: slices in µm from the native object plane, views by object-space angle."""
     from .. import geometry
     from ..errors import LfprocError
@@ -80,12 +113,12 @@ def _run_microscope(args, camera, a_values, disparities) -> int:
                           f"disparity is z_per_a_um per lens of shift (see --json)")
     if args.plot:
         raise LfprocError(f"{args.camera}: --plot draws distances from a main lens; not available for a microscope")
-    slices = geometry.slice_geometry(camera, a_values)
+    slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.microscope_views(camera)
     if args.json:
-        print(dumps_strict(microscope_report(camera, slices, views)))
+        print(dumps_strict(with_aperture_tags(microscope_report(camera, slices, views), aperture)))
         return 0
-    sys.stdout.write(format_microscope_table(camera, slices, views, args.camera))
+    sys.stdout.write(aperture_line(aperture) + format_microscope_table(camera, slices, views, args.camera))
     return 0
 
 

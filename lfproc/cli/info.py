@@ -61,7 +61,12 @@ def format_info(info: dict) -> str:
             continue
         if key == "tags" and isinstance(value, dict):
             lines.append("tags (embedded by lfproc):")
-            lines.extend(f"  {k:20s} {_fmt(v)}" for k, v in value.items())
+            for k, v in value.items():
+                if _is_records(v):      # a z-stack's slices: one line each
+                    lines.append(f"  {k} ({len(v)}):")
+                    lines += ["    " + ", ".join(f"{name} {_fmt(x)}" for name, x in row.items()) for row in v]
+                else:
+                    lines.append(f"  {k:20s} {_fmt(v)}")
             continue
         rows = []
         if isinstance(value, dict):
@@ -77,6 +82,10 @@ def format_info(info: dict) -> str:
             lines.append(f"  {s['kind']} {s['length']:>10d} B  {s['sha1'][:17]}…  "
                          f"{'ok' if s['sha1_ok'] else 'SHA-1 MISMATCH'}  {s['content']}")
     return f"{info.get('path', '')}\n" + "\n".join(lines) + "\n"
+
+
+def _is_records(value) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(item, dict) for item in value)
 
 
 def _fmt(value) -> str:

@@ -87,13 +87,14 @@ def run(args) -> int:
         stack = refocus(lf, values, interpolation=args.interpolation, upsample=args.upsample)
         describe_once(key, lf.camera, values, lf.view_mask)
         written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
-                               args.format, view_mask=lf.view_mask)
+                               args.format, view_mask=lf.view_mask, upsample=args.upsample)
         if args.preview:
             write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview_format,
                                  view_mask=lf.view_mask)
         if args.stack:
             write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,
-                              slice_metadata(os.path.abspath(path), lf.camera, values, lf.view_mask), kind=args.stack,
+                              slice_metadata(os.path.abspath(path), lf.camera, values, lf.view_mask, args.upsample),
+                              kind=args.stack,
                               lens_um=lateral_um_per_lens(lf.camera), upsample=args.upsample)
         progress.update(len(values))
         print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")

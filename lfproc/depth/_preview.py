@@ -120,14 +120,8 @@ def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None
 
 
 def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> None:
-    """Write :func:`preview_image` as an 8-bit PNG, atomically."""
-    from PIL import Image
+    """Write :func:`preview_image` as an 8-bit PNG, atomically, tagged as a depth map's preview (``lfproc info``)."""
+    from ..outputs import write_png_preview
 
-    from ..atomic import atomic_path
-    from ..errors import LfprocError
-
-    try:
-        with atomic_path(path, suffix=".png") as tmp:
-            Image.fromarray(preview_image(distance_mm, z_um)).save(tmp, format="PNG")
-    except OSError as exc:
-        raise LfprocError(f"{path}: cannot write ({exc.strerror or exc}); check the folder and permissions") from None
+    legend = "distance (m)" if z_um is None else "z (um)"
+    write_png_preview(path, preview_image(distance_mm, z_um), {"preview": "depth map", "legend": legend})

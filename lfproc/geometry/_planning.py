@@ -208,13 +208,15 @@ def uncovered_depths(camera: Camera, a_values, near_mm: float, far_mm: float,
     return gaps
 
 
-def integer_slice_gaps(camera: Camera, a_values) -> list[tuple[float, float, float]]:
+def integer_slice_gaps(camera: Camera, a_values, view_extent=None) -> list[tuple[float, float, float]]:
     """Depth gaps that no integer slice covers (the paper's Section 5.2 observation).
 
     Parameters
     ----------
     a_values : array_like of int
         Slices to inspect, e.g. ``range(0, 6)``.
+    view_extent : float, optional
+        The extent of the views the slices sum (:func:`slice_geometry`); ``None``: the full micro image.
 
     Returns
     -------
@@ -223,7 +225,7 @@ def integer_slice_gaps(camera: Camera, a_values) -> list[tuple[float, float, flo
         between d_(a+1)+ and d_a−.
     """
     a_sorted = np.unique(np.asarray(a_values, dtype=np.float64))
-    geo = slice_geometry(camera, a_sorted)
+    geo = slice_geometry(camera, a_sorted, view_extent)
     gaps = []
     for k in range(len(a_sorted) - 1):
         if a_sorted[k + 1] != a_sorted[k] + 1:  # only neighbouring integer slices bound a gap between them

@@ -2,7 +2,8 @@
 
 The dict has the contract's keys (``ARCHITECTURE.md``, "lfproc info"): ``format``
 (``"lytro-container"``, ``"lytro-raw"``, ``"camera-raw"``, ``"image"``, ``"lfproc-output"`` for an
-image lfproc wrote, with its ``product`` and embedded ``tags``), ``raw_light_field``,
+image lfproc wrote, with its ``product`` and embedded ``tags``: a data product, a preview picture with
+``preview_of``, or a focal z-stack, ``_describe_stack.py``), ``raw_light_field``,
 ``width``, ``height``, and for Lytro files ``camera_model`` and ``sections``; plus what else each
 kind of file tells (serial, bit depth, CFA, levels, lens and micro lens data).
 """
@@ -202,33 +203,58 @@ def _describe_image(path: str) -> dict:
                 "channels": spec.nchannels, "channel_names": list(spec.channelnames),
                 "pixel_type": str(spec.format), "bits_per_pixel": spec.format.size() * 8}
         tags = _lfproc_tags(spec)
+        stack_header = info["file_format"] == "tiff" and _is_stack_header(spec)
     finally:
         inp.close()
+    if stack_header:          # a z-stack lfproc wrote (refocus --stack): tifffile reads its structure
+        from ._describe_stack import describe_stack
+
+        stack = describe_stack(path)
+        if stack is not None:
+            return stack
     product = None if tags is None else lfproc_product(tags)
-    if product is not None:   # a data product (slice, view, mosaic, depth map): no raw light field any more
+    if product is not None:   # a data product or a picture of one: no raw light field any more
         info.update(format="lfproc-output", product=product, raw_light_field=False)
+        if "preview" in tags:
+            info["preview_of"] = tags["preview"]
     if tags:
         info["tags"] = tags
     return info
 
 
+def _is_stack_header(spec) -> bool:
+    from ._describe_stack import is_stack_header
+
+    try:
+        return is_stack_header(spec.get_string_attribute("ImageDescription") or "")
+    except UnicodeDecodeError:
+        return False
+
+
 def _lfproc_tags(spec) -> dict | None:
     """The metadata lfproc embedded in an image it wrote (``Software`` "lfproc", JSON in
-    ``ImageDescription``), or None for any other image."""
+    ``ImageDescription``; a GIF, which has no Software tag, says ``"software": "lfproc"`` in its JSON
+    comment), or None for any other image."""
     import json
 
-    if spec.get_string_attribute("Software") != "lfproc":
+    software = spec.get_string_attribute("Software")
+    if software not in ("lfproc", ""):
         return None
     try:
         tags = json.loads(spec.get_string_attribute("ImageDescription") or "{}")
-    except ValueError:
+    except (ValueError, UnicodeDecodeError):
         return None
-    return tags if isinstance(tags, dict) else None
+    if not isinstance(tags, dict) or (software != "lfproc" and tags.pop("software", None) != "lfproc"):
+        return None
+    return tags
 
 
 def lfproc_product(tags: dict) -> str | None:
     """What an lfproc data product is, from its embedded tags (a refocused slice, a view, a view mosaic, a
-    depth map); None for anything else lfproc wrote (a simulated capture or white image is still a capture)."""
+    depth map, a preview picture of one of these); None for anything else lfproc wrote (a simulated capture or
+    white image is still a capture)."""
+    if "preview" in tags:
+        return "preview picture"
     if "a" in tags:
         return "refocused slice"
     if "view" in tags:

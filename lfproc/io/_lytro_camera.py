@@ -93,13 +93,13 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
         text = ("metadata: devices.lens.exitPupilOffset.z" + (f" = {meta.exit_pupil_offset_m:g} m, effectively "
                 f"infinite (telecentric)" if meta.exit_pupil_offset_m is not None else " absent: telecentric"))
     else:
-        exit_pupil = meta.exit_pupil_offset_m * 1e3
+        exit_pupil = metres_to_mm(meta.exit_pupil_offset_m)
         text = "metadata: devices.lens.exitPupilOffset.z"
     provenance.append(("main_lens.exit_pupil_distance_mm", text))
-    f_u = meta.focal_length_m * 1e3
+    f_u = metres_to_mm(meta.focal_length_m)
     camera = Camera(
-        pixel_pitch_mm=meta.pixel_pitch_m * 1e3, mla_pitch_mm=meta.lens_pitch_m * 1e3,
-        mla_focal_length_mm=meta.sensor_offset_m[2] * 1e3, main_focal_length_mm=f_u, image_distance_mm=f_u,
+        pixel_pitch_mm=metres_to_mm(meta.pixel_pitch_m), mla_pitch_mm=metres_to_mm(meta.lens_pitch_m),
+        mla_focal_length_mm=metres_to_mm(meta.sensor_offset_m[2]), main_focal_length_mm=f_u, image_distance_mm=f_u,
         f_number=meta.f_number, grid="hexagonal" if "hex" in (meta.tiling or "").lower() else "rectangular",
         cfa=meta.cfa, exit_pupil_distance_mm=exit_pupil,
         name=" ".join(p for p in ("Lytro", meta.model, meta.serial or "") if p), source=where, **levels)
@@ -114,6 +114,16 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
                        notes=tuple(_notes(meta)))
 
 
+def metres_to_mm(metres: float) -> float:
+    """The metadata's number in millimetres without binary noise: its decimal (the shortest that reads back
+    as it) shifted by three places, so 3e-05 m is 0.03 mm, not 0.030000000000000002 as 3e-05 * 1e3 is; every
+    digit the metadata has is kept (1.3999999737279722e-06 m is 0.0013999999737279722 mm)."""
+    from decimal import Decimal
+
+    value = float(metres)
+    return float(Decimal(repr(value)).scaleb(3)) if math.isfinite(value) else value * 1e3
+
+
 def _notes(meta: LytroMetadata) -> list[str]:
     notes = [f"camera file written by 'lfproc camera' from {meta.source} (Lytro {meta.model}"
              f"{', serial ' + meta.serial if meta.serial else ''})"]
@@ -124,9 +134,14 @@ def _notes(meta: LytroMetadata) -> list[str]:
         notes.append(f"metadata: devices.mla.scaleFactor = {meta.scale_factor[0]:.6f}, {meta.scale_factor[1]:.6f}")
     if meta.zoom_step is not None or meta.focus_step is not None:
         notes.append(f"metadata: devices.lens.zoomStep = {meta.zoom_step:g}, focusStep = {meta.focus_step:g}, "
-                     f"infinityLambda = {meta.infinity_lambda}")
+                     f"infinityLambda = {_number(meta.infinity_lambda)}")
     black, white = meta.levels()
     if not (black.min() == black.max() and white.min() == white.max()):
         notes.append(f"levels per 2x2 position: black {black.tolist()}, white {white.tolist()} "
                      f"(Lytro files carry their own levels; the camera file's are not used for them)")
     return notes
+
+
+def _number(value) -> str:
+    """A metadata number for reading: 7 significant digits at most (the metadata's floats are float32)."""
+    return str(value) if value is None or isinstance(value, int) else f"{float(value):.7g}"

@@ -3,7 +3,8 @@
 Each preview is tone-mapped with one exposure for all its frames (:class:`ToneMap`, documented
 there), enlarged to at least :data:`MIN_LONG_SIDE_PX` on its long side (:func:`upscale`, nearest by
 default) and, for focal stacks, each frame is labelled with its distance and depth of field in
-metres. The linear TIFF/EXR outputs stay the data products; these files are for looking at.
+metres. The linear TIFF/EXR outputs stay the data products; these files are for looking at. PNG/JPEG
+previews embed what they show and their label (:func:`write_png_preview`), for ``lfproc info``.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import os
 import numpy as np
 
 from .. import geometry
-from ..atomic import atomic_path
+from ..atomic import atomic_path, json_safe
 from ..errors import LfprocError
 from ..viewpoints import circular_walk
 from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
@@ -37,18 +38,23 @@ def display_frames(images, tone: ToneMap | None = None, min_long_side: int = MIN
     return frames
 
 
-def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float) -> str:
-    """An endlessly looping GIF of 8-bit RGB frames (Pillow), written atomically."""
+def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float, tags: dict | None = None) -> str:
+    """An endlessly looping GIF of 8-bit RGB frames (Pillow), written atomically.
+
+    ``tags`` go into the GIF comment as JSON with ``"software": "lfproc"`` (GIF has no Software tag), for
+    ``lfproc info``.
+    """
     from PIL import Image
 
     path = os.fspath(path)
     if not frames:
         raise LfprocError(f"{path}: no frames to write; pass at least one image")
     images = [Image.fromarray(np.ascontiguousarray(frame)) for frame in frames]
+    comment = {} if tags is None else {"comment": _tag_text(dict(tags, software="lfproc"))}
     try:
         with atomic_path(path, suffix=".gif") as tmp:
             images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                           duration=int(round(duration_ms)), loop=0)
+                           duration=int(round(duration_ms)), loop=0, **comment)
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write GIF ({exc.strerror or exc}); check the folder and "
                           f"permissions") from None
@@ -59,8 +65,13 @@ PREVIEW_FORMATS = {"png": ".png", "jpeg": ".jpg"}
 _JPEG_PREVIEW_QUALITY = 92
 
 
-def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
-    """Write an 8-bit image as PNG, or as JPEG where ``path`` ends in ``.jpg``/``.jpeg`` (Pillow), atomically."""
+def write_png_preview(path: str | os.PathLike, image: np.ndarray, tags: dict | None = None) -> str:
+    """Write an 8-bit image as PNG, or as JPEG where ``path`` ends in ``.jpg``/``.jpeg`` (Pillow), atomically.
+
+    ``tags`` (a JSON-able dict: what the picture shows, its label) are embedded as lfproc embeds them in its
+    data products (``Software`` "lfproc", the JSON as the PNG ``Description`` text or the JSON EXIF
+    ``ImageDescription``), so ``lfproc info`` can tell the picture for what it is.
+    """
     from PIL import Image
 
     path = os.fspath(path)
@@ -70,13 +81,37 @@ def write_png_preview(path: str | os.PathLike, image: np.ndarray) -> str:
         with atomic_path(path, suffix=".jpg" if jpeg else ".png") as tmp:
             picture = Image.fromarray(np.ascontiguousarray(pixels))
             if jpeg:
-                picture.save(tmp, format="JPEG", quality=_JPEG_PREVIEW_QUALITY)
+                picture.save(tmp, format="JPEG", quality=_JPEG_PREVIEW_QUALITY, **_embedded(tags, jpeg))
             else:
-                picture.save(tmp, format="PNG")
+                picture.save(tmp, format="PNG", **_embedded(tags, jpeg))
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write {'JPEG' if jpeg else 'PNG'} ({exc.strerror or exc}); check the "
                           f"folder and permissions") from None
     return path
+
+
+def _embedded(tags: dict | None, jpeg: bool) -> dict:
+    """Pillow's save options that embed ``tags`` the way `lfproc.io.write_image` does (``Software`` "lfproc",
+    strict ASCII JSON as the image description)."""
+    if tags is None:
+        return {}
+    from PIL import Image, PngImagePlugin
+
+    text = _tag_text(tags)
+    if jpeg:
+        exif = Image.Exif()
+        exif[0x0131], exif[0x010E] = "lfproc", text       # EXIF Software, ImageDescription
+        return {"exif": exif}
+    info = PngImagePlugin.PngInfo()
+    info.add_text("Software", "lfproc")
+    info.add_text("Description", text)
+    return {"pnginfo": info}
+
+
+def _tag_text(tags: dict) -> str:
+    import json
+
+    return json.dumps(json_safe(dict(tags)), allow_nan=False)
 
 
 def slice_labels(camera, a_values, view_mask=None) -> list[str]:
@@ -98,10 +133,11 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
     ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres (of the views
     ``view_mask`` marks: those summed).
     """
-    frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method,
-                            labels=slice_labels(camera, a_values, view_mask))
-    return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame)
-            for name, frame in zip(slice_names(stem, a_values), frames)]
+    labels = slice_labels(camera, a_values, view_mask)
+    frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method, labels=labels)
+    return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame,
+                              {"preview": "refocused slice", "a": float(a), "label": label})
+            for name, frame, a, label in zip(slice_names(stem, a_values), frames, np.atleast_1d(a_values), labels)]
 
 
 def view_label(camera, ky: int, kx: int, centre=None) -> str:
@@ -133,7 +169,7 @@ def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndar
         label = view_label(camera, ky, kx, centre)
         frame = display_frames(views[ky, kx][None], tone, min_long_side, method, [label])[0]
         paths.append(write_png_preview(os.path.join(outdir, f"{view_name(stem, ky, kx)}_preview{PREVIEW_FORMATS[fmt]}"),
-                                       frame))
+                                       frame, {"preview": "view", "view": [ky, kx], "label": label}))
     return paths
 
 
@@ -148,9 +184,12 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
     images = np.asarray(images)
     labels = slice_labels(camera, a_values, view_mask) if camera is not None and a_values is not None else None
     frames = display_frames(images, min_long_side=min_long_side, method=method, labels=labels)
+    tags = {"preview": "refocus animation", "frames": len(frames)}
+    if a_values is not None:
+        tags["a"] = [float(a) for a in np.atleast_1d(a_values)]
     if len(frames) > 2:
         frames = frames + frames[-2:0:-1]
-    return write_gif_frames(os.path.join(outdir, f"{stem}_refocus.gif"), frames, SLICE_FRAME_MS)
+    return write_gif_frames(os.path.join(outdir, f"{stem}_refocus.gif"), frames, SLICE_FRAME_MS, tags)
 
 
 def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray | None = None, camera=None, *,
@@ -165,7 +204,8 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
     labels = [view_label(camera, ky, kx, centre) for ky, kx in walk] if camera is not None else None
     tone = ToneMap.for_images(frames)
     shown = display_frames(frames, tone, min_long_side, method, labels)
-    return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS)
+    return write_gif_frames(os.path.join(outdir, f"{stem}_views.gif"), shown, VIEW_FRAME_MS,
+                            {"preview": "view animation", "frames": len(walk), "views_per_side": int(views.shape[0])})
 
 
 def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None = None, *,
@@ -186,4 +226,5 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
     elif camera is not None:
         label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
     frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
-    return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame)
+    return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame,
+                             {"preview": "view mosaic", "views_shown": shown, "views_per_side": m, "label": label})

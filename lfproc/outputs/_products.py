@@ -30,15 +30,18 @@ def summed_views_metadata(camera, view_mask=None) -> tuple[float | None, dict]:
                     "views_summed": int(np.count_nonzero(view_mask))}
 
 
-def slice_metadata(source: str, camera, a_values, view_mask=None) -> list[dict]:
+def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int = 1) -> list[dict]:
     """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm; a
     microscope's: source, a, z_um, z_near_um, z_far_um, dof_um and ``refocus_shifts`` ("aplanatic" where
     :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial").
 
     The DOF is that of the views ``view_mask`` marks (the light field's, e.g. after
-    :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``.
+    :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``. Slices refocused
+    on a finer grid (``upsample`` s > 1: (N − 1)·s + 1 pixels per axis, pixel p at lens p/s) carry ``upsample``.
     """
     extent, extra = summed_views_metadata(camera, view_mask)
+    if int(upsample) != 1:
+        extra["upsample"] = int(upsample)
     if getattr(camera, "microscope", None) is not None:
         extra["refocus_shifts"] = "aplanatic" if geometry.uses_aplanatic(camera) else "paraxial"
     records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
@@ -66,15 +69,15 @@ def _exposed(image: np.ndarray, tone) -> np.ndarray:
 
 
 def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: np.ndarray,
-                 fmt: str = "tiff", view_mask=None) -> list[str]:
-    """Write each refocused slice with its sidecar (DOF of the views ``view_mask`` marks); returns the paths
-    (JPEGs: :func:`display_exposure`)."""
+                 fmt: str = "tiff", view_mask=None, upsample: int = 1) -> list[str]:
+    """Write each refocused slice with its sidecar (DOF of the views ``view_mask`` marks; ``upsample``: the
+    grid the slices were refocused on, :func:`slice_metadata`); returns the paths (JPEGs: :func:`display_exposure`)."""
     from ..io import write_image, write_sidecar
 
     paths = []
     names = slice_names(stem, a_values)
     tone, tone_meta = display_exposure(images, fmt)
-    for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask), images):
+    for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask, upsample), images):
         path = os.path.join(outdir, name + FORMATS[fmt])
         meta.update(tone_meta)
         write_image(path, _exposed(image, tone), meta, fmt)
