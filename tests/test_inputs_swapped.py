@@ -83,3 +83,45 @@ def test_renders_white_images_pass_and_captures_given_as_white_images_are_refuse
     capture, _, grid = renders["faint far grating"]      # its micro images carry the grating (texture ratio 0.19)
     with pytest.raises(LfprocError, match="not a white image"):
         check_white_is_white("capture.tif", capture, "RGGB", grid)
+
+
+def test_low_texture_captures_given_as_white_images_are_refused_and_no_white_image_is(renders):
+    """Captures whose micro images hardly differ from their neighbours (texture ratio 0.003-0.015, under the
+    0.04 limit) were accepted as white images; the lens-level cue refuses them. It must not refuse any white
+    image the tests make: renders (16 and 8 bits, strong vignetting, 300-photon shot noise), an independent
+    hexagonal white with noise, hot pixels and a rim cut, and the bundled Lytro sample's white images."""
+    from lfproc.calibrate import find_grid, lattice_texture
+    from lfproc.io import read_capture
+    from lfproc.simulate import Noise
+
+    from whitegen import covering_grid, white_image
+    cases = {**renders, "coarse +-5 % at 3 m": _render(Noise(30.0, low=0.475, high=0.525), 3000.0)}
+    for name, (capture, white, grid) in cases.items():
+        vignetted = np.round(white * np.linspace(1.0, 0.5, white.shape[1])[None, :] * 255) / 255
+        for given in (white, vignetted):
+            check_white_is_white("white.png", given, "RGGB", grid)
+        if name in ("textured", "low contrast", "coarse +-5 % at 3 m"):
+            assert max(lattice_texture(capture, "RGGB", grid)) < 0.04, name     # the micro images do not tell
+            with pytest.raises(LfprocError, match=r"capture\.png: this is a capture of a scene, not a white image: "
+                                                  r"the brightness of its micro images varies from lens to lens"):
+                check_white_is_white("capture.png", capture, "RGGB", grid)
+    lattice = covering_grid((360, 440), "hexagonal", 27.78, -1.2, (0.11, 0.43))
+    for seed in range(3):
+        cut = white_image((360, 440), lattice, 0.45 * 27.78, vignetting=0.5, cut_radius_px=200.0, noise_sigma=0.01,
+                          hot_pixels=12, seed=seed)
+        check_white_is_white("vignetted.tif", cut, "none", lattice)
+    for name in ("MOD_0000.RAW", "MOD_0001.RAW"):
+        white = read_capture(SAMPLES / "lytro" / "caldata" / name)
+        check_white_is_white(name, white.data, white.cfa, find_grid(white.data, kind="hexagonal", cfa=white.cfa).grid)
+
+
+def test_calibrate_refuses_a_low_texture_capture_in_one_line(tmp_path, renders):
+    """`lfproc calibrate` on a capture of a +-10 % texture far from the focus: wrote a grid before."""
+    from PIL import Image
+
+    capture = renders["low contrast"][0]
+    Image.fromarray(np.round(64 + capture * (16383 - 64)).astype(np.uint16)).save(tmp_path / "capture.png")
+    (tmp_path / "cam.toml").write_text(CAM.to_toml())
+    proc = run_cli("calibrate", tmp_path / "capture.png", "--camera", tmp_path / "cam.toml", "-o", tmp_path / "g.json")
+    assert_clean_error(proc, str(tmp_path / "capture.png"), "not a white image")
+    assert not (tmp_path / "g.json").exists()
