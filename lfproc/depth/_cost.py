@@ -66,7 +66,9 @@ def luminance(views: np.ndarray) -> np.ndarray:
     the more the larger ``|a|``. With equal weights every site has one measured channel of three and two
     interpolated ones: centre weight 1/3 at every site, and the rest spread over the same 3 × 3
     neighbourhood, a nearly uniform angular blur, under which the views agree again at the true ``a``
-    (docs/depth.md, "Depth at the edges of the scene")."""
+    (docs/depth.md, "Depth at the edges of the scene"). This holds for the decoder's bilinear demosaic
+    (and helps under OpenCV's edge-aware one); a colour-difference demosaic would need other weights
+    (docs/depth.md)."""
     return views.mean(axis=-1, dtype=np.float32)
 
 
