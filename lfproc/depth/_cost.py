@@ -22,9 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: luminance weights (Rec. 709) for colour light fields
-LUMA_WEIGHTS = np.array([0.2126, 0.7152, 0.0722], dtype=np.float32)
-
 #: view samples (views × lenses) above which the sweep uses every second view (or more)
 FULL_VIEW_BUDGET = 20_000_000
 
@@ -58,9 +55,20 @@ def delivered_views(views: np.ndarray, rows: int = 16) -> np.ndarray:
 
 
 def luminance(views: np.ndarray) -> np.ndarray:
-    """``(…, C)`` float32 → ``(…)`` float32: Rec. 709 luma for three channels, the mean otherwise."""
-    if views.shape[-1] == 3:
-        return np.tensordot(views, LUMA_WEIGHTS, axes=([-1], [0])).astype(np.float32, copy=False)
+    """``(…, C)`` float32 → ``(…)`` float32: the matching signal, the mean of the channels.
+
+    Equal weights, not Rec. 709 luma: a demosaiced view's missing colours are interpolated from the
+    neighbouring pixels of the micro image, i.e. from the neighbouring *views* of the same lens, which
+    see a surface at ``a`` displaced by ``±a`` lenses. Which colour is measured and which interpolated
+    changes from view to view and lens to lens (the Bayer phase under each lens), so luma (72 % green)
+    mixes neighbouring views with a kernel that changes from sample to sample (centre weight 0.72 at a
+    green site, 0.21 at a red one): the views disagree at the true ``a`` and the cost's minimum scatters,
+    the more the larger ``|a|``. With equal weights every site has one measured channel of three and two
+    interpolated ones: centre weight 1/3 at every site, and the rest spread over the same 3 × 3
+    neighbourhood, a nearly uniform angular blur, under which the views agree again at the true ``a``
+    (docs/depth.md, "Depth at the edges of the scene"). This holds for the decoder's bilinear demosaic
+    (and helps under OpenCV's edge-aware one); a colour-difference demosaic would need other weights
+    (docs/depth.md)."""
     return views.mean(axis=-1, dtype=np.float32)
 
 

@@ -6,7 +6,7 @@ Steps (each in its own module):
    coarse pass to the range the scene occupies (:func:`occupied_range`);
 2. :mod:`._cost` — one fused refocus of the views' luminance and its square gives, per slice, the
    variance across the views behind every lens (correspondence) and the refocused luminance;
-3. :mod:`._refine` — the cost averaged over 3 × 3 lenses, its minimum refined between slices, and
+3. :mod:`._refine` — the cost averaged over 5 × 5 lenses, its minimum refined between slices, and
    its basin;
 4. :mod:`._confidence` — the basin against the slice's DOF, checked by the sharpest-slice (defocus)
    cue; unknown (NaN) where the confidence is below :data:`MIN_CONFIDENCE`;

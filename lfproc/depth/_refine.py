@@ -18,8 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: box size (lenses) over which the cost is averaged before its minimum is sought
-AGGREGATION_WINDOW = 3
+#: box size (lenses) over which the cost is averaged before its minimum is sought: 5 × 5 rather than 3 × 3
+#: halves the per-lens scatter of the minimum where the cost curve is shallow (large ``|a|`` on demosaiced
+#: captures, docs/depth.md); the edge-aware shift keeps it off depth edges
+AGGREGATION_WINDOW = 5
 
 
 @dataclass(frozen=True, eq=False)

@@ -7,7 +7,19 @@
   white images measure 0.0005–0.008 with noise, hot pixels, vignetting with a sharp rim cut and 8-bit
   quantisation, the bundled sample's capture 0.11 in its most textured tile, the Lytro sample's 0.067).
   A capture whose micro images hardly differ from their neighbours (a textured plane far from the
-  focus, 0.015) is not recognised.
+  focus, 0.015) passes that test; the *lens-level* test then catches it: the brightness at the centre of
+  every micro image (`lens_brightness`, a Gaussian of σ = 0.15 pitch, the Bayer colours weighted
+  equally) is, in a white image, the main lens's smooth vignetting, and in a capture the scene as the
+  central view sees it — a pinhole image, sharp at every depth. Its robust spread about a local
+  quadratic fit over 13 × 13 lenses (the lens itself left out; hexagonal rows in lattice coordinates),
+  beyond the noise measured from two interleaved halves of the same pixels (`lens_scene_contrast`, on up
+  to 3 × 3 tiles of 40 × 40 lenses), must stay at or below `SCENE_CONTRAST_LIMIT` (0.6 %) or below
+  `NOISE_MULTIPLE` (2) × that noise. White images measure 0.00–0.03 % (renders at 16 and 8 bits with
+  strong vignetting; a hexagonal white with noise, hot pixels and a rim cut; the Lytro sample's; a
+  microscope's at 8 and 16 bits with a pedestal) and 0.5 % with 300-photon shot noise (noise 1.0 %:
+  not refused); low-texture captures 0.81 % (±5 %, coarse, 3 m), 1.04 % (±10 % at 800 mm), 5.2 % (a
+  textured plane at 800 mm, texture ratio 0.015). Not recognised: a low-texture capture whose noise
+  exceeds half its lens-to-lens contrast (±10 % under 300-photon shot noise: 0.99 % against 1.6 %).
 * **A white image given as the capture**: decoded (and devignetted), a white image is a smooth field with
   no scene in it. Each view is a pinhole image of the scene, sharp at every depth, so a capture shows its
   scene in every view at lens resolution. For the central view and the four views halfway to the rim, the
@@ -29,12 +41,19 @@ from ..errors import LfprocError
 TEXTURE_LIMIT = 0.04
 #: fewest lenses per side of a light field judged by `lens_flatness` (a crop of a few lenses may be uniform)
 MIN_LENSES_PER_SIDE = 20
+#: spread of the lens-level brightness beyond noise above which a "white image" is refused as a capture
+SCENE_CONTRAST_LIMIT = 0.006
+#: ... and it must exceed the noise of the lens brightness by this factor (a noisy white's estimate scatters)
+NOISE_MULTIPLE = 2.0
+#: lens-level trend window (lenses): wider than a scene's detail, far narrower than the vignetting
+SCENE_TREND_LENSES = 13
 #: 99th percentile of the lens-to-neighbourhood brightness difference below which a capture is a white image
 WHITE_FLATNESS = 0.005
 
 
 def check_white_is_white(source: str, image, cfa: str, grid) -> None:
-    """Refuse a white image that carries scene texture (module docstring)."""
+    """Refuse a white image that carries scene texture, in its micro images or from lens to lens (module
+    docstring)."""
     from ..calibrate import lattice_texture
 
     worst = max([0.0, *(float(t) for t in lattice_texture(image, cfa, grid))])
@@ -42,6 +61,142 @@ def check_white_is_white(source: str, image, cfa: str, grid) -> None:
         raise LfprocError(f"{source}: this is a capture of a scene, not a white image: its micro images differ from "
                           f"their neighbours (texture ratio {worst:.2f}, a white image gives < {TEXTURE_LIMIT}); "
                           f"give a white image (a uniform bright surface, e.g. through a diffuser) as WHITE")
+    contrast, noise = lens_scene_contrast(image, cfa, grid)
+    if contrast > SCENE_CONTRAST_LIMIT and contrast > NOISE_MULTIPLE * noise:
+        raise LfprocError(f"{source}: this is a capture of a scene, not a white image: the brightness of its micro "
+                          f"images varies from lens to lens like a scene ({100 * contrast:.1f} % beyond noise, a white "
+                          f"image gives < {100 * SCENE_CONTRAST_LIMIT:.1f} %); give a white image (a uniform bright "
+                          f"surface, e.g. through a diffuser) as WHITE")
+
+
+def lens_brightness(image, cfa: str, grid, rows, cols) -> np.ndarray:
+    """``(3, len(rows), len(cols))``: the brightness at the centre of the micro images of lenses ``rows`` ×
+    ``cols`` of ``grid``, from all pixels and from each of two halves of them; NaN where the stencil leaves
+    the sensor.
+
+    A Gaussian of σ = 0.15 pitch around the lens centre (`grid.lens_xy`, sub-pixel); on a Bayer mosaic each
+    colour is averaged on its own and the three means averaged, so the colour mix does not change with the
+    Bayer phase under a lens. The halves are the 2 × 2 cells of even and of odd parity (a checkerboard of
+    whole cells, so both hold every colour): two estimates whose difference is noise.
+    """
+    arr = np.asarray(image)
+    if arr.ndim == 3:
+        arr, cfa = arr.mean(axis=2, dtype=np.float32), "none"
+    h, w = arr.shape
+    sigma = 0.15 * float(grid.pitch_px)
+    r = max(1, int(np.ceil(2.0 * sigma)))
+    off = np.arange(-r, r + 1)
+    rr, cc = np.meshgrid(np.asarray(rows), np.asarray(cols), indexing="ij")
+    xy = grid.lens_xy(rr, cc)
+    cx, cy = np.rint(xy[..., 0]).astype(int), np.rint(xy[..., 1]).astype(int)
+    inside = (cx - r >= 0) & (cx + r < w) & (cy - r >= 0) & (cy + r < h)
+    py = np.clip(cy, r, h - 1 - r)[..., None, None] + off[:, None]
+    px = np.clip(cx, r, w - 1 - r)[..., None, None] + off[None, :]
+    weight = np.exp(-0.5 * ((py - xy[..., 1, None, None]) ** 2 + (px - xy[..., 0, None, None]) ** 2)
+                    / sigma ** 2).astype(np.float32)
+    values = arr[py, px].astype(np.float32)
+    parity = (py // 2 + px // 2) % 2
+    channels = (np.array(["RGB".index(ch) for ch in cfa])[(py % 2) * 2 + (px % 2)]
+                if cfa not in (None, "", "none") else np.zeros_like(parity))
+    out = np.empty((3,) + rr.shape)
+    present = np.unique(channels)
+    for k, part in enumerate((None, 0, 1)):
+        wk = weight if part is None else weight * (parity == part)
+        means = []
+        for ch in present:
+            wc = wk * (channels == ch)
+            means.append((values * wc).sum(axis=(-2, -1)) / np.maximum(wc.sum(axis=(-2, -1)), 1e-12))
+        out[k] = np.where(inside, np.mean(means, axis=0), np.nan)
+    return out
+
+
+def local_quadratic_trend(values: np.ndarray, use: np.ndarray, size: int, hexagonal: bool = False) -> np.ndarray:
+    """Per lens, the value at it of the quadratic surface fitted (least squares) to the ``use`` lenses of the
+    ``size`` × ``size`` lenses around it, itself left out: the vignetting's smooth curvature is followed, a
+    scene's lens-to-lens detail is not. On a hexagonal lattice odd rows sit half a pitch to the right
+    (`LensGrid.lens_xy`): the fit is in lattice coordinates (an affine map of the sensor's, under which a
+    quadratic stays a quadratic), with kernels for even and for odd centre rows. NaN where the fit is
+    undetermined."""
+    from scipy import ndimage
+
+    h = size // 2
+    u = np.arange(-h, h + 1, dtype=np.float64)
+    uy, ux = np.meshgrid(u, u, indexing="ij")
+    w = use.astype(np.float64)
+    wv = w * np.where(use, values, 0.0)
+    trend = np.full(values.shape, np.nan)
+    parities = (0, 1) if hexagonal else (0,)
+    for parity in parities:
+        # x of the neighbour (row + uy) relative to the centre (row of this parity), in pitches
+        dx = ux + (0.5 * (np.mod(parity + uy, 2) - parity) if hexagonal else 0.0)
+        basis = [np.ones_like(ux), dx, uy, dx * dx, dx * uy, uy * uy]
+        normal = np.empty(values.shape + (6, 6))
+        rhs = np.empty(values.shape + (6,))
+        for i in range(6):
+            kernel = basis[i].copy()
+            kernel[h, h] = 0.0                                 # leave the lens itself out
+            rhs[..., i] = ndimage.correlate(wv, kernel, mode="constant")
+            for j in range(i, 6):
+                k2 = basis[i] * basis[j]
+                k2[h, h] = 0.0
+                normal[..., i, j] = normal[..., j, i] = ndimage.correlate(w, k2, mode="constant")
+        rows = (np.arange(values.shape[0]) % 2 == parity)[:, None] if hexagonal else np.ones((values.shape[0], 1), bool)
+        ok = rows & (normal[..., 0, 0] >= 12)
+        if ok.any():
+            a, b = normal[ok], rhs[ok]
+            good = np.linalg.cond(a) < 1e8
+            coeffs = np.full(b.shape, np.nan)
+            coeffs[good] = np.linalg.solve(a[good], b[good][..., None])[..., 0]
+            trend[ok] = coeffs[:, 0]
+    return trend
+
+
+#: lens-level test: tiles of this many lenses a side, at most ``SCENE_TILES`` × ``SCENE_TILES`` of them spread
+#: over the sensor (a sample of the lenses: cheap on a 40-megapixel sensor)
+SCENE_TILE_LENSES = 40
+SCENE_TILES = 3
+
+
+def lens_scene_contrast(image, cfa: str, grid) -> tuple[float, float]:
+    """``(contrast, noise)``: how much the brightness at the micro images' centres (`lens_brightness`) varies
+    from lens to lens beyond noise, and that noise, both relative to the local level.
+
+    On up to `SCENE_TILES`² tiles of `SCENE_TILE_LENSES`² lenses spread over the grid, over the well-lit
+    lenses (at least half the 99th percentile of all tiles, two lenses in from the edge of that region): the
+    robust spread (1.4826 × MAD) of brightness / trend − 1 is ``s``, the trend a local quadratic fit over
+    `SCENE_TREND_LENSES`² lenses (`local_quadratic_trend`); the robust spread of half the difference of
+    the two halves' estimates is the noise ``n``; ``contrast = sqrt(max(s² − n², 0))``. ``(0, inf)``
+    where fewer than 25 lenses tell.
+    """
+    from scipy import ndimage
+
+    def starts(count):
+        size = min(SCENE_TILE_LENSES, count)
+        n = max(1, min(SCENE_TILES, count // size))
+        return [int(round(v)) // 2 * 2 for v in np.linspace(0, count - size, n)], size   # even: hexagonal parity
+
+    (row_starts, ny), (col_starts, nx) = starts(grid.rows), starts(grid.cols)
+    tiles = [lens_brightness(image, cfa, grid, np.arange(r0, r0 + ny), np.arange(c0, c0 + nx))
+             for r0 in row_starts for c0 in col_starts]
+    valid = [np.isfinite(t).all(axis=0) for t in tiles]
+    pooled = np.concatenate([t[0][v] for t, v in zip(tiles, valid)])
+    if pooled.size < 25:
+        return 0.0, float("inf")
+    floor = 0.5 * float(np.percentile(pooled, 99))
+    ratios, diffs = [], []
+    for t, v in zip(tiles, valid):
+        level = np.where(v, t[0], 0.0)
+        inner = ndimage.binary_erosion(v & (level >= floor), iterations=2)
+        trend = local_quadratic_trend(level, inner, SCENE_TREND_LENSES, grid.kind == "hexagonal")
+        inner &= np.isfinite(trend) & (trend > 0)
+        ratios.append(level[inner] / trend[inner] - 1.0)
+        diffs.append(0.5 * (t[1][inner] - t[2][inner]) / trend[inner])
+    ratios, diffs = np.concatenate(ratios), np.concatenate(diffs)
+    if ratios.size < 25:
+        return 0.0, float("inf")
+    mad = lambda x: 1.4826 * float(np.median(np.abs(x - np.median(x))))   # noqa: E731
+    spread, noise = mad(ratios), mad(diffs)
+    return float(np.sqrt(max(spread * spread - noise * noise, 0.0))), noise
 
 
 def lens_flatness(views: np.ndarray, view_mask=None) -> float:
