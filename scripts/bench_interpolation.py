@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp")
+INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp", "cubic-spline")
 PHOTOGRAPHIC = (0.1, 0.25, 0.5, 0.75, 0.9, 1.1, 1.25, 1.5, 1.75, 1.9)
 MICROSCOPE = (-0.05, 0.01, 0.025, 0.05, 0.1, 0.2)
 
