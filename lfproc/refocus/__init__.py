@@ -67,10 +67,11 @@ import types
 from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, check_refocused_area, full_view_fraction,
                         max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
+from ._sharpness import SHARPNESS_BAND, slice_sharpness
 
 __all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
            "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
-           "usable_a_bound", "check_refocused_area"]
+           "usable_a_bound", "check_refocused_area", "slice_sharpness", "SHARPNESS_BAND"]
 
 
 class _CallableModule(types.ModuleType):
