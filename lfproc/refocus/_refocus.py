@@ -278,7 +278,7 @@ def _render(views: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, upsample: int
     # per-view-row partial sums: float32 unless the views are float64 (module docstring, Precision)
     part = np.zeros(0, dtype=np.float64 if views.dtype == np.float64 else np.float32)
     if upsample == 1 and plan_y.whole_lens and plan_x.whole_lens:
-        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.lo), _phase0(plan_y.hi),
+        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.ntaps), _phase0(plan_y.lo), _phase0(plan_y.hi),
                 _phase0(plan_x.first), _phase0(plan_x.lo), _phase0(plan_x.hi), plan_y.count, plan_x.count)
         kernel = _gather_band
     elif upsample == 1:
