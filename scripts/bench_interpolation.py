@@ -13,8 +13,8 @@ the cubic spline through each view) and, as the reference without interpolation,
   ``--exponents`` sets the spectra, ``--coarse`` takes every other a0.
 * **speed**: 101 real slices in one call on an Illum-sized light field (15 × 15 views of 434 × 625 × 3
   float32), seconds per slice and as a ratio to the floor of one read of the views
-  (``views.sum(axis=(0, 1))``), measured in the same run; one real slice per call; integer slices (a pure
-  gather) for reference.
+  (``views.sum(axis=(0, 1))``) measured just before it in the same round (median over ``--repeats``
+  rounds); one real slice per call; integer slices (a pure gather) for reference.
 
 ``--simulator`` adds the same sweep on the photographic simulator's renders of the bundled sample camera.
 
@@ -138,34 +138,43 @@ def simulator_bias():
     return result
 
 
-def best_of(fn, repeats):
-    best = None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best or 1e99, time.perf_counter() - t0)
-    return best
+def timed(fn):
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
 
 
 def speed_table(repeats, small):
+    """Rounds of: the floor, then each interpolation (101 real slices in one call, and one real slice),
+    then integer slices; each time divided by the floor of its own round (the load of a shared machine
+    drifts between rounds), the median over the rounds reported, and the fastest time."""
     import lfproc
 
     shape = (9, 9, 120, 160, 3) if small else (15, 15, 434, 625, 3)
     views = np.random.default_rng(0).random(shape, dtype=np.float32)
     real = np.round(np.linspace(-1.5, 1.5, 101) + 0.0037, 9)       # no whole-lens slice among them
-    floor = best_of(lambda: views.sum(axis=(0, 1)), max(repeats, 5))
-    rows = {}
-    for interpolation in INTERPOLATIONS:
-        lfproc.refocus(views, real[:2], interpolation=interpolation)          # compile / load
-        per_slice = best_of(lambda: lfproc.refocus(views, real, interpolation=interpolation), repeats) / len(real)
-        single = best_of(lambda: lfproc.refocus(views, real[50], interpolation=interpolation), repeats)
-        rows[interpolation] = {"s_per_slice": per_slice, "over_floor": per_slice / floor,
-                               "s_one_slice": single, "one_over_floor": single / floor}
-    gather = best_of(lambda: lfproc.refocus(views, np.arange(-5, 6)), repeats) / 11
-    single = best_of(lambda: lfproc.refocus(views, 1.0), repeats)
-    rows["integer a (gather)"] = {"s_per_slice": gather, "over_floor": gather / floor, "s_one_slice": single,
-                                  "one_over_floor": single / floor}
-    return {"views": list(shape), "floor_s": floor, "rows": rows}
+    cases = {name: (lambda name=name: lfproc.refocus(views, real, interpolation=name), len(real))
+             for name in INTERPOLATIONS}
+    cases.update({f"{name}, one slice": (lambda name=name: lfproc.refocus(views, real[50], interpolation=name), 1)
+                  for name in INTERPOLATIONS})
+    cases["integer a (gather)"] = (lambda: lfproc.refocus(views, np.arange(-5, 6)), 11)
+    cases["integer a (gather), one slice"] = (lambda: lfproc.refocus(views, 1.0), 1)
+    for fn, _ in cases.values():
+        fn()                                                         # compile / load
+    floor = lambda: min(timed(lambda: views.sum(axis=(0, 1))) for _ in range(3))
+    ratios = {name: [] for name in cases}
+    times = {name: [] for name in cases}
+    floors = []
+    for _ in range(repeats):
+        for name, (fn, count) in cases.items():
+            f = floor()
+            floors.append(f)
+            t = timed(fn) / count
+            times[name].append(t)
+            ratios[name].append(t / f)
+    rows = {name: {"s_per_slice": min(times[name]), "over_floor": float(np.median(ratios[name])),
+                   "over_floor_range": [float(min(ratios[name])), float(max(ratios[name]))]} for name in cases}
+    return {"views": list(shape), "floor_s": min(floors), "rows": rows}
 
 
 def main(argv=None):
@@ -199,10 +208,12 @@ def main(argv=None):
                 f"({row[kind]['full'][1]:+.2f})" for kind in ("photographic", "microscope")))
     if not args.bias_only:
         result["speed"] = speed = speed_table(args.repeats, args.small)
-        print(f"speed, views {speed['views']}, floor (one read of the views) {1e3 * speed['floor_s']:.1f} ms:")
+        print(f"speed, views {speed['views']}, floor (one read of the views) {1e3 * speed['floor_s']:.1f} ms "
+              f"(fastest); per slice, fastest, and x floor of the same round (median, range over rounds):")
         for name, row in speed["rows"].items():
-            print(f"  {name:18s} {1e3 * row['s_per_slice']:7.1f} ms per slice  {row['over_floor']:5.2f}x floor   "
-                  f"one slice per call {1e3 * row['s_one_slice']:7.1f} ms  {row['one_over_floor']:5.2f}x floor")
+            low, high = row["over_floor_range"]
+            print(f"  {name:30s} {1e3 * row['s_per_slice']:7.1f} ms  {row['over_floor']:5.2f}x floor "
+                  f"({low:.2f}-{high:.2f})")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as fh:
             json.dump(result, fh, indent=1)

@@ -8,20 +8,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._spline import bspline_weights
-
 #: positions closer than this (in lenses) to an integer are snapped to it
 SNAP_TOLERANCE = 1e-9
 
 
 # ----------------------------------------------------------------------------- sampling plans (pure numpy)
 #: Keys' cubic convolution parameter of each cubic interpolation: ``"cubic"`` is Catmull-Rom (−0.5, exact
-#: for quadratics); ``"cubic-sharp"`` (−0.9) lifts the response between lenses just enough that, on
-#: textures with natural-image statistics (power ∝ 1/f²), a slice's sharpness no longer peaks at integer
-#: a: measured in docs/microscope-imaging.md (interpolation bias) and tests/test_interpolation_bias.py
+#: for quadratics); ``"cubic-sharp"`` (−0.9) lifts the response between lenses so that, on textures of
+#: power ∝ 1/f², a slice's full-band variance no longer peaks at integer a (other spectra and a band-
+#: limited sharpness it misses: docs/microscope-imaging.md). ``"cubic-spline"`` (B-spline weights here,
+#: the recursive filter on each slice afterwards) is in ._spline.
 KEYS_PARAMETER = {"cubic": -0.5, "cubic-sharp": -0.9}
-# ``"cubic-spline"`` (cubic spline interpolation: B-spline weights here, the recursive filter on each
-# slice afterwards) is in ._spline
 
 
 def keys_cubic_weights(t: np.ndarray, alpha: float = -0.5) -> np.ndarray:
@@ -36,6 +33,15 @@ def keys_cubic_weights(t: np.ndarray, alpha: float = -0.5) -> np.ndarray:
     near = lambda x: ((alpha + 2.0) * x - (alpha + 3.0)) * x * x + 1.0            # |x| ≤ 1
     far = lambda x: ((alpha * x - 5.0 * alpha) * x + 8.0 * alpha) * x - 4.0 * alpha  # 1 < |x| < 2
     return np.stack([far(1.0 + t), near(t), near(u), far(1.0 + u)], axis=-1)
+
+
+def bspline_weights(t: np.ndarray) -> np.ndarray:
+    """Weights of the cubic B-spline on the taps ``floor(pos) − 1 … floor(pos) + 2`` for fraction ``t``
+    (``t.shape + (4,)``); they sum to one, and at ``t = 0`` they are (1/6, 2/3, 1/6, 0)."""
+    t = np.asarray(t, dtype=np.float64)
+    u = 1.0 - t
+    return np.stack([u ** 3 / 6.0, (4.0 - 6.0 * t ** 2 + 3.0 * t ** 3) / 6.0,
+                     (1.0 + 3.0 * t + 3.0 * t ** 2 - 3.0 * t ** 3) / 6.0, t ** 3 / 6.0], axis=-1)
 
 
 def snap(x: np.ndarray) -> np.ndarray:

@@ -1,9 +1,9 @@
-"""Cubic spline interpolation between lenses (``"cubic-spline"``): tap weights and the recursive filter.
+"""Cubic spline interpolation between lenses (``"cubic-spline"``): the recursive filter of each slice.
 
 A view read between lenses as its interpolating cubic spline (Unser, "Splines: a perfect fit for signal
 and image processing", IEEE Signal Processing Magazine 16(6), 1999) is the four-tap sum, with the cubic
-B-spline's weights (:func:`bspline_weights`), of the view's B-spline coefficients ``P v``, where ``P`` is
-the inverse of the sampled B-spline (1/6, 2/3, 1/6): along each axis a causal and an anti-causal
+B-spline's weights (:func:`._plan.bspline_weights`), of the view's B-spline coefficients ``P v``, where
+``P`` is the inverse of the sampled B-spline (1/6, 2/3, 1/6): along each axis a causal and an anti-causal
 first-order recursive filter with the pole z = √3 − 2 and the gain 6, mirror-symmetric at the ends.
 
 ``P`` and the B-spline taps are both convolutions along the same axis, so they commute, and so does the
@@ -11,9 +11,10 @@ sum over the views: the mean over the views of ``B_{t_k} P v_k`` equals ``P`` ap
 ``B_{t_k} v_k``. The kernels therefore take the B-spline weights on the views themselves (four taps, as
 for Keys' cubic) and :func:`postfilter` runs ``P`` once on each slice (m̂² times less data than the
 views) instead of on every view. This is exact wherever a slice averages the same views over the
-filter's reach (|z|^d falls below float32 resolution at d ≈ 12 lenses): everywhere except the border band
-that views leave and the few lenses beside it, where each view's taps are clamped at its edge and the
-mean runs over fewer views — there the slice is the filtered mean, not the mean of filtered views.
+filter's reach (|z|^d falls below float32 resolution at d ≈ 12 lenses) and no tap is clamped:
+everywhere except the border band that views leave and the few lenses inside it and inside the array's
+edges, where taps are clamped to the edge (not mirrored) and the mean runs over fewer views — there the
+slice is the filtered mean of clamped taps, not the mean of the views' exact splines.
 With ``upsample = s`` each phase r of the finer grid is a lens-grid sequence of its own and is filtered
 on its own. At whole lenses the spline passes through the lenses; between them its response stays flat
 far closer to the lenses' Nyquist frequency than a 4-tap convolution kernel's, so interpolated slices
@@ -32,15 +33,6 @@ POLE = math.sqrt(3.0) - 2.0
 
 #: terms of the causal filter's start-up sum: |POLE|**HORIZON < 1e-9, far below float32 resolution
 HORIZON = 16
-
-
-def bspline_weights(t: np.ndarray) -> np.ndarray:
-    """Weights of the cubic B-spline on the taps ``floor(pos) − 1 … floor(pos) + 2`` for fraction ``t``
-    (``t.shape + (4,)``); they sum to one, and at ``t = 0`` they are (1/6, 2/3, 1/6, 0)."""
-    t = np.asarray(t, dtype=np.float64)
-    u = 1.0 - t
-    return np.stack([u ** 3 / 6.0, (4.0 - 6.0 * t ** 2 + 3.0 * t ** 3) / 6.0,
-                     (1.0 + 3.0 * t + 3.0 * t ** 2 - 3.0 * t ** 3) / 6.0, t ** 3 / 6.0], axis=-1)
 
 
 def causal_start(n: int) -> np.ndarray:
