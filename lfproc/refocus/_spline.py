@@ -54,16 +54,16 @@ def causal_start(n: int) -> np.ndarray:
 
 @numba.njit(cache=True, nogil=True)
 def _filter_axis0(a, start):
-    """``P`` along the first axis of ``a`` (n, L), in place, whole rows at a time (vectorised along L)."""
+    """``P`` along the first axis of ``a`` (n, L) float64, in place, whole rows at a time (vectorised along L)."""
     n, length = a.shape
     if n == 1:
         return
-    z = np.float32(POLE)
-    end = np.float32(6.0 * POLE / (POLE * POLE - 1.0))     # the anti-causal start, gain 6 folded in
-    g = np.float32(6.0 * POLE)
-    first = np.zeros(length, dtype=np.float32)
+    z = POLE
+    end = 6.0 * POLE / (POLE * POLE - 1.0)     # the anti-causal start, gain 6 folded in
+    g = 6.0 * POLE
+    first = np.zeros(length)
     for k in range(start.shape[0]):
-        w = np.float32(start[k])
+        w = start[k]
         row = a[k]
         for e in range(length):
             first[e] += w * row[e]
@@ -122,7 +122,7 @@ def _phase_lengths(points: int, s: int) -> list[int]:
 def postfilter(out: np.ndarray, along_y: np.ndarray, along_x: np.ndarray, upsample: int) -> None:
     """Turn summed B-spline samples into cubic spline samples, in place (module docstring).
 
-    ``out`` (K, Py, Px, C) float32; ``along_y[k]`` / ``along_x[k]``: slice k was read with B-spline
+    ``out`` (K, Py, Px, C) float32 (each slice filtered in float64); ``along_y[k]`` / ``along_x[k]``: slice k was read with B-spline
     weights along that axis (whole-lens slices are not). Each phase of an upsampled axis is filtered on
     its own.
     """
@@ -130,11 +130,15 @@ def postfilter(out: np.ndarray, along_y: np.ndarray, along_x: np.ndarray, upsamp
     flat = out.reshape(k_count, py, px * channels)
     s = upsample
     for k in range(k_count):
+        if not (along_y[k] or along_x[k]):
+            continue
+        image = flat[k].astype(np.float64)      # one slice: filtered in float64, rounded once
         if along_y[k]:
             for r, n in enumerate(_phase_lengths(py, s)):
                 if n > 0:
-                    _filter_axis0(flat[k, r::s], causal_start(n))
+                    _filter_axis0(image[r::s], causal_start(n))
         if along_x[k]:
             for r, n in enumerate(_phase_lengths(px, s)):
                 if n > 0:
-                    _filter_rows(flat[k], channels, s, r, n, causal_start(n))
+                    _filter_rows(image, channels, s, r, n, causal_start(n))
+        flat[k] = image
