@@ -327,6 +327,18 @@ def test_finite_float64_beyond_float32_range_says_rescale():
         lfproc.refocus(views, 0)
 
 
+@pytest.mark.parametrize("interpolation", ["cubic", "cubic-spline"])
+def test_overshoot_beyond_float32_says_rescale(recwarn, interpolation):
+    """Finite float32 views with a step up to 3.4e38: cubic kernels overshoot the float32 range between
+    lenses. That is a range problem (rescale), not NaN input, and no numpy warning reaches stderr."""
+    views = np.zeros((3, 3, 12, 12, 1), np.float32)
+    views[:, :, :, 6:] = np.float32(3.4e38)
+    views[:, :, :, 8] = 0.0
+    with pytest.raises(LfprocError, match="exceed the float32 range.*rescale") as info:
+        lfproc.refocus(views, 0.5, interpolation)
+    assert "NaN" not in str(info.value) and not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_other_input_dtypes_and_lightfield_agree():
     views = (random_views(3, 5, 6, 1, seed=8) * 200).astype(np.uint8)
     expected = reference(views, 1.5)

@@ -105,7 +105,7 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
         bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
     if bad.any():
         first_bad = slopes[int(np.argmax(bad))]
-        if views.dtype == np.float64 and np.isfinite(views).all():
+        if np.isfinite(views).all():      # finite float64 beyond float32, or a cubic's overshoot near 3.4e38
             raise LfprocError(f"light field values exceed the float32 range; rescale them (largest magnitude "
                               f"{float(np.abs(views).max()):.3g}, e.g. divide by it) before refocusing "
                               f"(slice a={first_bad:g})")
