@@ -9,8 +9,8 @@ capture of a session) and the decoder prepared once (timed separately).
 
 Timed per capture, each the best of ``--repeats`` runs after a warm-up (numba compiles on the first):
 
-* read the capture, decode it into views, refocus 101 slices (a = −0.5 … 0.5, cubic-sharp, in one
-  call), write the z-stack (ImageJ hyperstack with µm spacing) — the end-to-end time, target ≤ 3 s;
+* read the capture, decode it into views, refocus 101 slices (a = −0.5 … 0.5, ``--interpolation``,
+  default cubic-spline as the commands, in one call), write the z-stack (ImageJ hyperstack with µm spacing) — the end-to-end time, target ≤ 3 s;
 * the straightforward implementation on the same views: plain numpy shift-and-sum (each view shifted by
   slicing with linear interpolation between whole-lens shifts, summed into a float64 accumulator);
 * floors: reading the views once from memory (``views.sum``), and the capture read + decode alone.
@@ -21,7 +21,8 @@ the CPU time much less; CPU time / threads estimates the wall time on idle cores
 Threads: ``NUMBA_NUM_THREADS`` (default 2: the issue's 2 cores). Numbers are reported as ratios to the
 floor measured in the same run as well as in seconds (a shared machine inflates seconds, not ratios).
 
-Usage: ``python scripts/bench_microscope.py [--repeats N] [--workdir DIR] [--json PATH]``.
+Usage: ``python scripts/bench_microscope.py [--repeats N] [--workdir DIR] [--json PATH] [--skip-numpy]
+[--interpolation NAME]``.
 """
 
 from __future__ import annotations
@@ -124,6 +125,7 @@ def main(argv=None):
     parser.add_argument("--workdir", default=os.path.join(tempfile.gettempdir(), "lfproc-bench-microscope"))
     parser.add_argument("--json", metavar="PATH")
     parser.add_argument("--skip-numpy", action="store_true", help="leave out the (slow) plain numpy baseline")
+    parser.add_argument("--interpolation", default="cubic-spline", help="of the z-stack (default: the commands')")
     args = parser.parse_args(argv)
     os.makedirs(args.workdir, exist_ok=True)
 
@@ -142,21 +144,22 @@ def main(argv=None):
 
     def end_to_end():
         field = load_lightfield(capture, setup)
-        stack = refocus(field, A_VALUES, interpolation="cubic-sharp")
+        stack = refocus(field, A_VALUES, interpolation=args.interpolation)
         write_focal_stack(stack_path, stack, records, kind="imagej", lens_um=lateral_um_per_lens(camera))
         return field
 
-    refocus(lf, A_VALUES[:2], interpolation="cubic-sharp")          # compile / load the kernels
+    refocus(lf, A_VALUES[:2], interpolation=args.interpolation)          # compile / load the kernels
     total_s, lf = best_of(end_to_end, args.repeats, "end_to_end")
     decode_s, _ = best_of(lambda: load_lightfield(capture, setup), args.repeats, "read_and_decode")
-    refocus_s, stack = best_of(lambda: refocus(lf, A_VALUES, interpolation="cubic-sharp"), args.repeats, "refocus")
+    refocus_s, stack = best_of(lambda: refocus(lf, A_VALUES, interpolation=args.interpolation), args.repeats,
+                               "refocus")
     linear_s, _ = best_of(lambda: refocus(lf, A_VALUES, interpolation="linear"), args.repeats, "refocus_linear")
     nearest_s, _ = best_of(lambda: refocus(lf, A_VALUES, interpolation="nearest"), args.repeats, "refocus_nearest")
     write_s, _ = best_of(lambda: write_focal_stack(stack_path, stack, records, kind="imagej",
                                                    lens_um=lateral_um_per_lens(camera)), args.repeats, "write")
     views = np.ascontiguousarray(lf.views)
     floor_s, _ = best_of(lambda: views.sum(axis=(0, 1)), max(args.repeats, 5), "floor")
-    result = dict(sensor=list(SENSOR), m_hat=camera.m_hat, lenses=list(lf.lens_shape), slices=len(A_VALUES),
+    result = dict(interpolation=args.interpolation, sensor=list(SENSOR), m_hat=camera.m_hat, lenses=list(lf.lens_shape), slices=len(A_VALUES),
                   threads=int(os.environ["NUMBA_NUM_THREADS"]), decoder_setup_s=setup_s, end_to_end_s=total_s,
                   read_and_decode_s=decode_s, refocus_101_s=refocus_s, refocus_101_linear_s=linear_s,
                   refocus_101_nearest_s=nearest_s, write_stack_s=write_s, views_read_floor_s=floor_s,

@@ -49,7 +49,7 @@ def beads_at(camera, a_values):
 
 def sharpest_bead_depths(camera, beads, views, a, **kwargs):
     """Per bead: (z of its sharpest slice, that slice's DOF), brightness peak over the 3 × 3 lenses around it."""
-    stack = lfproc.refocus(LightField.from_views(views, camera), a, interpolation="cubic-sharp", **kwargs)
+    stack = lfproc.refocus(LightField.from_views(views, camera), a, interpolation="cubic-spline", **kwargs)
     geo = geometry.microscope_slices(camera, a)
     found = []
     for bead in beads:
@@ -91,7 +91,7 @@ def test_textured_sheet_is_sharpest_at_its_depth():
     lat, zpa = geometry.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
     sheet = Sheet(z_um=0.15 * zpa, period_um=3.0 * lat, seed=4)
     views, _ = render_microscope_views(camera, MicroscopeScene(sheets=(sheet,)), LENSES)
-    stack = lfproc.refocus(LightField.from_views(views, camera), A_SWEEP, interpolation="cubic-sharp")
+    stack = lfproc.refocus(LightField.from_views(views, camera), A_SWEEP, interpolation="cubic-spline")
     inner = stack[:, 6:-6, 6:-6, 0]
     i = int(np.argmax(inner.reshape(len(A_SWEEP), -1).var(axis=1)))
     geo = geometry.microscope_slices(camera, A_SWEEP[i])
@@ -126,7 +126,7 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
     write_image(str(tmp_path / "capture.tif"), np.round(60000 * image / image.max()).astype(np.uint16), {}, "tiff")
     write_image(str(tmp_path / "white.tif"), np.round(60000 * white).astype(np.uint16), {}, "tiff")
     lf = load_lightfield(str(tmp_path / "capture.tif"), prepare_decoding(camera, white=str(tmp_path / "white.tif")))
-    stack = lfproc.refocus(lf, A_SWEEP, interpolation="cubic-sharp")
+    stack = lfproc.refocus(lf, A_SWEEP, interpolation="cubic-spline")
     geo = geometry.microscope_slices(camera, A_SWEEP)
     rows, cols = np.mgrid[:lf.lens_shape[0], :lf.lens_shape[1]]
     centres = lf.grid.lens_xy(rows, cols)                                  # (Ny, Nx, 2) sensor px

@@ -22,7 +22,7 @@ def _eq9_table(m):
     return np.repeat((c - k)[:, None], m, axis=1), np.repeat((c - k)[None, :], m, axis=0)
 
 
-@pytest.mark.parametrize("interpolation", ["nearest", "linear", "cubic"])
+@pytest.mark.parametrize("interpolation", ["nearest", "linear", "cubic", "cubic-spline"])
 @pytest.mark.parametrize("upsample", [1, 3])
 def test_per_view_table_of_eq9_equals_the_kernels(interpolation, upsample):
     rng = np.random.default_rng(3)

@@ -3,7 +3,10 @@
 The reference below is written from the contract's formula, not from the module: it computes every
 sample position per output pixel, builds a dense 1-D interpolation matrix per view axis from the
 interpolation kernels' textbook definitions (the piecewise Keys kernel, not the module's polynomial
-weights), and counts the inside samples pixel by pixel.
+weights), and counts the inside samples pixel by pixel. ``"cubic-spline"`` is the cubic B-spline kernel
+on the views and then, on the slice, the inverse of the sampled B-spline (1/6, 2/3, 1/6) along each axis
+with mirror-symmetric ends, as a dense matrix inverse: in the interior the mean of the views' cubic
+spline interpolants (checked against scipy's map_coordinates in tests/test_interpolation_bias.py).
 """
 
 import contextlib
@@ -23,7 +26,7 @@ rf = importlib.import_module("lfproc.refocus._refocus")      # the driver: _view
 rf_plan = importlib.import_module("lfproc.refocus._plan")     # axis_plan, keys_cubic_weights
 rf_kernels = importlib.import_module("lfproc.refocus._kernels")
 
-INTERPOLATIONS = ("nearest", "linear", "cubic")
+INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-spline")
 RTOL, ATOL = 2e-5, 2e-5
 
 
@@ -40,6 +43,32 @@ def _keys(x):
                     np.where(x < 2, -0.5 * x**3 + 2.5 * x**2 - 4 * x + 2, 0.0))
 
 
+def _bspline(x):
+    """The cubic B-spline, piecewise in |x|."""
+    x = np.abs(x)
+    return np.where(x <= 1, 2 / 3 - x**2 + x**3 / 2, np.where(x < 2, (2 - x) ** 3 / 6, 0.0))
+
+
+def _spline_inverse(n):
+    """(n, n): B-spline coefficients from samples — the inverse of the sampled B-spline, mirror ends."""
+    if n == 1:
+        return np.ones((1, 1))
+    t = np.zeros((n, n))
+    for i in range(n):
+        for j in (i - 1, i, i + 1):
+            k = abs(j) if j < n else 2 * (n - 1) - j          # mirror-symmetric about 0 and n − 1
+            t[i, k] += _bspline(i - j)
+    return np.linalg.inv(t)
+
+
+def _spline_filter(out, s, axis):
+    """The inverse filter along ``axis`` of each phase r of an s-times upsampled axis."""
+    out = np.moveaxis(out.copy(), axis, 0)
+    for r in range(s):
+        out[r::s] = np.einsum("ij,j...->i...", _spline_inverse(len(out[r::s])), out[r::s])
+    return np.moveaxis(out, 0, axis)
+
+
 def _interp_matrix(pos, n, interpolation):
     """Dense (len(pos), n) matrix: row p samples a length-n signal at pos[p] (rows outside [0, n-1] are 0)."""
     w = np.zeros((len(pos), n))
@@ -53,6 +82,10 @@ def _interp_matrix(pos, n, interpolation):
             t = x - i
             w[p, i] += 1 - t
             w[p, min(i + 1, n - 1)] += t
+        elif interpolation == "cubic-spline":
+            i = int(np.floor(x))
+            for j in range(i - 1, i + 3):
+                w[p, min(max(j, 0), n - 1)] += _bspline(x - j)
         else:
             i = int(np.floor(x))
             for j in range(i - 1, i + 3):
@@ -69,23 +102,36 @@ def reference(views, a, interpolation="linear", upsample=1, mask=None):
     s = upsample
     py = np.arange((ny - 1) * s + 1) / s
     px = np.arange((nx - 1) * s + 1) / s
+
+    def kind(positions, n):
+        """cubic-spline along an axis with no sample between lenses is a gather there."""
+        pos = _snap(np.concatenate([positions + a * (c - k) for k in range(m)]))
+        between = ((pos % 1 != 0) & (pos >= 0) & (pos <= n - 1)).any()
+        return interpolation if interpolation != "cubic-spline" or between else "nearest"
+
+    kind_y, kind_x = kind(py, ny), kind(px, nx)
     total = np.zeros((len(py), len(px), channels))
     count = np.zeros((len(py), len(px)))
     for ky in range(m):
         y = _snap(py + a * (c - ky))
-        wy = _interp_matrix(y, ny, interpolation)
+        wy = _interp_matrix(y, ny, kind_y)
         for kx in range(m):
             if mask is not None and not mask[ky, kx]:
                 continue
             x = _snap(px + a * (c - kx))
-            wx = _interp_matrix(x, nx, interpolation)
+            wx = _interp_matrix(x, nx, kind_x)
             inside = ((0 <= y) & (y <= ny - 1))[:, None] & ((0 <= x) & (x <= nx - 1))[None, :]
             sampled = np.einsum("pi,ijc,qj->pqc", wy, views[ky, kx], wx)
             total += np.where(inside[..., None], sampled, 0.0)
             count += inside
     if mask is None:
         assert count.min() >= 1
-    return np.where(count[..., None] > 0, total / np.maximum(count, 1)[..., None], 0.0)
+    out = np.where(count[..., None] > 0, total / np.maximum(count, 1)[..., None], 0.0)
+    if kind_y == "cubic-spline":
+        out = _spline_filter(out, s, 0)
+    if kind_x == "cubic-spline":
+        out = _spline_filter(out, s, 1)
+    return out
 
 
 def random_views(m, ny, nx, channels, seed=0, dtype=np.float32):
@@ -279,6 +325,18 @@ def test_finite_float64_beyond_float32_range_says_rescale():
     views[0, 0, 1, 1, 0] = np.nan      # really non-finite input keeps the NaN message
     with pytest.raises(LfprocError, match="NaN or infinite"):
         lfproc.refocus(views, 0)
+
+
+@pytest.mark.parametrize("interpolation", ["cubic", "cubic-spline"])
+def test_overshoot_beyond_float32_says_rescale(recwarn, interpolation):
+    """Finite float32 views with a step up to 3.4e38: cubic kernels overshoot the float32 range between
+    lenses. That is a range problem (rescale), not NaN input, and no numpy warning reaches stderr."""
+    views = np.zeros((3, 3, 12, 12, 1), np.float32)
+    views[:, :, :, 6:] = np.float32(3.4e38)
+    views[:, :, :, 8] = 0.0
+    with pytest.raises(LfprocError, match="exceed the float32 range.*rescale") as info:
+        lfproc.refocus(views, 0.5, interpolation)
+    assert "NaN" not in str(info.value) and not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
 
 
 def test_other_input_dtypes_and_lightfield_agree():

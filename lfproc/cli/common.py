@@ -60,8 +60,9 @@ def parse_depth_range(text: str) -> tuple[float, float]:
 
 FORMAT_HELP = ("image format: tiff = float32 linear (default), png16 = 16-bit linear, jpeg = 8-bit sRGB with one "
                "exposure for the set (for viewing), exr = half/float linear")
-INTERPOLATION_HELP = ("interpolation between lenses for real a (default cubic-sharp: the sharpest slice of a sweep "
-                      "sits at the true a; linear and nearest pull it to integer a)")
+INTERPOLATION_HELP = ("interpolation between lenses for real a (default cubic-spline: the cubic spline through each "
+                      "view, as sharp between lenses as at them, so the sharpest slice of a sweep sits at the true a; "
+                      "linear and nearest pull it to integer a)")
 
 
 def dumps_strict(obj, **kwargs) -> str:

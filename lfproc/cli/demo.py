@@ -82,7 +82,7 @@ def run(args) -> int:
     near, far = distances[0] * 0.97, distances[-1] * 1.03
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = [float(a) for a in geometry.plan_slices(camera, near, far, view_extent=extent)]
-    stack = refocus(lf, a_values)
+    stack = refocus(lf, a_values, interpolation="cubic-spline")     # as `lfproc refocus` writes them
     source = str((sample / "capture.png").resolve())
     refocus_dir = out / "refocus"
     paths = write_slices(str(refocus_dir), "sample", source, camera, a_values, stack, "tiff", view_mask=lf.view_mask)

@@ -31,7 +31,8 @@ def register(sub) -> None:
 def add_render_options(p) -> None:
     """``--format``, ``--interpolation``, ``--upsample`` and ``--stack`` of refocused slices (refocus and batch)."""
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
-    p.add_argument("--interpolation", default="cubic-sharp", choices=("nearest", "linear", "cubic", "cubic-sharp"),
+    p.add_argument("--interpolation", default="cubic-spline",
+                   choices=("nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
                    help="render slices on an S times finer grid than the lenses (default 1: one pixel per lens)")

@@ -22,10 +22,15 @@ Interpolation (for positions between lenses; whole-lens positions read the lens 
     ``"nearest"``: the lens at ``floor(pos + 0.5)`` (halves round up). ``"linear"``: bilinear, two taps
     per axis. ``"cubic"``: separable cubic convolution of Keys with a = −0.5 — the Catmull-Rom spline —
     four taps per axis at ``floor(pos) − 1 … floor(pos) + 2``; taps beyond the array are clamped to its
-    edge. ``"cubic-sharp"``: the same with Keys' a = −0.9, which lifts the response between lenses: with
-    linear (and, less, Catmull-Rom) interpolation an interpolated slice is blurrier than a whole-lens one,
-    so the sharpest slice of a fine sweep snaps towards integer ``a``; cubic-sharp removes that pull for
-    natural textures (the commands' default; docs/microscope-imaging.md). Whole-lens samples — every
+    edge. ``"cubic-sharp"``: the same with Keys' a = −0.9, which lifts the response between lenses.
+    ``"cubic-spline"`` (the commands' default): the interpolating cubic spline through each view — the
+    cubic B-spline's four taps on the views, then the recursive inverse filter (``_spline``) once on each
+    summed slice, exact away from the border band (the filter commutes with the taps and the mean); a
+    slice whose samples are all whole lenses is a gather. With linear (and, less, Catmull-Rom)
+    interpolation an interpolated slice is blurrier than a whole-lens one, so the sharpest slice of a fine
+    sweep snaps towards integer ``a``; the spline's response stays flat to a quarter cycle per lens, where
+    :func:`slice_sharpness` measures, and holds it at the true ``a`` (docs/microscope-imaging.md).
+    Whole-lens samples — every
     sample when ``a`` is an integer and ``upsample = 1`` — are a pure gather: no weights, no multiplications, whatever ``interpolation`` says (nearest with ``upsample = 1``
     is a gather too). A call whose slices are all gathers runs the gather kernel; integer slices that
     share a call with real ones take single unit-weight taps there, still without multiplications.
@@ -67,10 +72,11 @@ import types
 from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, check_refocused_area, full_view_fraction,
                         max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
+from ._sharpness import SHARPNESS_BAND, slice_sharpness
 
 __all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
            "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
-           "usable_a_bound", "check_refocused_area"]
+           "usable_a_bound", "check_refocused_area", "slice_sharpness", "SHARPNESS_BAND"]
 
 
 class _CallableModule(types.ModuleType):

@@ -41,13 +41,44 @@ def _add_into(acc_row, part):
 
 
 @numba.njit(cache=True, nogil=True)
-def _gather_band(views, channels, first_y, lo_y, hi_y, first_x, lo_x, hi_x, count_y, count_x,
+def _add_weighted(acc_row, part, w):
+    """``acc_row += w · part`` (a plain add for unit weights: whole-lens y-taps multiply nothing)."""
+    if w == 1.0:
+        _add_into(acc_row, part)
+    else:
+        for i in range(acc_row.shape[0]):
+            acc_row[i] += w * part[i]
+
+
+@numba.njit(cache=True, nogil=True)
+def _source_rows(ky, row0, row1, first_y, ntaps_y, lo_y, hi_y, src_rows, need_lo, need_hi):
+    """The source rows that slice k reads for the output rows ``row0 … row1 − 1`` of view row ky, clamped
+    to the array, into ``need_lo[k] … need_hi[k]`` (``need_lo > need_hi``: none); returns their union
+    ``(sy_lo, sy_hi)`` (``sy_lo > sy_hi``: none) — the rows of the view row that the band streams through."""
+    sy_lo = src_rows
+    sy_hi = -1
+    for k in range(first_y.shape[0]):
+        j0 = max(row0, lo_y[k, ky])
+        j1 = min(row1 - 1, hi_y[k, ky])
+        if j0 > j1:
+            need_lo[k] = src_rows
+            need_hi[k] = -1
+            continue
+        need_lo[k] = min(max(j0 + first_y[k, ky], 0), src_rows - 1)
+        need_hi[k] = min(max(j1 + first_y[k, ky] + ntaps_y[k, ky] - 1, 0), src_rows - 1)
+        sy_lo = min(sy_lo, need_lo[k])
+        sy_hi = max(sy_hi, need_hi[k])
+    return sy_lo, sy_hi
+
+
+@numba.njit(cache=True, nogil=True)
+def _gather_band(views, channels, first_y, ntaps_y, lo_y, hi_y, first_x, lo_x, hi_x, count_y, count_x,
                  row0, row1, part_kind, out):
     """Output rows ``row0 … row1 − 1`` of every slice for whole-lens shifts (integer ``a``, or nearest, at
     ``upsample = 1``): pure adds of shifted row segments, no weights.
 
-    ``first_*[k, v]`` is the shift of view index v for slice k; ``lo_*``/``hi_*`` the output range that
-    reads inside the view. Loop order: view row ky, view column kx, source row sy, slice k — each view
+    ``first_*[k, v]`` is the shift of view index v for slice k (``ntaps_y`` all 1); ``lo_*``/``hi_*`` the
+    output range that reads inside the view. Loop order: view row ky, view column kx, source row sy, slice k — each view
     is read as one contiguous stream of the band's rows (what hardware prefetchers do best), each row
     once for all the slices that use it, into per-view-row partial sums ``part`` that then go into the
     float64 accumulators.
@@ -57,16 +88,10 @@ def _gather_band(views, channels, first_y, lo_y, hi_y, first_x, lo_x, hi_x, coun
     n_slices, _, row_len = out.shape
     acc = np.zeros((n_slices, row1 - row0, row_len))
     part = np.empty((n_slices, row1 - row0, row_len), dtype=part_kind.dtype)
+    need_lo = np.empty(n_slices, dtype=np.int64)
+    need_hi = np.empty(n_slices, dtype=np.int64)
     for ky in range(m):
-        # the source rows that any slice reads for this band and view row
-        sy_lo = src_rows
-        sy_hi = -1
-        for k in range(n_slices):
-            j0 = max(row0, lo_y[k, ky])
-            j1 = min(row1 - 1, hi_y[k, ky])
-            if j0 <= j1:
-                sy_lo = min(sy_lo, j0 + first_y[k, ky])
-                sy_hi = max(sy_hi, j1 + first_y[k, ky])
+        sy_lo, sy_hi = _source_rows(ky, row0, row1, first_y, ntaps_y, lo_y, hi_y, src_rows, need_lo, need_hi)
         part[:] = 0
         for kx in range(m):
             for sy in range(sy_lo, sy_hi + 1):
@@ -203,12 +228,7 @@ def _interpolated_band(views, channels, s, first_y, ntaps_y, w_y, lo_y, hi_y,
                             _add_row(x_sum, views[ky, kx, sy], channels, s, src_cols,
                                      first_x[k, kx], ntaps_x[k, kx], w_x[k, kx], lo_x[k, kx], hi_x[k, kx])
                         ring_row[k, slot] = sy
-                    wy = w_y[k, ky, r, t]
-                    if wy == 1.0:
-                        _add_into(dst, x_sum)
-                    else:
-                        for i in range(row_len):
-                            dst[i] += wy * x_sum[i]
+                    _add_weighted(dst, x_sum, w_y[k, ky, r, t])
     _normalise(acc, count_y, count_x, channels, row0, out)
 
 
@@ -280,20 +300,7 @@ def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
     need_lo = np.empty(n_slices, dtype=np.int64)
     need_hi = np.empty(n_slices, dtype=np.int64)
     for ky in range(m):
-        # the (clamped) source rows each slice reads for this band and view row
-        sy_lo = src_rows
-        sy_hi = -1
-        for k in range(n_slices):
-            j0 = max(row0, lo_y[k, ky])
-            j1 = min(row1 - 1, hi_y[k, ky])
-            if j0 > j1:
-                need_lo[k] = src_rows
-                need_hi[k] = -1
-                continue
-            need_lo[k] = min(max(j0 + first_y[k, ky], 0), src_rows - 1)
-            need_hi[k] = min(max(j1 + first_y[k, ky] + ntaps_y[k, ky] - 1, 0), src_rows - 1)
-            sy_lo = min(sy_lo, need_lo[k])
-            sy_hi = max(sy_hi, need_hi[k])
+        sy_lo, sy_hi = _source_rows(ky, row0, row1, first_y, ntaps_y, lo_y, hi_y, src_rows, need_lo, need_hi)
         if sy_lo > sy_hi:
             continue
         xs = np.zeros((n_slices, sy_hi - sy_lo + 1, row_len), dtype=part_kind.dtype)
@@ -312,10 +319,5 @@ def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
                 for t in range(ntaps_y[k, ky]):
                     sy = min(max(jy + first_y[k, ky] + t, 0), src_rows - 1)
                     x_sum = xs[k, sy - sy_lo]
-                    wy = w_y[k, ky, t]
-                    if wy == 1.0:
-                        _add_into(dst, x_sum)
-                    else:
-                        for i in range(row_len):
-                            dst[i] += wy * x_sum[i]
+                    _add_weighted(dst, x_sum, w_y[k, ky, t])
     _normalise(acc, count_y, count_x, channels, row0, out)

@@ -14,9 +14,10 @@ SNAP_TOLERANCE = 1e-9
 
 # ----------------------------------------------------------------------------- sampling plans (pure numpy)
 #: Keys' cubic convolution parameter of each cubic interpolation: ``"cubic"`` is Catmull-Rom (−0.5, exact
-#: for quadratics); ``"cubic-sharp"`` (−0.9) lifts the response between lenses just enough that, on
-#: textures with natural-image statistics (power ∝ 1/f²), a slice's sharpness no longer peaks at integer
-#: a: measured in docs/microscope-imaging.md (interpolation bias) and tests/test_interpolation_bias.py
+#: for quadratics); ``"cubic-sharp"`` (−0.9) lifts the response between lenses so that, on textures of
+#: power ∝ 1/f², a slice's full-band variance no longer peaks at integer a (other spectra and a band-
+#: limited sharpness it misses: docs/microscope-imaging.md). ``"cubic-spline"`` (B-spline weights here,
+#: the recursive filter on each slice afterwards) is in ._spline.
 KEYS_PARAMETER = {"cubic": -0.5, "cubic-sharp": -0.9}
 
 
@@ -32,6 +33,15 @@ def keys_cubic_weights(t: np.ndarray, alpha: float = -0.5) -> np.ndarray:
     near = lambda x: ((alpha + 2.0) * x - (alpha + 3.0)) * x * x + 1.0            # |x| ≤ 1
     far = lambda x: ((alpha * x - 5.0 * alpha) * x + 8.0 * alpha) * x - 4.0 * alpha  # 1 < |x| < 2
     return np.stack([far(1.0 + t), near(t), near(u), far(1.0 + u)], axis=-1)
+
+
+def bspline_weights(t: np.ndarray) -> np.ndarray:
+    """Weights of the cubic B-spline on the taps ``floor(pos) − 1 … floor(pos) + 2`` for fraction ``t``
+    (``t.shape + (4,)``); they sum to one, and at ``t = 0`` they are (1/6, 2/3, 1/6, 0)."""
+    t = np.asarray(t, dtype=np.float64)
+    u = 1.0 - t
+    return np.stack([u ** 3 / 6.0, (4.0 - 6.0 * t ** 2 + 3.0 * t ** 3) / 6.0,
+                     (1.0 + 3.0 * t + 3.0 * t ** 2 - 3.0 * t ** 3) / 6.0, t ** 3 / 6.0], axis=-1)
 
 
 def snap(x: np.ndarray) -> np.ndarray:
@@ -58,6 +68,7 @@ class AxisPlan:
     lo: np.ndarray       # (K, m, s) int64
     hi: np.ndarray       # (K, m, s) int64
     count: np.ndarray    # (K, P) int64: number of views that count at each output index
+    spline: np.ndarray   # (K,) bool
 
     def inside(self, n: int, upsample: int) -> np.ndarray:
         """``(K, m, P)`` booleans: whether view v's sample counts at output index p (as ``count`` sums)."""
@@ -92,6 +103,7 @@ def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str, factors
     lo = np.clip(lo_f, -1, n + 1).astype(np.int64)
     hi = np.clip(hi_f, -1, n + 1).astype(np.int64)
     valid = lo <= hi
+    spline = np.zeros(len(offset), dtype=bool)
     safe = np.where(valid, offset, 0.0)                      # keeps huge |a| away from int conversion
     weights = np.zeros(offset.shape + (4,))
     if interpolation == "nearest":
@@ -107,6 +119,15 @@ def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str, factors
             ntaps = np.where(whole, 1, 2).astype(np.int64)
             weights[..., 0] = 1.0 - frac
             weights[..., 1] = frac
+        elif interpolation == "cubic-spline":
+            # a slice with any sample between lenses takes B-spline weights everywhere, whole lenses
+            # included (1/6, 2/3, 1/6: the filter of its sum turns them back into the lenses); a slice
+            # of whole lenses alone stays a gather
+            spline = ~whole.reshape(len(whole), -1).all(axis=1)
+            between = spline[:, None, None]
+            first = np.where(between, base - 1.0, base)
+            ntaps = np.where(between, 4, np.ones(offset.shape, dtype=np.int64))
+            weights[...] = np.where(between[..., None], bspline_weights(frac), np.array([1.0, 0.0, 0.0, 0.0]))
         else:
             first = np.where(whole, base, base - 1.0)
             ntaps = np.where(whole, 1, 4).astype(np.int64)
@@ -114,7 +135,8 @@ def axis_plan(slopes, m: int, n: int, upsample: int, interpolation: str, factors
                                     keys_cubic_weights(frac, KEYS_PARAMETER[interpolation]))
     c_order = np.ascontiguousarray     # one memory layout, so the kernels compile once per dtype
     plan = AxisPlan(offset=c_order(offset), first=c_order(first, dtype=np.int64), ntaps=c_order(ntaps),
-                    weights=c_order(weights), lo=c_order(lo), hi=c_order(hi), count=np.zeros((0, 0), np.int64))
+                    weights=c_order(weights), lo=c_order(lo), hi=c_order(hi), count=np.zeros((0, 0), np.int64),
+                    spline=spline)
     return dataclasses.replace(plan, count=c_order(plan.inside(n, s).sum(axis=1), dtype=np.int64))
 
 

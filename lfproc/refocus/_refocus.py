@@ -13,8 +13,9 @@ from ..errors import LfprocError
 from ._kernels import _gather_band, _interpolated_band, _interpolated_rows_band
 from ._per_view import refocus_per_view
 from ._plan import AxisPlan, axis_plan
+from ._spline import postfilter
 
-INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp")
+INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-sharp", "cubic-spline")
 
 #: dtypes the kernels read directly; other real dtypes are converted (see the module docstring)
 NATIVE_DTYPES = (np.dtype(np.float32), np.dtype(np.float64), np.dtype(np.uint16))
@@ -45,11 +46,11 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
-    interpolation : {"nearest", "linear", "cubic", "cubic-sharp"}
+    interpolation : {"nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"}
         How positions between lenses are read (module docstring). ``"linear"`` (the default here) and
-        ``"nearest"`` make the sharpest slice of a sweep snap to integer ``a``; ``"cubic-sharp"`` (the
-        default of the commands) does not. Irrelevant for integer ``a`` with
-        ``upsample = 1``, which is a pure gather.
+        ``"nearest"`` make the sharpest slice of a sweep snap to integer ``a``; ``"cubic-spline"`` (the
+        default of the commands: cubic spline interpolation) holds it at the true ``a``. Irrelevant for
+        integer ``a`` with ``upsample = 1``, which is a pure gather.
     upsample : int, optional
         Output grid ``s`` times finer: shape ``((Ny − 1)·s + 1, (Nx − 1)·s + 1)``, pixel (py, px) at lens
         position (py/s, px/s). ``1`` (default) is the lens grid itself. The output of the call (all K
@@ -104,7 +105,7 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
         bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
     if bad.any():
         first_bad = slopes[int(np.argmax(bad))]
-        if views.dtype == np.float64 and np.isfinite(views).all():
+        if np.isfinite(views).all():      # finite float64 beyond float32, or a cubic's overshoot near 3.4e38
             raise LfprocError(f"light field values exceed the float32 range; rescale them (largest magnitude "
                               f"{float(np.abs(views).max()):.3g}, e.g. divide by it) before refocusing "
                               f"(slice a={first_bad:g})")
@@ -114,6 +115,9 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     mask = getattr(lf, "view_mask", None)
     if mask is not None:
         out *= _masked_mean_factor(np.asarray(mask, dtype=bool), plan_y, plan_x, ny, nx, upsample)[..., None]
+    if plan_y.spline.any() or plan_x.spline.any():
+        postfilter(out, plan_y.spline, plan_x.spline, upsample)
+        _check_finite(out, slopes, views)
     return out[0] if scalar else out
 
 
@@ -157,6 +161,11 @@ def _view_mask(lf, m: int):
 
 def _check_finite(out: np.ndarray, slopes, views: np.ndarray) -> None:
     bad = ~np.isfinite(out).reshape(len(slopes), -1).all(axis=1)
+    if bad.any() and np.isfinite(views).all():
+        # finite views, non-finite slice: values beyond the float32 range (or a cubic spline's overshoot)
+        raise LfprocError(f"light field values exceed the float32 range in the slice a={slopes[int(np.argmax(bad))]:g}; "
+                          f"rescale them (largest magnitude {float(np.abs(views).max()):.3g}, e.g. divide by it) "
+                          "before refocusing")
     if bad.any():
         raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={slopes[int(np.argmax(bad))]:g}; "
                           "replace them (e.g. numpy.nan_to_num) before refocusing")
@@ -269,7 +278,7 @@ def _render(views: np.ndarray, plan_y: AxisPlan, plan_x: AxisPlan, upsample: int
     # per-view-row partial sums: float32 unless the views are float64 (module docstring, Precision)
     part = np.zeros(0, dtype=np.float64 if views.dtype == np.float64 else np.float32)
     if upsample == 1 and plan_y.whole_lens and plan_x.whole_lens:
-        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.lo), _phase0(plan_y.hi),
+        args = (flat, channels, _phase0(plan_y.first), _phase0(plan_y.ntaps), _phase0(plan_y.lo), _phase0(plan_y.hi),
                 _phase0(plan_x.first), _phase0(plan_x.lo), _phase0(plan_x.hi), plan_y.count, plan_x.count)
         kernel = _gather_band
     elif upsample == 1:

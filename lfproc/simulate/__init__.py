@@ -16,7 +16,7 @@ fractional a: the interpolation-bias ground truth).
 
 from ._microscope import (Bead, MicroscopeScene, Sheet, lens_of_point, render_microscope_sensor,
                           render_microscope_views)
-from ._plane_views import plane_views
+from ._plane_views import fourier_refocus, plane_views
 from ._render import SimulatedCapture, render, render_ideal_views, render_radiance, render_white
 from ._scene import Plane, Scene
 from ._scene_file import RenderOptions, SceneFile, load_scene_file, parse_scene_dict
@@ -30,6 +30,7 @@ __all__ = [
                         "MicroscopeScene",
                         "Sheet",
                         "lens_of_point",
+                        "fourier_refocus",
                         "plane_views",
                         "render_microscope_sensor",
                         "render_microscope_views",

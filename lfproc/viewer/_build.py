@@ -67,14 +67,14 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
         np.asarray(a_values, dtype=np.float64)
-    stack = refocus(lf, a_values)
+    stack = refocus(lf, a_values, interpolation="cubic-spline")     # the commands' default
     tone = ToneMap.for_images(stack)
     extension = image_extension(lf.lens_shape)
     jobs = []
     apertures = []
     for f_number in page_apertures(camera):
         summed = with_aperture(lf, f_number)
-        aperture_stack = stack if f_number is None else refocus(summed, a_values)
+        aperture_stack = stack if f_number is None else refocus(summed, a_values, interpolation="cubic-spline")
         folder = "slices" if f_number is None else f"slices/f{f_number:g}"
         apertures.append(_aperture_record(camera, summed.view_mask, f_number, a_values, stem, folder, extension))
         for k, record in enumerate(apertures[-1]["slices"]):
