@@ -21,6 +21,11 @@ from ..grid import ROW_SPACING, LensGrid
 
 #: lens classes whose cells are read separately (see the module docstring)
 CLASSES = 4
+#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
+MIN_OWN_WEIGHT = 0.05
+#: a sample carries signal where its white is at least this fraction of the bright level (per unit of
+#: its kernel's weight on its own cell): ``make_decoder``'s default ``dark_fraction``
+DARK_FRACTION = 0.05
 #: sensor rows converted at a time (bounded float64 temporaries)
 _CHUNK_ROWS = 256
 

@@ -13,7 +13,8 @@ from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_metho
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._cells import CLASSES, cell_classes, masked
+from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, masked
+from ._luma import luminance_views, with_colour
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
@@ -21,8 +22,6 @@ from ._whole_lenses import crop_to_whole_lenses
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
 LEVEL_SAMPLES = 4_000_000
-#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
-MIN_OWN_WEIGHT = 0.05
 
 
 def _band_rows(m_hat: int, cols: int, channels: int) -> int:
@@ -121,6 +120,9 @@ class Decoder:
     views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
     view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
     cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
+    luma_views: np.ndarray = None        # (m̂, m̂) bool: delivered views read from the Bayer mosaic (._luma), or None
+    luma_shift_px: np.ndarray = None     # (m̂, m̂, 2) where those are read off nominal (sensor px x, y)
+    inverse_luma: np.ndarray = None      # (n, rows, cols, 1) 1 / the white's mosaic readings of those n views
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -160,12 +162,15 @@ class Decoder:
                     hex_rows_to_rect(run, rows.start, out_rows, dst)
                 else:
                     dst[...] = run
+        if self.luma_views is not None and self.luma_views.any():     # their colour from the nominal reading
+            luma = luminance_views(sensor, self, read_band, _band_rows(m, grid.cols, 3))
+            out[self.luma_views] = with_colour(luma, out[self.luma_views])
         return out
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
                    interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
-                   cells=None) -> np.ndarray:
+                   cells=None, runs=None) -> np.ndarray:
     """1 / white views where the white carries signal in every channel and the view is delivered, else 0.
 
     Reading own cells (``cells``), a sample's white is compared with the threshold per unit of its kernel's
@@ -178,8 +183,8 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     bands = [range(r0, min(r0 + step, grid.rows)) for r0 in range(0, grid.rows, step)]
     for rows in bands:
         inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
-                                                        interpolation, shift, cells)
-    flat = inverse.reshape(-1)
+                                                        interpolation, shift, cells, runs)
+    flat = inverse.reshape(-1) if runs is None else inverse[delivered].reshape(-1)   # only those views were read
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
@@ -189,7 +194,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     for rows in bands:
         band = inverse[:, :, rows.start:rows.stop]
         weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
-                                                      interpolation, shift, cells)
+                                                      interpolation, shift, cells, runs)
         for ky in range(m_hat):      # per view row: the boolean temporaries stay small
             w = band[ky]
             # a sample carries signal only where every channel does: one dark channel alone would turn a
@@ -204,7 +209,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
 
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
                  interpolation: str = "linear", demosaic_method: str = "fast",
-                 dark_fraction: float = 0.05, centroid_tolerance: float | None = 0.1,
+                 dark_fraction: float = DARK_FRACTION, centroid_tolerance: float | None = 0.1,
                  whole_lenses: bool = True) -> Decoder:
     """Prepare a :class:`Decoder`: the views it delivers, the lenses it keeps, the white's inverse views.
 
@@ -244,27 +249,42 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
+    luma = luma_shift = inverse_luma = None
     if centroid_tolerance is None:
         delivered, shift, cells = np.ones((m_hat, m_hat), dtype=bool), None, None
     else:
         sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
         delivered, shift = sampling.delivered, sampling.shift_px
+        if sampling.luma is not None and sampling.luma.any():
+            luma, luma_shift = sampling.luma, sampling.luma_shift_px
     if whole_lenses:
-        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
+        reach = shift if luma is None else np.where(luma[..., None], luma_shift, shift)
+        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, reach)
     if grid.kind == "hexagonal":
         check_hex_size(grid.rows, grid.cols)
     if centroid_tolerance is not None:
         cells = cell_classes(grid, white.shape)
     inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
                              shift, cells)
+    if luma is not None:      # views read from the mosaic: the white's mosaic readings there
+        mosaic = _inverse_white(white, grid, m_hat, "none", demosaic_method, interpolation, dark_fraction, luma,
+                                luma_shift, cells, view_runs(luma))
+        kept = carrying_views(mosaic, luma)
+        delivered = delivered & ~(luma & ~kept)
+        luma = kept
+        inverse_luma = np.ascontiguousarray(mosaic[luma])
+        del mosaic
     if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
         kept = carrying_views(inverse, delivered)
+        if luma is not None:   # the colour of a mosaic-read view may be missing at some lenses: it is neutral there
+            kept |= luma
         inverse[~kept] = 0.0
         delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, luma, luma_shift,
+                   inverse_luma)
 
 
 def decode(sensor: np.ndarray, white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", **options):

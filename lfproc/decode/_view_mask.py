@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..grid import LensGrid
-from ._cells import cell_classes, lens_class
+from ._cells import DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, nearest_lens
 from ._demosaic import to_channels
 from ._positions import view_offsets_px
 from ._resample import cv_flag
@@ -60,6 +60,9 @@ PROBED_LENSES = 400
 MIN_PROBED = 4
 #: a view is delivered where it is lit (and right) at this fraction of the probed lenses
 REQUIRED_FRACTION = 0.9
+#: a moved view's samples must carry signal at this share of the lenses it is lit on: a margin over
+#: REQUIRED_FRACTION, which the decoder checks again on all the central lenses (the probe sees up to 400)
+COVERED_FRACTION = 0.95
 #: a view is lit at a lens where its white reaches this fraction of the central view's (channel mean)
 LIT_FRACTION = 0.4
 #: the lit disc is decoded centred when its centre is further than this (effective pixels) off the grid's
@@ -70,6 +73,17 @@ CENTRE_DECODING = False
 MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
 ITERATIONS = 10
+#: count the neighbour's light in pixels on the cell boundary as a ghost without parallax (see _own_parts)
+GHOSTS = True
+#: sub-pixel samples per axis that measure a boundary pixel's own part
+_SUBSAMPLES = 4
+#: Bayer mosaics: deliver the views demosaicing cannot reach by reading their luminance from the mosaic
+MOSAIC_LUMA = True
+#: their centroid tolerance, as a fraction of the others': they are the outermost views, which refocusing weighs
+#: most, and their residual is always inwards (they are read as far out as their samples carry signal)
+LUMA_TOLERANCE = 0.5
+#: probe planes per channel: white; own light's two first moments and level; flat, its moments; own cell
+PLANES = 8
 
 
 @dataclass(frozen=True)
@@ -89,6 +103,8 @@ class ViewSampling:
     centred: bool
     residual: np.ndarray
     lit: np.ndarray
+    luma: np.ndarray = None
+    luma_shift_px: np.ndarray = None
 
 
 def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, int]]:
@@ -111,10 +127,12 @@ class _Probe:
     origin: np.ndarray
     moments: np.ndarray
     channels: int
+    bright: float
 
 
-def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | None:
-    """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor)."""
+def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) -> _Probe | None:
+    """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor); ``mosaic``: a Bayer mosaic read
+    as it is, one channel (each pixel for what it saw), not demosaiced."""
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
     size = 2 * half + 2
@@ -130,17 +148,24 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
         patch[ys - y0:ye - y0, xs - x0:xe - x0] = white[ys:ye, xs:xe]
         yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
+        share, ox, oy = np.ones_like(dx), np.zeros_like(dx), np.zeros_like(dx)
         if own_cells:
             own = ((cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q))
                    & (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
+            if GHOSTS:
+                share, ox, oy = _own_parts(grid, r, q, xx, yy, own)
         if patch.ndim == 3:
-            dx, dy = dx[..., None], dy[..., None]
-        rx, ry = _lit_part_offsets(patch, dx, dy, cfa)      # where each pixel's lit rays are
+            dx, dy, share, ox, oy = (v[..., None] for v in (dx, dy, share, ox, oy))
+        rx, ry, frac = _lit_part_offsets(patch, dx + ox, dy + oy, cfa, share)   # where each pixel's own lit rays are
         ones = np.ones_like(patch)
-        # the white, its first moments, and the same of a flat image (the kernel's own centroid)
-        planes = [to_channels(p.astype(np.float32), cfa, demosaic_method)
-                  for p in (patch, patch * rx, patch * ry, ones, ones * dx, ones * dy)]
+        own_light = patch * share
+        # the white; its own light's first moments and level; the same of a flat image (the kernel's own
+        # centroid)
+        cell = ones * (own[..., None] if patch.ndim == 3 else own) if own_cells else ones
+        planes = [to_channels(p.astype(np.float32), "none" if mosaic else cfa, demosaic_method)
+                  for p in (frac * (patch > 0) if mosaic else patch, own_light * rx, own_light * ry, own_light,
+                            ones, ones * dx, ones * dy, cell)]
         tiles.append(np.concatenate(planes, axis=-1))
         origin.append((cx - x0, cy - y0 + len(origin) * size))
         moments.append((np.sum(patch), np.sum(patch * dx), np.sum(patch * dy)))   # raw, no demosaic
@@ -148,10 +173,35 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
         return None
     stack = np.concatenate(tiles, axis=0)
     groups = [np.ascontiguousarray(stack[..., c0:c0 + 4]) for c0 in range(0, stack.shape[2], 4)]
-    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), stack.shape[2] // 6)
+    channels = stack.shape[2] // PLANES
+    bright = float(np.percentile(stack[..., :channels], 99))
+    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), channels, bright)
 
 
-def _lit_part_offsets(patch, dx, dy, cfa):
+def _own_parts(grid, r, q, xx, yy, own):
+    """Per pixel of lens (r, q)'s own cell: the share of its area nearer to that lens than to any other, and
+    the centre of that part (x, y) from the pixel centre. Where micro images touch, the rest of a pixel on
+    the cell boundary holds the neighbour's light: rays from the other side of the main lens, a faint
+    ghost image rather than a shift, so it carries no parallax of this lens."""
+    sub = (np.arange(_SUBSAMPLES) + 0.5) / _SUBSAMPLES - 0.5
+    share, ox, oy = np.where(own, 1.0, 0.0), np.zeros_like(xx), np.zeros_like(xx)
+    inner = own.copy()
+    inner[1:] &= own[:-1]
+    inner[:-1] &= own[1:]
+    inner[:, 1:] &= own[:, :-1]
+    inner[:, :-1] &= own[:, 1:]
+    edge = own & ~inner
+    sx, sy = (v.ravel()[None] for v in np.meshgrid(sub, sub))
+    rr, qq = nearest_lens(grid, xx[edge][:, None] + sx, yy[edge][:, None] + sy)
+    mine = (rr == r) & (qq == q)
+    n = np.maximum(mine.sum(axis=1), 1)
+    share[edge] = mine.mean(axis=1)
+    ox[edge] = (mine * sx).sum(axis=1) / n
+    oy[edge] = (mine * sy).sum(axis=1) / n
+    return share, ox, oy
+
+
+def _lit_part_offsets(patch, dx, dy, cfa, width=1.0):
     """Where each pixel's lit rays are, from the lens centre: a pixel the rim of the micro image crosses is
     lit over its inner part only (lit fraction f of the full level), so its rays sit (1 − f)/2 px inwards
     of its centre along the radius. The full level is the median of the well lit pixels (above half the
@@ -167,11 +217,11 @@ def _lit_part_offsets(patch, dx, dy, cfa):
         ref = float(np.median(lit)) if lit.size else 0.0
         frac[sy, sx] = np.clip(sub / ref, 0.0, 1.0) if ref > 0 else 0.0
     rho = np.maximum(np.hypot(dx, dy), 1e-9)
-    pull = 0.5 * (1.0 - frac)
-    return dx - pull * dx / rho, dy - pull * dy / rho
+    pull = 0.5 * (1.0 - frac) * width
+    return dx - pull * dx / rho, dy - pull * dy / rho, frac
 
 
-def _centroids(probe: _Probe, off_x, off_y, flag):
+def _centroids(probe: _Probe, off_x, off_y, flag, channels=None, per_weight=False):
     """Per lens: white level ``(L, m̂, m̂, C)`` and the white-weighted centroid (x, y) of the samples, all
     channels together, from the lens centre, less the kernel's own centroid plus the sample position
     (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the sample
@@ -185,19 +235,28 @@ def _centroids(probe: _Probe, off_x, off_y, flag):
                                     borderValue=0).reshape(n, m, m, -1) for t in probe.tiles],
                          axis=-1).astype(np.float64)
     c = probe.channels
-    lvl, total, flat = got[..., :c], got[..., :c].sum(axis=-1), got[..., 3 * c:4 * c].sum(axis=-1)
+    sel = list(range(c)) if channels is None else list(channels)
+
+    def plane(i):       # plane i (white; own light's moments and level; flat, its moments), channels summed
+        return got[..., [i * c + ch for ch in sel]].sum(axis=-1)
+    lvl, total, flat = got[..., :c], plane(3), plane(4)
+    weight = got[..., 7 * c:8 * c]
+    # as the decoder does: a sample carries signal where its kernel weighs its own cell and the white there
+    lvl = np.where((weight > MIN_OWN_WEIGHT) & (lvl > DARK_FRACTION * probe.bright * weight), lvl, 0.0)
+    if per_weight:      # the level the sample stands for: its own cell's pixels only
+        lvl = lvl / np.maximum(weight, MIN_OWN_WEIGHT)
     with np.errstate(invalid="ignore", divide="ignore"):
-        own_x = got[..., 4 * c:5 * c].sum(axis=-1) / flat - off_x
-        own_y = got[..., 5 * c:].sum(axis=-1) / flat - off_y
-        gx = np.where(total > 0, got[..., c:2 * c].sum(axis=-1) / total - own_x, np.nan)
-        gy = np.where(total > 0, got[..., 2 * c:3 * c].sum(axis=-1) / total - own_y, np.nan)
-    return lvl, gx, gy
+        own_x = plane(5) / flat - off_x
+        own_y = plane(6) / flat - off_y
+        gx = np.where(total > 0, plane(1) / total - own_x, np.nan)
+        gy = np.where(total > 0, plane(2) / total - own_y, np.nan)
+    return lvl[..., sel], gx, gy
 
 
-def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag):
+def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag, channels=None):
     """Mean centroid error (x, y) over the lenses where each view is lit, ``(m̂, m̂)`` each (px), and the
     share of those lenses on which the samples read light in every channel (the mean is over them)."""
-    level, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
+    level, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag, channels)
     ex, ey = gx - tx, gy - ty
     use = lit & np.isfinite(ex) & np.isfinite(ey) & (level.min(axis=-1) > 0)
     n = use.sum(axis=0)
@@ -213,22 +272,22 @@ def disc_centre(probe: _Probe) -> tuple[float, float]:
     return (float(np.mean(mx[ok] / total[ok])), float(np.mean(my[ok] / total[ok]))) if ok.any() else (0.0, 0.0)
 
 
-def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
+def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff, channels=None, max_shift=None):
     """Per-view shifts moving the mean white-weighted centroid onto nominal, and the residual (eff. px)."""
     m_hat = nom_x.shape[0]
     base = shift.copy()
     best, best_err = shift.copy(), np.full((m_hat, m_hat), np.inf)
     for i in range(ITERATIONS + 1):
-        ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
+        ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag, channels)
         err = np.hypot(ex, ey)
-        better = (err < best_err) & (covered >= REQUIRED_FRACTION)
+        better = (err < best_err) & (covered >= COVERED_FRACTION)
         best[better], best_err[better] = shift[better], err[better]
         if i == ITERATIONS:
             break
         step = np.stack([np.nan_to_num(ex, posinf=0.0), np.nan_to_num(ey, posinf=0.0)], axis=-1)
         shift = shift - step
         away = np.hypot(*np.moveaxis(shift - base, -1, 0))
-        shift = base + (shift - base) * np.minimum(1.0, MAX_SHIFT * eff / np.maximum(away, 1e-12))[..., None]
+        shift = base + (shift - base) * np.minimum(1.0, (MAX_SHIFT if max_shift is None else max_shift) * eff / np.maximum(away, 1e-12))[..., None]
     return best, best_err / eff
 
 
@@ -283,7 +342,25 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     delivered[c, c] = delivered[c, c] or not lit.any()
     delivered = symmetric(delivered)
     shift[~delivered] = 0.0
-    return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share)
+    luma, luma_shift = np.zeros((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2))
+    if MOSAIC_LUMA and cfa != "none" and white.ndim == 2 and np.any((lit_share >= REQUIRED_FRACTION) & ~delivered):
+        # Bayer: the views demosaicing cannot reach, read from the mosaic as it is (every pixel for its rays)
+        mosaic = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True,
+                         mosaic=True)
+        start = np.where(delivered[..., None], 0.0, shift)
+        luma_shift, luma_residual = _corrected(mosaic, nom_x, nom_y, tx, ty, start, lit, flag, eff)
+        # where they are read, they still read the lit micro image (not stray light in the gaps between them)
+        moved, _, _ = _centroids(mosaic, nom_x + luma_shift[..., 0], nom_y + luma_shift[..., 1], flag,
+                                 per_weight=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            moved_lit = np.nan_to_num(moved[..., 0] / moved[:, c:c + 1, c:c + 1, 0], nan=0.0) >= LIT_FRACTION
+        luma = symmetric((lit_share >= REQUIRED_FRACTION) & ~delivered
+                         & ((moved_lit & lit).sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1))
+                         & (mirror_mean(luma_residual) <= LUMA_TOLERANCE * tolerance))
+        residual = np.where(luma, luma_residual, residual)
+        luma_shift[~luma] = 0.0
+        delivered = delivered | luma
+    return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share, luma, luma_shift)
 
 
 def mirror_mean(values: np.ndarray) -> np.ndarray:
