@@ -184,7 +184,9 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     for rows in bands:
         inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
                                                         interpolation, shift, cells, runs)
-    flat = inverse.reshape(-1) if runs is None else inverse[delivered].reshape(-1)   # only those views were read
+    if runs is not None:     # only the runs' views were read
+        inverse[~delivered] = 0.0
+    flat = inverse.reshape(-1) if runs is None else inverse[delivered].reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
@@ -199,7 +201,8 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
             w = band[ky]
             # a sample carries signal only where every channel does: one dark channel alone would turn a
             # neutral sample magenta or green
-            lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
+            own = None if weight is None else np.where(delivered[ky, :, None, None, None], weight[ky], 0.0)
+            lit = w > threshold if own is None else (own > MIN_OWN_WEIGHT) & (w > threshold * own)
             signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
             np.divide(np.float32(1.0), w, out=w, where=signal)
             w[~signal] = 0.0

@@ -28,17 +28,23 @@ off, so that nearest-neighbour reading is not counted against the white image:
    division by the white image would amplify them.
 3. **Where to read them.** A view whose centroid is right at nominal (within ``tolerance`` at
    :data:`REQUIRED_FRACTION` of the lenses it is lit on) is read there. Any other view is moved off
-   nominal until the white-weighted centroid of its samples, averaged over the probed lenses on which
-   they read light in every channel, is the nominal position (:data:`ITERATIONS` fixed-point steps, at
-   most :data:`MAX_SHIFT` effective pixels; a larger move over-corrected the renders, +0.011 in a). A
-   pixel the rim of the micro image crosses counts at the centre of its lit part
-   (:func:`_lit_part_offsets`): without that the outer ring stayed compressed (−0.03…−0.07 in a).
+   nominal until the centroid of its samples' own light, averaged over the probed lenses on which they
+   carry signal in every channel (as the decoder decides, at :data:`COVERED_FRACTION` of them), is the
+   nominal position (:data:`ITERATIONS` fixed-point steps, at most :data:`MAX_SHIFT` effective pixels).
+   A pixel the rim of the micro image crosses counts at the centre of its lit part
+   (:func:`_lit_part_offsets`); a pixel on the cell boundary of micro images that touch counts with its
+   own part only (:func:`._cells.own_parts`: the rest is the neighbour's light, a ghost without this
+   lens's parallax; counted as own, the outer ring stayed 1.5 % compressed, also on mono sensors).
+4. **Bayer: from the mosaic.** Views that demosaicing cannot reach (red and blue at the rim are two
+   pixels apart) are read from the mosaic as it is, every pixel for its own rays (:mod:`._luma`), if
+   there their centroid is within :data:`LUMA_TOLERANCE` of ``tolerance`` and they still read the lit
+   micro image (not stray light in the gaps).
 
 A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its
 (corrected) centroid is right (a moved view: the mean residual of it and its mirror images, which are
-delivered together, within ``tolerance``; their differences are the probe's noise); the set is made symmetric (a view and its mirror images both or
-neither), so slices stay evenly bright, and :func:`carrying_views` drops views whose samples carry no
-signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
+delivered together, within ``tolerance``; their differences are the probe's noise); the set is made
+symmetric (a view and its mirror images both or neither), so slices stay evenly bright, and
+:func:`carrying_views` drops views whose samples carry no signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
 """
 
 from __future__ import annotations
@@ -49,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..grid import LensGrid
-from ._cells import DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, nearest_lens
+from ._cells import DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, own_parts
 from ._demosaic import to_channels
 from ._positions import view_offsets_px
 from ._resample import cv_flag
@@ -73,7 +79,7 @@ CENTRE_DECODING = False
 MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
 ITERATIONS = 10
-#: count the neighbour's light in pixels on the cell boundary as a ghost without parallax (see _own_parts)
+#: count the neighbour's light in pixels on the cell boundary as a ghost without parallax (:func:`._cells.own_parts`)
 GHOSTS = True
 #: sub-pixel samples per axis that measure a boundary pixel's own part
 _SUBSAMPLES = 4
@@ -119,9 +125,10 @@ def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, 
 @dataclass(frozen=True)
 class _Probe:
     """The probed lenses' patches side by side: ``tiles`` is a list of contiguous ``(L·S, S, ≤4)`` float32
-    images holding, per lens, the demosaiced white, its first moments, and those of a flat image
-    (channels ``6C`` in all); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments``
-    ``(L, 3)`` the raw own-cell white's sum and first moments (for the disc centre)."""
+    images holding, per lens, :data:`PLANES` planes of ``C`` channels (the demosaiced white, or for a mosaic
+    probe its lit fraction; its own light's first moments and level; a flat image and its first moments;
+    the own cell); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments`` ``(L, 3)`` the
+    raw own-cell white's sum and first moments (for the disc centre); ``bright`` the white's bright level."""
 
     tiles: list
     origin: np.ndarray
@@ -154,7 +161,7 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) 
                    & (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
             if GHOSTS:
-                share, ox, oy = _own_parts(grid, r, q, xx, yy, own)
+                share, ox, oy = own_parts(grid, r, q, xx, yy, own, _SUBSAMPLES)
         if patch.ndim == 3:
             dx, dy, share, ox, oy = (v[..., None] for v in (dx, dy, share, ox, oy))
         rx, ry, frac = _lit_part_offsets(patch, dx + ox, dy + oy, cfa, share)   # where each pixel's own lit rays are
@@ -178,35 +185,13 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) 
     return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), channels, bright)
 
 
-def _own_parts(grid, r, q, xx, yy, own):
-    """Per pixel of lens (r, q)'s own cell: the share of its area nearer to that lens than to any other, and
-    the centre of that part (x, y) from the pixel centre. Where micro images touch, the rest of a pixel on
-    the cell boundary holds the neighbour's light: rays from the other side of the main lens, a faint
-    ghost image rather than a shift, so it carries no parallax of this lens."""
-    sub = (np.arange(_SUBSAMPLES) + 0.5) / _SUBSAMPLES - 0.5
-    share, ox, oy = np.where(own, 1.0, 0.0), np.zeros_like(xx), np.zeros_like(xx)
-    inner = own.copy()
-    inner[1:] &= own[:-1]
-    inner[:-1] &= own[1:]
-    inner[:, 1:] &= own[:, :-1]
-    inner[:, :-1] &= own[:, 1:]
-    edge = own & ~inner
-    sx, sy = (v.ravel()[None] for v in np.meshgrid(sub, sub))
-    rr, qq = nearest_lens(grid, xx[edge][:, None] + sx, yy[edge][:, None] + sy)
-    mine = (rr == r) & (qq == q)
-    n = np.maximum(mine.sum(axis=1), 1)
-    share[edge] = mine.mean(axis=1)
-    ox[edge] = (mine * sx).sum(axis=1) / n
-    oy[edge] = (mine * sy).sum(axis=1) / n
-    return share, ox, oy
-
-
 def _lit_part_offsets(patch, dx, dy, cfa, width=1.0):
     """Where each pixel's lit rays are, from the lens centre: a pixel the rim of the micro image crosses is
     lit over its inner part only (lit fraction f of the full level), so its rays sit (1 − f)/2 px inwards
     of its centre along the radius. The full level is the median of the well lit pixels (above half the
     brightest) of the same Bayer phase (mono: of the patch), so that the gentle fall-off of the interior
-    does not count as a rim."""
+    does not count as a rim. ``width``: of the pixel's own part along the radius (a pixel on the cell
+    boundary, :func:`._cells.own_parts`). Returns the rays' position (x, y) and f."""
     frac = np.zeros_like(patch)
     phases = [(slice(py, None, 2), slice(px, None, 2)) for py in (0, 1) for px in (0, 1)] if (
         cfa != "none" and patch.ndim == 2) else [(slice(None), slice(None))]
@@ -221,11 +206,12 @@ def _lit_part_offsets(patch, dx, dy, cfa, width=1.0):
     return dx - pull * dx / rho, dy - pull * dy / rho, frac
 
 
-def _centroids(probe: _Probe, off_x, off_y, flag, channels=None, per_weight=False):
-    """Per lens: white level ``(L, m̂, m̂, C)`` and the white-weighted centroid (x, y) of the samples, all
-    channels together, from the lens centre, less the kernel's own centroid plus the sample position
-    (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the sample
-    position (nearest neighbour) is not a fault of the white image."""
+def _centroids(probe: _Probe, off_x, off_y, flag, per_weight=False):
+    """Per lens: white level ``(L, m̂, m̂, C)`` (0 where the sample carries no signal, as the decoder decides;
+    ``per_weight``: per unit of the kernel's weight on the own cell) and the centroid (x, y) of the samples'
+    own light, all channels together, from the lens centre, less the kernel's own centroid plus the sample
+    position (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the
+    sample position (nearest neighbour) is not a fault of the white image."""
     import cv2
 
     n, m = probe.origin.shape[0], off_x.shape[0]
@@ -235,10 +221,9 @@ def _centroids(probe: _Probe, off_x, off_y, flag, channels=None, per_weight=Fals
                                     borderValue=0).reshape(n, m, m, -1) for t in probe.tiles],
                          axis=-1).astype(np.float64)
     c = probe.channels
-    sel = list(range(c)) if channels is None else list(channels)
 
     def plane(i):       # plane i (white; own light's moments and level; flat, its moments), channels summed
-        return got[..., [i * c + ch for ch in sel]].sum(axis=-1)
+        return got[..., i * c:(i + 1) * c].sum(axis=-1)
     lvl, total, flat = got[..., :c], plane(3), plane(4)
     weight = got[..., 7 * c:8 * c]
     # as the decoder does: a sample carries signal where its kernel weighs its own cell and the white there
@@ -250,13 +235,13 @@ def _centroids(probe: _Probe, off_x, off_y, flag, channels=None, per_weight=Fals
         own_y = plane(6) / flat - off_y
         gx = np.where(total > 0, plane(1) / total - own_x, np.nan)
         gy = np.where(total > 0, plane(2) / total - own_y, np.nan)
-    return lvl[..., sel], gx, gy
+    return lvl, gx, gy
 
 
-def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag, channels=None):
+def _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag):
     """Mean centroid error (x, y) over the lenses where each view is lit, ``(m̂, m̂)`` each (px), and the
     share of those lenses on which the samples read light in every channel (the mean is over them)."""
-    level, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag, channels)
+    level, gx, gy = _centroids(planes, nom_x + shift[..., 0], nom_y + shift[..., 1], flag)
     ex, ey = gx - tx, gy - ty
     use = lit & np.isfinite(ex) & np.isfinite(ey) & (level.min(axis=-1) > 0)
     n = use.sum(axis=0)
@@ -272,13 +257,13 @@ def disc_centre(probe: _Probe) -> tuple[float, float]:
     return (float(np.mean(mx[ok] / total[ok])), float(np.mean(my[ok] / total[ok]))) if ok.any() else (0.0, 0.0)
 
 
-def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff, channels=None, max_shift=None):
+def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
     """Per-view shifts moving the mean white-weighted centroid onto nominal, and the residual (eff. px)."""
     m_hat = nom_x.shape[0]
     base = shift.copy()
     best, best_err = shift.copy(), np.full((m_hat, m_hat), np.inf)
     for i in range(ITERATIONS + 1):
-        ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag, channels)
+        ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
         err = np.hypot(ex, ey)
         better = (err < best_err) & (covered >= COVERED_FRACTION)
         best[better], best_err[better] = shift[better], err[better]
@@ -287,7 +272,7 @@ def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff, channels=Non
         step = np.stack([np.nan_to_num(ex, posinf=0.0), np.nan_to_num(ey, posinf=0.0)], axis=-1)
         shift = shift - step
         away = np.hypot(*np.moveaxis(shift - base, -1, 0))
-        shift = base + (shift - base) * np.minimum(1.0, (MAX_SHIFT if max_shift is None else max_shift) * eff / np.maximum(away, 1e-12))[..., None]
+        shift = base + (shift - base) * np.minimum(1.0, MAX_SHIFT * eff / np.maximum(away, 1e-12))[..., None]
     return best, best_err / eff
 
 
