@@ -14,7 +14,7 @@ from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_gr
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
 from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, masked
-from ._luma import luminance_views, with_colour
+from ._luma import inverse_mosaic_white, luminance_views, mean_colour, with_colour
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
@@ -163,14 +163,15 @@ class Decoder:
                 else:
                     dst[...] = run
         if self.luma_views is not None and self.luma_views.any():     # their colour from the nominal reading
-            luma = luminance_views(sensor, self, read_band, _band_rows(m, grid.cols, 3))
+            gains = mean_colour(out[(m - 1) // 2, (m - 1) // 2])
+            luma = luminance_views(sensor, self, gains)
             out[self.luma_views] = with_colour(luma, out[self.luma_views])
         return out
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
                    interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
-                   cells=None, runs=None) -> np.ndarray:
+                   cells=None) -> np.ndarray:
     """1 / white views where the white carries signal in every channel and the view is delivered, else 0.
 
     Reading own cells (``cells``), a sample's white is compared with the threshold per unit of its kernel's
@@ -183,10 +184,8 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     bands = [range(r0, min(r0 + step, grid.rows)) for r0 in range(0, grid.rows, step)]
     for rows in bands:
         inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
-                                                        interpolation, shift, cells, runs)
-    if runs is not None:     # only the runs' views were read
-        inverse[~delivered] = 0.0
-    flat = inverse.reshape(-1) if runs is None else inverse[delivered].reshape(-1)
+                                                        interpolation, shift, cells)
+    flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
     if not bright > 0:
@@ -196,13 +195,12 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     for rows in bands:
         band = inverse[:, :, rows.start:rows.stop]
         weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
-                                                      interpolation, shift, cells, runs)
+                                                      interpolation, shift, cells)
         for ky in range(m_hat):      # per view row: the boolean temporaries stay small
             w = band[ky]
             # a sample carries signal only where every channel does: one dark channel alone would turn a
             # neutral sample magenta or green
-            own = None if weight is None else np.where(delivered[ky, :, None, None, None], weight[ky], 0.0)
-            lit = w > threshold if own is None else (own > MIN_OWN_WEIGHT) & (w > threshold * own)
+            lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
             signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
             np.divide(np.float32(1.0), w, out=w, where=signal)
             w[~signal] = 0.0
@@ -270,13 +268,10 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
                              shift, cells)
     if luma is not None:      # views read from the mosaic: the white's mosaic readings there
-        mosaic = _inverse_white(white, grid, m_hat, "none", demosaic_method, interpolation, dark_fraction, luma,
-                                luma_shift, cells, view_runs(luma))
-        kept = carrying_views(mosaic, luma)
+        inverse_luma = inverse_mosaic_white(white, grid, m_hat, cells, luma, luma_shift, dark_fraction)
+        kept = carrying_views(inverse_luma, luma)
         delivered = delivered & ~(luma & ~kept)
-        luma = kept
-        inverse_luma = np.ascontiguousarray(mosaic[luma])
-        del mosaic
+        inverse_luma, luma = inverse_luma[kept[luma]], kept
     if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
         kept = carrying_views(inverse, delivered)
         if luma is not None:   # the colour of a mosaic-read view may be missing at some lenses: it is neutral there

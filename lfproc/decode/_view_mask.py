@@ -36,7 +36,7 @@ off, so that nearest-neighbour reading is not counted against the white image:
    own part only (:func:`._cells.own_parts`: the rest is the neighbour's light, a ghost without this
    lens's parallax; counted as own, the outer ring stayed 1.5 % compressed, also on mono sensors).
 4. **Bayer: from the mosaic.** Views that demosaicing cannot reach (red and blue at the rim are two
-   pixels apart) are read from the mosaic as it is, every pixel for its own rays (:mod:`._luma`), if
+   pixels apart) are read from the mosaic as it is (linear interpolation), every pixel for its own rays (:mod:`._luma`), if
    there their centroid is within :data:`LUMA_TOLERANCE` of ``tolerance`` and they still read the lit
    micro image (not stray light in the gaps).
 
@@ -328,7 +328,8 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     delivered = symmetric(delivered)
     shift[~delivered] = 0.0
     luma, luma_shift = np.zeros((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2))
-    if MOSAIC_LUMA and cfa != "none" and white.ndim == 2 and np.any((lit_share >= REQUIRED_FRACTION) & ~delivered):
+    if (MOSAIC_LUMA and cfa != "none" and white.ndim == 2 and interpolation == "linear"
+            and np.any((lit_share >= REQUIRED_FRACTION) & ~delivered)):
         # Bayer: the views demosaicing cannot reach, read from the mosaic as it is (every pixel for its rays)
         mosaic = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True,
                          mosaic=True)
@@ -355,11 +356,15 @@ def mirror_mean(values: np.ndarray) -> np.ndarray:
 
 def carrying_views(inverse: np.ndarray, delivered: np.ndarray) -> np.ndarray:
     """``delivered`` less the views whose samples carry signal (non-zero inverse white) at fewer than
-    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric."""
-    rows, cols = inverse.shape[2:4]
+    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric. ``inverse`` is ``(m̂, m̂, rows, cols,
+    C)``, or ``(n, rows, cols, C)`` holding only the ``delivered`` views (row-major)."""
+    rows, cols = inverse.shape[-3:-1]
     r0, r1 = (int(0.2 * rows), int(math.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
     q0, q1 = (int(0.2 * cols), int(math.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
-    share = (inverse[:, :, r0:r1, q0:q1] != 0).any(axis=-1).mean(axis=(2, 3))
+    carried = (inverse[..., r0:r1, q0:q1, :] != 0).any(axis=-1).mean(axis=(-2, -1))
+    share = carried if inverse.ndim == 5 else np.zeros(delivered.shape)
+    if inverse.ndim == 4:
+        share[delivered] = carried
     return symmetric(delivered & (share >= REQUIRED_FRACTION))
 
 
