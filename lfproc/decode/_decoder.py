@@ -14,7 +14,7 @@ from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_gr
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
 from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, masked
-from ._luma import inverse_mosaic_white, luminance_views, mean_colour, with_colour
+from ._luma import inverse_mosaic_white, luminance_views, with_colour
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
@@ -163,8 +163,7 @@ class Decoder:
                 else:
                     dst[...] = run
         if self.luma_views is not None and self.luma_views.any():     # their colour from the nominal reading
-            gains = mean_colour(out[(m - 1) // 2, (m - 1) // 2])
-            luma = luminance_views(sensor, self, gains)
+            luma = luminance_views(sensor, self)
             out[self.luma_views] = with_colour(luma, out[self.luma_views])
         return out
 

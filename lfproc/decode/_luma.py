@@ -29,21 +29,17 @@ from ._positions import lens_centers, lens_offsets_px
 
 #: lenses per side over which a mosaic-read view's colour is averaged
 CHROMA_LENSES = 3
+#: lenses per side over which the colour that makes its brightness is averaged (wider: the nominal readings'
+#: channels are read at centroids up to half an effective pixel apart, and their texture must stay out)
+GAIN_LENSES = 7
 
 
-def _colour_factors(cfa: str, gains) -> np.ndarray:
-    """``(2, 2)`` factor of each pixel of the Bayer pattern: 1 / its colour's gain."""
-    factor = np.empty((2, 2), dtype=np.float64)
-    for (py, px), colour in zip(((0, 0), (0, 1), (1, 0), (1, 1)), cfa):
-        factor[py, px] = 1.0 / gains["RGB".index(colour)]
-    return factor
-
-
-def _read(image: np.ndarray, factor: np.ndarray, grid, m_hat: int, cells: np.ndarray, ky: int, kx: int,
+def _read(image: np.ndarray, colours: np.ndarray, grid, m_hat: int, cells: np.ndarray, ky: int, kx: int,
           shift) -> tuple[np.ndarray, np.ndarray]:
-    """View (ky, kx) of every lens read from the mosaic ``image`` as it is (bilinear, each pixel times its
-    ``factor``), from the lens's own cell only: ``(rows, cols)`` weighted sums and the kernel's weight on
-    the own cell. A direct gather: the few views read this way cost in proportion to their samples."""
+    """View (ky, kx) of every lens read from the mosaic ``image`` as it is (bilinear), from the lens's own cell
+    only: ``(C, rows, cols)`` weighted sums of the pixels of each colour (``colours`` ``(2, 2)``: the index
+    of each Bayer position's colour, C = its maximum + 1) and ``(rows, cols)`` the kernel's weight on the
+    own cell. A direct gather: the few views read this way cost in proportion to their samples."""
     rows = range(grid.rows)
     off_x, off_y = lens_offsets_px(grid, m_hat, rows, shift)
     centres = lens_centers(grid, rows)
@@ -53,13 +49,15 @@ def _read(image: np.ndarray, factor: np.ndarray, grid, m_hat: int, cells: np.nda
     x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
     fx, fy = x - x0, y - y0
     height, width = image.shape
-    total, weight = np.zeros(x.shape), np.zeros(x.shape)
+    total, weight = np.zeros((int(colours.max()) + 1,) + x.shape), np.zeros(x.shape)
     for dy, dx, w in ((0, 0, (1 - fx) * (1 - fy)), (0, 1, fx * (1 - fy)), (1, 0, (1 - fx) * fy), (1, 1, fx * fy)):
         xi, yi = x0 + dx, y0 + dy
         inside = (xi >= 0) & (xi < width) & (yi >= 0) & (yi < height)
         xi, yi = np.clip(xi, 0, width - 1), np.clip(yi, 0, height - 1)
         w = np.where(inside & (cells[yi, xi] == own_class), w, 0.0)
-        total += w * image[yi, xi] * factor[yi % 2, xi % 2]
+        value, colour = w * image[yi, xi], colours[yi % 2, xi % 2]
+        for c in range(total.shape[0]):
+            total[c] += np.where(colour == c, value, 0.0)
         weight += w
     return total, weight
 
@@ -69,9 +67,9 @@ def inverse_mosaic_white(white: np.ndarray, grid, m_hat: int, cells: np.ndarray,
     """``(n, rows, cols, 1)`` 1 / the white's mosaic readings of the ``luma`` views (row-major), 0 where a
     sample carries no signal: less than ``MIN_OWN_WEIGHT`` of its kernel on its own cell, or a white below
     ``dark_fraction`` of the readings' bright level (99th percentile) per unit of that weight."""
-    ones = np.ones((2, 2))
-    read = [_read(white, ones, grid, m_hat, cells, ky, kx, shift) for ky, kx in np.argwhere(luma)]
-    level = np.stack([total for total, _ in read])
+    single = np.zeros((2, 2), dtype=np.int64)
+    read = [_read(white, single, grid, m_hat, cells, ky, kx, shift) for ky, kx in np.argwhere(luma)]
+    level = np.stack([total[0] for total, _ in read])
     weight = np.stack([w for _, w in read])
     bright = float(np.percentile(level, 99)) if level.size else 0.0
     signal = (weight > MIN_OWN_WEIGHT) & (level > dark_fraction * bright * weight) & (level > 0)
@@ -79,43 +77,51 @@ def inverse_mosaic_white(white: np.ndarray, grid, m_hat: int, cells: np.ndarray,
     return inverse[..., None].astype(np.float32)
 
 
-def mean_colour(view: np.ndarray) -> np.ndarray:
-    """``(3,)`` mean colour of the samples of a ``view`` ``(Ny, Nx, 3)`` that carry signal, channel mean 1."""
-    samples = view.reshape(-1, view.shape[-1])
-    samples = samples[np.all(samples != 0, axis=-1)]
-    mean = samples.mean(axis=0) if samples.size else np.ones(view.shape[-1])
-    return mean / mean.mean() if np.all(mean > 0) else np.ones(view.shape[-1])
-
-
-def luminance_views(sensor: np.ndarray, decoder, gains: np.ndarray) -> np.ndarray:
-    """``(n, Ny, Nx, 1)`` brightness of the decoder's ``luma_views`` (row-major order): the mosaic, each pixel
-    divided by its colour's gain, read as it is and devignetted by the white's mosaic reading."""
+def luminance_views(sensor: np.ndarray, decoder) -> np.ndarray:
+    """``(n, Ny, Nx, 3)`` mosaic readings of the decoder's ``luma_views`` (row-major order), devignetted by the
+    white's mosaic reading and split by the colour of the pixels they read (their sum is the reading)."""
     grid, out_grid = decoder.grid, decoder.output_grid
-    factor = _colour_factors(decoder.cfa, gains)
-    views = np.stack([_read(sensor, factor, grid, decoder.m_hat, decoder.cells, ky, kx, decoder.luma_shift_px)[0]
-                      for ky, kx in np.argwhere(decoder.luma_views)]).astype(np.float32)[..., None]
-    views *= decoder.inverse_luma
+    colours = np.empty((2, 2), dtype=np.int64)
+    for (py, px), colour in zip(((0, 0), (0, 1), (1, 0), (1, 1)), decoder.cfa):
+        colours[py, px] = "RGB".index(colour)
+    views = np.stack([_read(sensor, colours, grid, decoder.m_hat, decoder.cells, ky, kx, decoder.luma_shift_px)[0]
+                      for ky, kx in np.argwhere(decoder.luma_views)]).astype(np.float32)
+    views = np.moveaxis(views, 1, -1) * decoder.inverse_luma
     if grid.kind != "hexagonal":
         return views
-    out = np.zeros((views.shape[0], out_grid.rows, out_grid.cols, 1), dtype=np.float32)
+    out = np.zeros((views.shape[0], out_grid.rows, out_grid.cols, 3), dtype=np.float32)
     hex_rows_to_rect(views[None], 0, range(out_grid.rows), out[None])
     return out
 
 
-def _box(values: np.ndarray) -> np.ndarray:
-    """Mean over :data:`CHROMA_LENSES` × :data:`CHROMA_LENSES` lenses of ``(n, Ny, Nx, C)`` (zero beyond)."""
+def _box(values: np.ndarray, lenses: int) -> np.ndarray:
+    """Mean over ``lenses`` × ``lenses`` lenses of ``(n, Ny, Nx, C)`` (zero beyond)."""
     from scipy import ndimage
 
-    return ndimage.uniform_filter(values, size=(1, CHROMA_LENSES, CHROMA_LENSES, 1), mode="constant")
+    return ndimage.uniform_filter(values, size=(1, lenses, lenses, 1), mode="constant")
 
 
-def with_colour(brightness: np.ndarray, nominal: np.ndarray) -> np.ndarray:
-    """``(n, Ny, Nx, 3)`` views from their brightness (:func:`luminance_views`) and their demosaiced readings
-    at nominal ``nominal``: the local colour (nominal readings over :data:`CHROMA_LENSES` ×
-    :data:`CHROMA_LENSES` lenses, channel mean 1) times the brightness; neutral where no colour is known;
-    the nominal reading where the mosaic reading carries no signal. All devignetted, 0 where no signal."""
+def _channel_mean_one(values: np.ndarray) -> np.ndarray:
+    """``values`` ``(..., 3)`` scaled to channel mean 1 where every channel is positive, else 1 (neutral)."""
+    ok = np.all(values > 0, axis=-1, keepdims=True)
+    return np.where(ok, values / np.where(ok, values.mean(axis=-1, keepdims=True), 1.0), np.float32(1.0))
+
+
+def with_colour(parts: np.ndarray, nominal: np.ndarray) -> np.ndarray:
+    """``(n, Ny, Nx, 3)`` views from their mosaic readings split by colour (``parts``, :func:`luminance_views`)
+    and their demosaiced readings at nominal ``nominal``, all devignetted, 0 where a sample carries no signal.
+
+    The brightness of a sample is ``T = Σ_c part_c / g_c``, each colour's part divided by the scene's
+    colour g there (the nominal readings over :data:`GAIN_LENSES` × :data:`GAIN_LENSES` lenses, channel
+    mean 1): a red pixel on a red surface reads bright, a blue one dark, and without g a coloured scene
+    would print the Bayer pattern into these views. The sample is ``C · T`` with C the local colour (over
+    :data:`CHROMA_LENSES` × :data:`CHROMA_LENSES` lenses, channel mean 1, so that it does not change the
+    brightness). Where no colour is known it is neutral; where the mosaic reading carries no signal the
+    nominal reading stays.
+    """
     known = np.all(nominal != 0, axis=-1, keepdims=True)
-    local = _box(np.where(known, nominal, np.float32(0.0)))
-    local_ok = np.all(local > 0, axis=-1, keepdims=True)
-    colour = np.where(local_ok, local / np.where(local_ok, local.mean(axis=-1, keepdims=True), 1.0), 1.0)
-    return np.where(brightness != 0, colour * brightness, nominal).astype(np.float32)
+    lit = np.where(known, nominal, np.float32(0.0))
+    gains = _channel_mean_one(_box(lit, GAIN_LENSES))
+    brightness = np.sum(parts / gains, axis=-1, keepdims=True)
+    colour = _channel_mean_one(_box(lit, CHROMA_LENSES))
+    return np.where(np.any(parts != 0, axis=-1, keepdims=True), colour * brightness, nominal).astype(np.float32)
