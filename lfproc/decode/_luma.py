@@ -34,32 +34,36 @@ CHROMA_LENSES = 3
 GAIN_LENSES = 7
 
 
-def _read(image: np.ndarray, colours: np.ndarray, grid, m_hat: int, cells: np.ndarray, ky: int, kx: int,
+def _read(image: np.ndarray, colours: np.ndarray, grid, m_hat: int, cells: np.ndarray, luma,
           shift) -> tuple[np.ndarray, np.ndarray]:
-    """View (ky, kx) of every lens read from the mosaic ``image`` as it is (bilinear), from the lens's own cell
-    only: ``(C, rows, cols)`` weighted sums of the pixels of each colour (``colours`` ``(2, 2)``: the index
-    of each Bayer position's colour, C = its maximum + 1) and ``(rows, cols)`` the kernel's weight on the
-    own cell. A direct gather: the few views read this way cost in proportion to their samples."""
+    """The ``luma`` views (row-major) of every lens read from the mosaic ``image`` as it is (bilinear), from
+    the lens's own cell only: ``(C, n, rows, cols)`` weighted sums of the pixels of each colour
+    (``colours`` ``(2, 2)``: the index of each Bayer position's colour, C = its maximum + 1) and ``(n, rows,
+    cols)`` the kernel's weight on the own cell. A direct gather: the few views read this way cost in
+    proportion to their samples, not to the sensor."""
     rows = range(grid.rows)
-    off_x, off_y = lens_offsets_px(grid, m_hat, rows, shift)
+    ky, kx = np.nonzero(luma)
+    off_x, off_y = (np.broadcast_to(v, (m_hat, m_hat, grid.rows, grid.cols))[ky, kx]
+                    for v in lens_offsets_px(grid, m_hat, rows, shift))
     centres = lens_centers(grid, rows)
-    x, y = centres[..., 0] + off_x[ky, kx], centres[..., 1] + off_y[ky, kx]
+    x, y = centres[None, ..., 0] + off_x, centres[None, ..., 1] + off_y
     r, q = np.meshgrid(np.arange(grid.rows), np.arange(grid.cols), indexing="ij")
-    own_class = lens_class(r, q)
+    own_class = lens_class(r, q)[None]
     x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
     fx, fy = x - x0, y - y0
     height, width = image.shape
-    total, weight = np.zeros((int(colours.max()) + 1,) + x.shape), np.zeros(x.shape)
+    n_colours, size = int(colours.max()) + 1, x.size
+    total, weight = np.zeros(n_colours * size), np.zeros(x.shape)
+    slot = np.arange(size).reshape(x.shape)
     for dy, dx, w in ((0, 0, (1 - fx) * (1 - fy)), (0, 1, fx * (1 - fy)), (1, 0, (1 - fx) * fy), (1, 1, fx * fy)):
         xi, yi = x0 + dx, y0 + dy
         inside = (xi >= 0) & (xi < width) & (yi >= 0) & (yi < height)
         xi, yi = np.clip(xi, 0, width - 1), np.clip(yi, 0, height - 1)
         w = np.where(inside & (cells[yi, xi] == own_class), w, 0.0)
-        value, colour = w * image[yi, xi], colours[yi % 2, xi % 2]
-        for c in range(total.shape[0]):
-            total[c] += np.where(colour == c, value, 0.0)
+        total += np.bincount((colours[yi % 2, xi % 2] * size + slot).ravel(), weights=(w * image[yi, xi]).ravel(),
+                             minlength=n_colours * size)
         weight += w
-    return total, weight
+    return total.reshape((n_colours,) + x.shape), weight
 
 
 def inverse_mosaic_white(white: np.ndarray, grid, m_hat: int, cells: np.ndarray, luma, shift,
@@ -67,10 +71,8 @@ def inverse_mosaic_white(white: np.ndarray, grid, m_hat: int, cells: np.ndarray,
     """``(n, rows, cols, 1)`` 1 / the white's mosaic readings of the ``luma`` views (row-major), 0 where a
     sample carries no signal: less than ``MIN_OWN_WEIGHT`` of its kernel on its own cell, or a white below
     ``dark_fraction`` of the readings' bright level (99th percentile) per unit of that weight."""
-    single = np.zeros((2, 2), dtype=np.int64)
-    read = [_read(white, single, grid, m_hat, cells, ky, kx, shift) for ky, kx in np.argwhere(luma)]
-    level = np.stack([total[0] for total, _ in read])
-    weight = np.stack([w for _, w in read])
+    total, weight = _read(white, np.zeros((2, 2), dtype=np.int64), grid, m_hat, cells, luma, shift)
+    level = total[0]
     bright = float(np.percentile(level, 99)) if level.size else 0.0
     signal = (weight > MIN_OWN_WEIGHT) & (level > dark_fraction * bright * weight) & (level > 0)
     inverse = np.where(signal, 1.0 / np.where(signal, level, 1.0), 0.0)
@@ -84,9 +86,8 @@ def luminance_views(sensor: np.ndarray, decoder) -> np.ndarray:
     colours = np.empty((2, 2), dtype=np.int64)
     for (py, px), colour in zip(((0, 0), (0, 1), (1, 0), (1, 1)), decoder.cfa):
         colours[py, px] = "RGB".index(colour)
-    views = np.stack([_read(sensor, colours, grid, decoder.m_hat, decoder.cells, ky, kx, decoder.luma_shift_px)[0]
-                      for ky, kx in np.argwhere(decoder.luma_views)]).astype(np.float32)
-    views = np.moveaxis(views, 1, -1) * decoder.inverse_luma
+    total, _ = _read(sensor, colours, grid, decoder.m_hat, decoder.cells, decoder.luma_views, decoder.luma_shift_px)
+    views = np.moveaxis(total.astype(np.float32), 0, -1) * decoder.inverse_luma
     if grid.kind != "hexagonal":
         return views
     out = np.zeros((views.shape[0], out_grid.rows, out_grid.cols, 3), dtype=np.float32)
@@ -103,8 +104,10 @@ def _box(values: np.ndarray, lenses: int) -> np.ndarray:
 
 def _channel_mean_one(values: np.ndarray) -> np.ndarray:
     """``values`` ``(..., 3)`` scaled to channel mean 1 where every channel is positive, else 1 (neutral)."""
-    ok = np.all(values > 0, axis=-1, keepdims=True)
-    return np.where(ok, values / np.where(ok, values.mean(axis=-1, keepdims=True), 1.0), np.float32(1.0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = values / values.mean(axis=-1, keepdims=True)
+    out[~np.all(values > 0, axis=-1)] = 1.0
+    return out
 
 
 def with_colour(parts: np.ndarray, nominal: np.ndarray) -> np.ndarray:
