@@ -140,12 +140,13 @@ def _finite(value) -> float | None:
 def mosaic(views: np.ndarray, gap: int = 0) -> np.ndarray:
     """Tile all views into one image: view (ky, kx) at block row ky, block column kx.
 
-    Returns ``(m̂·Ny + (m̂−1)·gap, m̂·Nx + (m̂−1)·gap, C)`` float32 (gaps are 0).
+    Returns ``(m̂·Ny + (m̂−1)·gap, m̂·Nx + (m̂−1)·gap, C)`` float32 (gaps are 0); a block of views that is
+    not square (a mosaic cropped to the rows and columns of the lit views) tiles its own rows and columns.
     """
-    m, _, ny, nx, ch = views.shape
-    out = np.zeros((m * ny + (m - 1) * gap, m * nx + (m - 1) * gap, ch), np.float32)
-    for ky in range(m):
-        for kx in range(m):
+    rows, cols, ny, nx, ch = views.shape
+    out = np.zeros((rows * ny + (rows - 1) * gap, cols * nx + (cols - 1) * gap, ch), np.float32)
+    for ky in range(rows):
+        for kx in range(cols):
             y0, x0 = ky * (ny + gap), kx * (nx + gap)
             out[y0:y0 + ny, x0:x0 + nx] = views[ky, kx]
     return out
