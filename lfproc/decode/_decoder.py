@@ -8,12 +8,12 @@ import numpy as np
 
 from ..errors import LfprocError
 from ..grid import LensGrid
-from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_quantized, quantize,
+from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_u16, quantize,
                         quantized_zero, to_channels)
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
 from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._cells import CLASSES, cell_classes, masked
+from ._cells import CLASSES, cell_classes, lens_class, masked
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
@@ -66,40 +66,70 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
     maps = band_maps(grid, m_hat, rows, y0, shift)
     if cells is None:
         strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
-        flat = out.reshape(m_hat, m_hat * len(rows), grid.cols, channels)
         n = len(rows)
         for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
             map_x, map_y = maps[ky]
-            remap_into(flat[ky, kx0 * n:kx1 * n], strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
+            remap_into(flat_out(out, ky, kx0, kx1), strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
         return out
-    classes = cells[y0:y1]
-    raw = sensor[y0:y1]
-    if raw.ndim == 2 and cfa != "none":   # quantize the band's mosaic once, demosaic each class's cells
+    reach = INTERPOLATION_REACH_PX[interpolation]     # a sample reads rows floor(y) - reach + 1 … floor(y) + reach
+    gap = 2 * reach
+    stack, scale, low = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap)
+    height = y1 - y0
+    n = len(rows)
+    r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
+    base = (gap + lens_class(r, q) * (height + 2 * gap)).astype(np.float32)   # each lens's strip in the stack
+    clipped = y0 == 0 or y1 == sensor.shape[0]     # only there can samples reach past the strip's gap rows
+    for ky, kx0, kx1 in runs:
+        map_x, map_y = maps[ky]
+        my = map_y[kx0 * n:kx1 * n].reshape(kx1 - kx0, n, grid.cols) + base
+        if clipped:    # reading past the gap, a sample reads only 0 in its own strip: so it does here
+            y = my - base
+            my[(y < reach - 1 - gap) | (y >= height + gap - reach)] = -2 * gap - 2
+        remap_into(flat_out(out, ky, kx0, kx1), stack, map_x[kx0 * n:kx1 * n], my.reshape(-1, grid.cols), flag,
+                   scale=scale, offset=low)
+    return out
+
+
+def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
+    """``out[ky, kx0:kx1]`` as map rows over (kx, r): ``((kx1 − kx0)·rows, cols, C)``."""
+    m_hat, _, rows, cols, channels = out.shape
+    return out.reshape(m_hat, m_hat * rows, cols, channels)[ky, kx0 * rows:kx1 * rows]
+
+
+def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method: str, grid: LensGrid,
+                 rows: range, gap: int) -> tuple[np.ndarray, float | None, float]:
+    """The sensor strip once per lens class, masked to that class's cells and converted to channels,
+    stacked vertically (class c at rows ``gap + c·(h + 2·gap)``) with ``gap`` rows of 0 around each, so
+    that one ``remap`` reads every lens from its own class's strip, as if from that strip alone.
+
+    A Bayer mosaic is quantized once (:func:`quantize`) and its classes demosaiced straight into a
+    uint16 stack: returns ``(stack, 1 / scale, low)``, ``linear = value / scale + low``, so that only the
+    resampled samples are converted to float (the remap rounds them to the 16-bit unit, as the mosaic
+    was). Other images give a float32 stack and ``(stack, None, 0.0)``.
+    """
+    height, width = raw.shape[:2]
+    channels = channel_count(raw, cfa)
+    present = set(np.unique(lens_class(*np.meshgrid(np.arange(rows.start, min(rows.start + 2, rows.stop)),
+                                                    np.arange(min(2, grid.cols)), indexing="ij"))).tolist())
+    quantized = raw.ndim == 2 and cfa != "none"
+    if quantized:
         as_u16, low, scale = quantize(raw)
         zero = quantized_zero(low, scale)
-
-        def class_channels(cls):
-            return demosaic_quantized(masked(as_u16, classes, cls, zero), low, scale, cfa, demosaic_method)
     else:
-        def class_channels(cls):
-            return to_channels(masked(raw, classes, cls), cfa, demosaic_method)
+        low, scale, zero = 0.0, None, 0
+    stack = np.empty((CLASSES * (height + 2 * gap), width, channels), dtype=np.uint16 if quantized else np.float32)
     for cls in range(CLASSES):
-        first_row = rows.start + ((cls // 2 - rows.start) % 2)      # the band's first row of this class
-        first_col = cls % 2
-        if first_row >= rows.stop or first_col >= grid.cols:
-            continue
-        rsel = slice(first_row - rows.start, None, 2)
-        qsel = slice(first_col, None, 2)
-        strip = np.ascontiguousarray(class_channels(cls))
-        for ky, kx0, kx1 in runs:
-            map_x, map_y = maps[ky]
-            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
-            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
-            part = np.empty(mx.shape + (channels,), dtype=np.float32)
-            remap_into(part.reshape(-1, mx.shape[2], channels), strip, mx.reshape(-1, mx.shape[2]),
-                       my.reshape(-1, mx.shape[2]), flag)
-            out[ky][kx0:kx1, rsel, qsel] = part
-    return out
+        top = gap + cls * (height + 2 * gap)
+        stack[top - gap:top] = zero
+        stack[top + height:top + height + gap] = zero
+        dst = stack[top:top + height]
+        if cls not in present:
+            dst[...] = zero
+        elif quantized:
+            demosaic_u16(masked(as_u16, classes, cls, zero), cfa, demosaic_method, dst=dst)
+        else:
+            dst[...] = to_channels(masked(raw, classes, cls), cfa, demosaic_method)
+    return stack, (None if scale is None else 1.0 / scale), low
 
 
 @dataclass(frozen=True, eq=False)
