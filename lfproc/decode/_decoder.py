@@ -12,11 +12,13 @@ from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_metho
                         quantized_zero, to_channels)
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import band_maps, check_m_hat, sensor_rows_read
-from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
+from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
 from ._cells import CLASSES, cell_classes, lens_class, masked
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
+#: interpolations whose weights are >= 0 (each sample within its taps' range: safe on 16-bit data)
+CONVEX_INTERPOLATIONS = ("nearest", "linear")
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
@@ -73,7 +75,13 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
         return out
     reach = INTERPOLATION_REACH_PX[interpolation]     # a sample reads rows floor(y) - reach + 1 … floor(y) + reach
     gap = 2 * reach
-    stack, scale, low = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap)
+    if CLASSES * (y1 - y0 + 2 * gap) >= CV_MAX_SIZE and len(rows) > 1:   # a stack too tall for remap: halves
+        half = rows.start + len(rows) // 2
+        return np.concatenate([read_band(sensor, grid, m_hat, part, cfa, demosaic_method, interpolation, shift,
+                                         cells, runs) for part in (range(rows.start, half), range(half, rows.stop))],
+                              axis=2)
+    stack, scale, low, zero = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap,
+                                           interpolation in CONVEX_INTERPOLATIONS)
     height = y1 - y0
     n = len(rows)
     r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
@@ -86,7 +94,7 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
             y = my - base
             my[(y < reach - 1 - gap) | (y >= height + gap - reach)] = -2 * gap - 2
         remap_into(flat_out(out, ky, kx0, kx1), stack, map_x[kx0 * n:kx1 * n], my.reshape(-1, grid.cols), flag,
-                   scale=scale, offset=low)
+                   scale=scale, offset=low, border=zero)
     return out
 
 
@@ -97,15 +105,17 @@ def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
 
 
 def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method: str, grid: LensGrid,
-                 rows: range, gap: int) -> tuple[np.ndarray, float | None, float]:
+                 rows: range, gap: int, convex: bool = True) -> tuple[np.ndarray, float | None, float, int]:
     """The sensor strip once per lens class, masked to that class's cells and converted to channels,
     stacked vertically (class c at rows ``gap + c·(h + 2·gap)``) with ``gap`` rows of 0 around each, so
     that one ``remap`` reads every lens from its own class's strip, as if from that strip alone.
 
     A Bayer mosaic is quantized once (:func:`quantize`) and its classes demosaiced straight into a
-    uint16 stack: returns ``(stack, 1 / scale, low)``, ``linear = value / scale + low``, so that only the
-    resampled samples are converted to float (the remap rounds them to the 16-bit unit, as the mosaic
-    was). Other images give a float32 stack and ``(stack, None, 0.0)``.
+    uint16 stack: returns ``(stack, 1 / scale, low, zero)``, ``linear = value / scale + low`` (``zero``: the
+    value that stands for 0, :func:`quantized_zero`, read outside the stack), so that only the resampled
+    samples are converted to float (the remap rounds them to the 16-bit unit, as the mosaic was). Other
+    images, and every image when the interpolation is not ``convex`` (its negative lobes over- and
+    undershoot the 16-bit range), give a float32 linear stack and ``(stack, None, 0.0, 0)``.
     """
     height, width = raw.shape[:2]
     channels = channel_count(raw, cfa)
@@ -129,7 +139,14 @@ def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method
             demosaic_u16(masked(as_u16, classes, cls, zero), cfa, demosaic_method, dst=dst)
         else:
             dst[...] = to_channels(masked(raw, classes, cls), cfa, demosaic_method)
-    return stack, (None if scale is None else 1.0 / scale), low
+    if scale is None:
+        return stack, None, 0.0, 0
+    if not convex:
+        linear = stack.astype(np.float32)
+        linear *= np.float32(1.0 / scale)
+        linear += np.float32(low)
+        return linear, None, 0.0, 0
+    return stack, 1.0 / scale, low, zero
 
 
 @dataclass(frozen=True, eq=False)
