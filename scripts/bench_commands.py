@@ -116,8 +116,9 @@ def make_capture(folder: Path) -> None:
 
 # ----------------------------------------------------------------------------- measuring
 def child_env(code: str | None, cache: Path, **extra) -> dict:
-    """The environment of a measured process: whose code (PYTHONPATH), which decoder cache."""
-    env = dict(os.environ, LFPROC_CACHE_DIR=str(cache), PYTHONPATH=str(code or ROOT))
+    """The environment of a measured process: whose code (PYTHONPATH, and the folder it runs in: see
+    :func:`run_command`), which decoder cache."""
+    env = dict(os.environ, LFPROC_CACHE_DIR=str(cache), PYTHONPATH=str(Path(code or ROOT).resolve()))
     env.pop("LFPROC_NO_CACHE", None)
     env.update(extra)
     return env
@@ -125,7 +126,13 @@ def child_env(code: str | None, cache: Path, **extra) -> dict:
 
 def run_command(argv: list[str], env: dict | None = None) -> dict:
     """Wall time, CPU time and peak RSS of one fresh process running ``argv`` (``python -m lfproc …`` if it
-    starts with a command name)."""
+    starts with a command name).
+
+    The process runs in the folder of the code it measures (``env``'s PYTHONPATH): ``python -m`` puts
+    the working folder first on ``sys.path``, so run from another checkout it would import that
+    checkout's lfproc, whatever PYTHONPATH says (how an earlier ``--before`` column measured the new
+    code). Every path in ``argv`` is absolute."""
+    cwd = (env or {}).get("PYTHONPATH", str(ROOT))
     if not argv[0].startswith("/"):
         argv = [sys.executable, "-m", "lfproc", *argv]
     code = ("import resource, subprocess, sys, time, json\n"
@@ -136,7 +143,7 @@ def run_command(argv: list[str], env: dict | None = None) -> dict:
             "print(json.dumps({'rc': p.returncode, 'seconds': dt, 'cpu_s': r.ru_utime + r.ru_stime,\n"
             "                  'peak_bytes': r.ru_maxrss * 1024, 'stderr': p.stderr[-800:], 'stdout': p.stdout[-4000:]}))\n")
     proc = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, check=True,
-                          env=env)
+                          env=env, cwd=cwd)
     result = json.loads(proc.stdout)
     if result["rc"] != 0:
         raise SystemExit(f"{' '.join(argv[2:])} failed: {result['stderr']}")
@@ -228,9 +235,20 @@ def command_cases(folder: Path, quick: bool) -> list[tuple[str, list[str], dict]
     return cases
 
 
+def imported_lfproc(env: dict) -> str:
+    """The folder of the lfproc a measured process imports (the checkout it is meant to measure)."""
+    probe = run_command([sys.executable, "-c", "import lfproc, os; print(os.path.dirname(os.path.dirname("
+                                               "os.path.abspath(lfproc.__file__))))"], env)
+    return probe["stdout"].strip()
+
+
 def run_commands(folder: Path, code: str | None, quick: bool, tag: str) -> list[dict]:
     cache = folder / f"cache-{tag}"
     shutil.rmtree(cache, ignore_errors=True)
+    env = child_env(code, cache)
+    imported = imported_lfproc(env)
+    if Path(imported).resolve() != Path(env["PYTHONPATH"]):
+        raise SystemExit(f"[{tag}] the measured processes import lfproc from {imported}, not {env['PYTHONPATH']}")
     rows = []
     for label, argv, extra in command_cases(folder, quick):
         out = Path(argv[argv.index("-o") + 1])
@@ -481,7 +499,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    folder = Path(args.keep or tempfile.mkdtemp(prefix="lfproc-bench-"))
+    folder = Path(args.keep or tempfile.mkdtemp(prefix="lfproc-bench-")).resolve()
     folder.mkdir(parents=True, exist_ok=True)
     new = {"date": time.strftime("%Y-%m-%d"), "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
            "sensor": list(SENSOR)}
