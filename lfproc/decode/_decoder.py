@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +12,7 @@ from ..grid import LensGrid
 from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_u16, quantize,
                         quantized_zero, to_channels)
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
-from ._positions import band_maps, check_m_hat, sensor_rows_read
+from ._positions import check_m_hat, lens_centers, lens_offsets_px, sensor_rows_read
 from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
 from ._cells import CLASSES, cell_classes, lens_class, masked
 from ._view_mask import carrying_views, view_sampling
@@ -48,7 +49,7 @@ def view_runs(delivered) -> list[tuple[int, int, int]]:
 
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
               interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None,
-              runs: list | None = None, scratch: dict | None = None) -> np.ndarray:
+              runs: list | None = None, scratch: dict | None = None, sink=None) -> np.ndarray | None:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
@@ -56,47 +57,75 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
     (:mod:`._cells`), makes every lens read its own cell only (else the plain sensor image is read).
     With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
     ``scratch`` (a dict kept by the caller across bands) lends the result's and the stack's memory: the
-    result is then valid until the next call with the same ``scratch``.
+    result is then valid until the next call with the same ``scratch``. With ``sink``, each run is handed
+    to ``sink(ky, kx0, kx1, views)`` (``views``: ``(1, kx1 − kx0, len(rows), cols, C)``, valid during the
+    call) as soon as it is read, while it is still in the processor's cache, and None is returned.
     """
     runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
     y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0], shift)
     channels = channel_count(sensor, cfa)
-    out = borrowed(scratch, "views", (m_hat, m_hat, len(rows), grid.cols, channels), np.float32)
+    n = len(rows)
+    out = None if sink is not None else borrowed(scratch, "views", (m_hat, m_hat, n, grid.cols, channels),
+                                                 np.float32)
+
+    def target(ky, kx0, kx1):
+        if out is not None:
+            return flat_out(out, ky, kx0, kx1)
+        return borrowed(scratch, "run", ((kx1 - kx0) * n, grid.cols, channels), np.float32)
+
+    def deliver(ky, kx0, kx1, block):
+        if sink is not None:
+            sink(ky, kx0, kx1, block.reshape(1, kx1 - kx0, n, grid.cols, channels))
+
     if y1 <= y0:
-        out[...] = 0.0
-        return out
-    flag = cv_flag(interpolation)
-    maps = band_maps(grid, m_hat, rows, y0, shift)
-    if cells is None:
-        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
-        n = len(rows)
-        for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
-            map_x, map_y = maps[ky]
-            remap_into(flat_out(out, ky, kx0, kx1), strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
+        for ky, kx0, kx1 in runs:
+            block = target(ky, kx0, kx1)
+            block[...] = 0.0
+            deliver(ky, kx0, kx1, block)
         return out
     reach = INTERPOLATION_REACH_PX[interpolation]     # a sample reads rows floor(y) - reach + 1 … floor(y) + reach
     gap = 2 * reach
-    if CLASSES * (y1 - y0 + 2 * gap) >= CV_MAX_SIZE and len(rows) > 1:   # a stack too tall for remap: halves
-        half = rows.start + len(rows) // 2
-        return np.concatenate([read_band(sensor, grid, m_hat, part, cfa, demosaic_method, interpolation, shift,
-                                         cells, runs) for part in (range(rows.start, half), range(half, rows.stop))],
-                              axis=2)
+    if cells is not None and CLASSES * (y1 - y0 + 2 * gap) >= CV_MAX_SIZE and n > 1:   # too tall for remap: halves
+        half = rows.start + n // 2
+        views = np.concatenate([read_band(sensor, grid, m_hat, part, cfa, demosaic_method, interpolation, shift,
+                                          cells, runs) for part in (range(rows.start, half), range(half, rows.stop))],
+                               axis=2)
+        for ky, kx0, kx1 in runs:
+            deliver(ky, kx0, kx1, views[ky, kx0:kx1])
+        return None if sink is not None else views
+    flag = cv_flag(interpolation)
+    off_x, off_y = lens_offsets_px(grid, m_hat, rows, shift)
+    centers = lens_centers(grid, rows).astype(np.float32)
+    cx, cy = centers[None, :, :, 0], centers[None, :, :, 1] - np.float32(y0)
+
+    def run_maps(ky, kx0, kx1):
+        """The remap maps of views ``(ky, kx0:kx1)``, rows over (kx, r): :func:`band_maps`' run of them."""
+        return ((cx + off_x[ky, kx0:kx1].astype(np.float32)).reshape(-1, grid.cols),
+                (cy + off_y[ky, kx0:kx1].astype(np.float32)).reshape(-1, grid.cols))
+
+    if cells is None:
+        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
+        for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
+            block = target(ky, kx0, kx1)
+            remap_into(block, strip, *run_maps(ky, kx0, kx1), flag)
+            deliver(ky, kx0, kx1, block)
+        return out
     stack, scale, low, zero = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap,
                                            interpolation in CONVEX_INTERPOLATIONS, scratch)
     height = y1 - y0
-    n = len(rows)
     r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
     base = (gap + lens_class(r, q) * (height + 2 * gap)).astype(np.float32)   # each lens's strip in the stack
     clipped = y0 == 0 or y1 == sensor.shape[0]     # only there can samples reach past the strip's gap rows
     for ky, kx0, kx1 in runs:
-        map_x, map_y = maps[ky]
-        my = map_y[kx0 * n:kx1 * n].reshape(kx1 - kx0, n, grid.cols) + base
+        map_x, map_y = run_maps(ky, kx0, kx1)
+        my = map_y.reshape(kx1 - kx0, n, grid.cols) + base
         if clipped:    # reading past the gap, a sample reads only 0 in its own strip: so it does here
             y = my - base
             my[(y < reach - 1 - gap) | (y >= height + gap - reach)] = -2 * gap - 2
-        remap_into(flat_out(out, ky, kx0, kx1), stack, map_x[kx0 * n:kx1 * n], my.reshape(-1, grid.cols), flag,
-                   scale=scale, offset=low, border=zero)
+        block = target(ky, kx0, kx1)
+        remap_into(block, stack, map_x, my.reshape(-1, grid.cols), flag, scale=scale, offset=low, border=zero)
+        deliver(ky, kx0, kx1, block)
     return out
 
 
@@ -214,17 +243,21 @@ class Decoder:
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
-                              self.view_shift_px, self.cells, runs, scratch)
-            for ky, kx0, kx1 in runs:
-                run = views[ky:ky + 1, kx0:kx1]
-                run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
-                dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
-                if grid.kind == "hexagonal":
-                    hex_rows_to_rect(run, rows.start, out_rows, dst)
-                else:
-                    dst[...] = run
+            read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
+                      self.view_shift_px, self.cells, runs, scratch, functools.partial(self._devignette, out, rows,
+                                                                                       out_rows))
         return out
+
+    def _devignette(self, out: np.ndarray, rows: range, out_rows: range, ky: int, kx0: int, kx1: int,
+                    run: np.ndarray) -> None:
+        """Devignette a run of raw views of lens ``rows`` (:func:`read_band`'s ``sink``) into ``out[..., out_rows]``
+        (resampled to rectangular rows on a hexagonal grid)."""
+        run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
+        dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
+        if self.grid.kind == "hexagonal":
+            hex_rows_to_rect(run, rows.start, out_rows, dst)
+        else:
+            dst[...] = run
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
