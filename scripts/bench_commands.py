@@ -4,6 +4,7 @@ same run.
 
     python scripts/bench_commands.py [--quick] [--out DIR] [--keep DIR] [--before CHECKOUT] [--markdown]
     python scripts/bench_commands.py --disk-only [--out DIR]
+    python scripts/bench_commands.py --batch-only [--keep DIR] [--out DIR]
 
 The capture is a Lytro-Illum-like sensor (7728 × 5368 px, GRBG, 1.4 µm pixels under 20 µm hexagonal
 lenses = 14.29 px, m̂ = 15 → a 15 × 15 × 434 × 625 × 3 light field) made here in a few seconds: a white
@@ -22,6 +23,8 @@ times a smooth random texture, both 10-bit in 16-bit PNGs (kept in ``--keep DIR`
   capture PNG with OpenCV (``cv2.imread``, the PNG decoder alone); a fixed single-threaded numpy
   workload timed before and after (its wall/CPU ratio says how loaded the machine was: 1.0 is idle).
 * **Disk** (full runs, ``--disk-only``): the views' 225 TIFFs against one ``tofile`` of the same bytes.
+* ``--batch-only``: the batch runs again (with the load gauge around them), the other rows kept: for a
+  quieter moment on a shared machine.
 * ``--before CHECKOUT``: the same commands run on the code of another checkout (e.g. ``git worktree
   add /tmp/base COMMIT``), for the before/after table.
 
@@ -240,6 +243,12 @@ def imported_lfproc(env: dict) -> str:
     probe = run_command([sys.executable, "-c", "import lfproc, os; print(os.path.dirname(os.path.dirname("
                                                "os.path.abspath(lfproc.__file__))))"], env)
     return probe["stdout"].strip()
+
+
+def describe_checkout(path: str) -> str:
+    """``commit abc1234 (PATH)`` for a git checkout, else the path."""
+    proc = subprocess.run(["git", "-C", path, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    return f"commit {proc.stdout.strip()} ({path})" if proc.returncode == 0 else path
 
 
 def run_commands(folder: Path, code: str | None, quick: bool, tag: str) -> list[dict]:
@@ -494,8 +503,12 @@ def markdown(r: dict) -> str:
             f"{ph['phase']} {ph['cpu_s']:.2f} s ({100 * ph['cpu_s'] / total_c:.0f} %)" for ph in largest) + "."]
     if r.get("batch"):
         b = r["batch"]
-        lines += ["", f"## Batch: {b['captures']} captures, one white image (cache ready)", "",
-                  *batch_lines(b, r.get("cores"))]
+        lines += ["", f"## Batch: {b['captures']} captures, one white image (cache ready)", ""]
+        if r.get("batch_load"):
+            bl = r["batch_load"]
+            lines += [f"Run again on its own (`--batch-only`): the load gauge read {bl['before']['load_factor']:.1f}× "
+                      f"before and {bl['after']['load_factor']:.1f}× after these runs.", ""]
+        lines += batch_lines(b, r.get("cores"))
     if r.get("disk"):
         d = r["disk"]
         lines += ["", "## Writing the views against the disk", "",
@@ -521,6 +534,7 @@ def main(argv=None) -> int:
     parser.add_argument("--before", metavar="CHECKOUT", help="also run the commands on this checkout's code")
     parser.add_argument("--batch", type=int, metavar="N", help="captures in the batch (default 20, --quick 4)")
     parser.add_argument("--disk-only", action="store_true", help="only the view-writing measurement")
+    parser.add_argument("--batch-only", action="store_true", help="only the batch runs (and the load gauge)")
     parser.add_argument("--markdown", action="store_true", help="also print the tables (markdown) to stdout")
     args = parser.parse_args(argv)
     out = Path(args.out)
@@ -531,7 +545,12 @@ def main(argv=None) -> int:
            "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
            "sensor": list(SENSOR)}
     try:
-        if not args.disk_only:
+        if args.batch_only:
+            make_capture(folder)
+            load_before = reference_load()
+            new["batch"] = batch(folder, args.batch or 20, child_env(None, folder / "cache-now"))
+            new["batch_load"] = {"before": load_before, "after": reference_load()}
+        elif not args.disk_only:
             t = time.perf_counter()
             make_capture(folder)
             print(f"capture ready in {time.perf_counter() - t:.1f} s", flush=True)
@@ -540,13 +559,13 @@ def main(argv=None) -> int:
             new["commands"] = run_commands(folder, None, args.quick, "now")
             if args.before:
                 new["before_commands"] = run_commands(folder, args.before, args.quick, "before")
-                new["before_code"] = args.before
+                new["before_code"] = describe_checkout(args.before)
             env = child_env(None, folder / "cache-now")
             new["phases"] = phases(folder, env)
             new["floors"] = floors(folder, env)
             new["batch"] = batch(folder, args.batch or (4 if args.quick else 20), env)
             new["load"] = {"before": load_before, "after": reference_load()}
-        if args.disk_only or not args.quick:
+        if args.disk_only or not (args.quick or args.batch_only):
             new["disk"] = disk_floor_and_views(folder)
     finally:
         if not args.keep:
@@ -554,6 +573,8 @@ def main(argv=None) -> int:
     json_path = out / "benchmarks-commands.json"
     previous = json.loads(json_path.read_text()) if json_path.is_file() else None
     results = merge_results(previous, new)
+    if "batch" in new and "batch_load" not in new:      # a full run's batch: no note of an earlier batch-only run
+        results.pop("batch_load", None)
     json_path.write_text(json.dumps(results, indent=1) + "\n")
     page = markdown(results)
     (out / "benchmarks-commands.md").write_text(page)
