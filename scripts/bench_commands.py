@@ -454,6 +454,8 @@ def markdown(r: dict) -> str:
                       f"(before the commands) and {load['after']['load_factor']:.1f}× (after) its CPU time in wall "
                       "time (1.0 = an idle core): wall times below are inflated by about that much; CPU times "
                       "and memory are not."]
+    if r.get("note"):
+        lines += ["", r["note"]]
     if r.get("commands") and r.get("load"):
         lines += ["", "## Targets (issue 24)", "", *targets_table(r), "",
                   "*wall ÷ load factor* divides the wall time by the slowdown the load gauge measured in this run: "
@@ -535,6 +537,7 @@ def main(argv=None) -> int:
     parser.add_argument("--batch", type=int, metavar="N", help="captures in the batch (default 20, --quick 4)")
     parser.add_argument("--disk-only", action="store_true", help="only the view-writing measurement")
     parser.add_argument("--batch-only", action="store_true", help="only the batch runs (and the load gauge)")
+    parser.add_argument("--note", default="", help="a paragraph for the page about this run (e.g. the machine's load)")
     parser.add_argument("--markdown", action="store_true", help="also print the tables (markdown) to stdout")
     args = parser.parse_args(argv)
     out = Path(args.out)
@@ -543,7 +546,7 @@ def main(argv=None) -> int:
     folder.mkdir(parents=True, exist_ok=True)
     new = {"date": time.strftime("%Y-%m-%d"), "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
            "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
-           "sensor": list(SENSOR)}
+           "sensor": list(SENSOR), "note": args.note}
     try:
         if args.batch_only:
             make_capture(folder)
