@@ -322,9 +322,11 @@ def batch_lines(b: dict, cores: int | None) -> list[str]:
                  f"demosaicing, numba's refocusing): 2 workers run {single['seconds'] / two['seconds']:.2f}× one "
                  f"single-threaded worker, but against the threaded one a second process gains only the part of "
                  f"each capture that runs on one core.")
-    text += (f" The 2 workers spent {two['cpu_s'] / one['cpu_s']:.2f}× the CPU time of one for the same captures "
-             "(two processes share the memory bandwidth and caches; each starts, imports and reads the decoder "
-             "cache once)")
+    growth = two["cpu_s"] / one["cpu_s"]
+    text += (f" The 2 workers spent {growth:.2f}× the CPU time of one for the same captures " +
+             ("(two processes share the memory bandwidth and caches; each starts, imports and reads the decoder "
+              "cache once)" if growth > 1.02 else "(sharing the memory bandwidth cost them nothing measurable; "
+                                                  "one worker's threads cost some CPU time of their own)"))
     if cores:
         text += (f", and kept {two['cpu_s'] / two['seconds']:.2f} of {cores} cores busy (anything below "
                  f"{min(cores, 2)} is time the workers waited: for the machine's other work, the disk, or the "
