@@ -11,7 +11,10 @@ image (and a dark frame, when one is subtracted), the camera, the grid and the d
   and the source of the code that derives the state (``decode/``, ``io/``, ``grid.py``). Any change to
   any of them is another key: an entry is never stale, it is simply not found.
 * **Entry**: one file ``KEY.lfdec``: a JSON header (the decoder's fields: numbers, strings, grids) and
-  its arrays; blocks of an array that are 0 (the views the decoder never delivers) are not stored.
+  its arrays, each whole at a page-aligned offset; blocks of an array that are 0 (the views the decoder
+  never delivers) are not written (holes of a sparse file: no disk space). Large arrays are read back by
+  mapping the file (read-only), not copied: a command or batch worker starts decoding without copying
+  hundreds of MB, and processes using one entry share its pages.
   Written atomically (:func:`lfproc.atomic.atomic_path`): a reader sees a whole entry or none.
 * **Concurrency**: the process that derives an entry holds an exclusive lock (``KEY.lock``) while it
   does; others wanting the same entry wait for it and then read it, so a batch derives once, not once
@@ -43,8 +46,10 @@ import numpy as np
 from .errors import LfprocError
 from .grid import LensGrid
 
+#: arrays at least this large are mapped from the entry, smaller ones copied (ordinary writable arrays)
+MAP_BYTES = 1 << 20
 #: bump when the entry layout changes
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 MAGIC = b"LFPDEC01"
 ALIGN = 4096
 DEFAULT_MAX_GB = 4.0
@@ -181,20 +186,35 @@ def _nonzero_blocks(array: np.ndarray):
     return [(i, j) for i in range(array.shape[0]) for j in range(array.shape[1]) if array[i, j].any()]
 
 
+def _aligned(n: int) -> int:
+    return n + (-n % ALIGN)
+
+
 def store(path: str, key: str, decoder) -> None:
-    """Write a decoder's entry atomically."""
+    """Write a decoder's entry atomically: each array whole at its page-aligned offset from the data start,
+    its zero blocks left as holes."""
     from .atomic import atomic_path
 
     fields, arrays = _encode(decoder)
+    offset = 0
+    for spec, (array, _) in zip((spec for spec in fields.values() if "array" in spec), arrays):
+        spec["offset"] = offset
+        offset = _aligned(offset + array.nbytes)
     header = json.dumps({"format": CACHE_FORMAT, "key": key, "fields": fields}).encode()
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as fh:
             fh.write(MAGIC + struct.pack("<Q", len(header)) + header)
-            for array, blocks in arrays:
-                fh.write(b"\0" * (-fh.tell() % ALIGN))
-                parts = [array] if blocks is None else [array[i, j] for i, j in blocks]
-                for part in parts:
-                    fh.write(memoryview(np.ascontiguousarray(part)).cast("B"))
+            start = _aligned(fh.tell())
+            for spec, (array, blocks) in zip((spec for spec in fields.values() if "array" in spec), arrays):
+                if blocks is None:
+                    fh.seek(start + spec["offset"])
+                    fh.write(memoryview(np.ascontiguousarray(array)).cast("B"))
+                    continue
+                block = array[0, 0].nbytes
+                for i, j in blocks:
+                    fh.seek(start + spec["offset"] + (i * array.shape[1] + j) * block)
+                    fh.write(memoryview(np.ascontiguousarray(array[i, j])).cast("B"))
+            fh.truncate(start + offset)    # the zero blocks after the last one written: holes too
 
 
 def load(path: str, key: str, cls):
@@ -207,6 +227,7 @@ def load(path: str, key: str, cls):
             head = json.loads(fh.read(size))
             if head.get("format") != CACHE_FORMAT or head.get("key") != key:
                 return None
+            start, length = _aligned(fh.tell()), os.fstat(fh.fileno()).st_size
             values = {}
             for name, spec in head["fields"].items():
                 if "grid" in spec:
@@ -214,9 +235,8 @@ def load(path: str, key: str, cls):
                 elif "value" in spec:
                     values[name] = tuple(spec["value"]) if spec["tuple"] else spec["value"]
                 else:
-                    dtype, shape = spec["array"]
-                    fh.seek(fh.tell() + (-fh.tell() % ALIGN))
-                    values[name] = _read_array(fh, np.dtype(dtype), tuple(shape), spec["blocks"])
+                    dtype, shape = np.dtype(spec["array"][0]), tuple(spec["array"][1])
+                    values[name] = _read_array(fh, start + int(spec["offset"]), dtype, shape, length)
             decoder = cls(**values)
     except (OSError, ValueError, KeyError, TypeError, struct.error, LfprocError):
         return None
@@ -225,15 +245,29 @@ def load(path: str, key: str, cls):
     return decoder
 
 
-def _read_array(fh, dtype: np.dtype, shape: tuple, blocks) -> np.ndarray:
-    """Read an array stored whole or as nonzero blocks (the rest 0, never touched: no memory for it)."""
-    array = np.zeros(shape, dtype=dtype)
-    parts = [array] if blocks is None else [array[i, j] for i, j in blocks]
-    for part in parts:
-        view = memoryview(part).cast("B")
-        if fh.readinto(view) != view.nbytes:
-            raise ValueError("truncated cache entry")
+def _read_array(fh, offset: int, dtype: np.dtype, shape: tuple, length: int) -> np.ndarray:
+    """The array at ``offset``: mapped read-only when large (on POSIX systems, where a mapped entry can
+    still be replaced or pruned), else copied."""
+    import mmap
+
+    nbytes = int(np.prod(shape)) * dtype.itemsize
+    if offset + nbytes > length:
+        raise ValueError("truncated cache entry")     # mapping past the end would crash on first access
+    if nbytes >= MAP_BYTES and os.name == "posix" and offset % mmap.ALLOCATIONGRANULARITY == 0:
+        mapped = mmap.mmap(fh.fileno(), nbytes, access=mmap.ACCESS_READ, offset=offset)
+        return np.frombuffer(mapped, dtype=dtype).reshape(shape)
+    fh.seek(offset)
+    array = np.empty(shape, dtype=dtype)
+    view = memoryview(array).cast("B") if nbytes else memoryview(b"")
+    if nbytes and fh.readinto(view) != nbytes:
+        raise ValueError("truncated cache entry")
     return array
+
+
+def disk_bytes(path: str) -> int:
+    """The disk space an entry takes (its holes, the zero blocks, take none)."""
+    st = os.stat(path)
+    return getattr(st, "st_blocks", -(-st.st_size // 512)) * 512
 
 
 def prune(folder: str, limit: int, keep: str | None = None) -> None:
@@ -241,8 +275,7 @@ def prune(folder: str, limit: int, keep: str | None = None) -> None:
     found = []
     for path in entries(folder):
         with contextlib.suppress(FileNotFoundError):
-            st = os.stat(path)
-            found.append((st.st_mtime, st.st_size, path))
+            found.append((os.stat(path).st_mtime, disk_bytes(path), path))
     total = sum(size for _, size, _ in found)
     for _, size, path in sorted(found):
         if total <= limit:
@@ -325,7 +358,7 @@ def main(argv=None) -> int:
         print(f"{folder}: removed {clear(folder)} entries")
         return 0
     found = entries(folder)
-    size = sum(os.path.getsize(p) for p in found)
+    size = sum(disk_bytes(p) for p in found)
     print(f"{folder}: {len(found)} entries, {size / 1e9:.2f} GB of at most {max_bytes() / 1e9:.2f} GB "
           f"(LFPROC_CACHE_MAX_GB)")
     return 0

@@ -4,6 +4,7 @@ same run.
 
     python scripts/bench_commands.py [--quick] [--out DIR] [--keep DIR] [--before CHECKOUT] [--markdown]
     python scripts/bench_commands.py --disk-only [--out DIR]
+    python scripts/bench_commands.py --batch-only [--keep DIR] [--out DIR]
 
 The capture is a Lytro-Illum-like sensor (7728 × 5368 px, GRBG, 1.4 µm pixels under 20 µm hexagonal
 lenses = 14.29 px, m̂ = 15 → a 15 × 15 × 434 × 625 × 3 light field) made here in a few seconds: a white
@@ -22,6 +23,8 @@ times a smooth random texture, both 10-bit in 16-bit PNGs (kept in ``--keep DIR`
   capture PNG with OpenCV (``cv2.imread``, the PNG decoder alone); a fixed single-threaded numpy
   workload timed before and after (its wall/CPU ratio says how loaded the machine was: 1.0 is idle).
 * **Disk** (full runs, ``--disk-only``): the views' 225 TIFFs against one ``tofile`` of the same bytes.
+* ``--batch-only``: the batch runs again (with the load gauge around them), the other rows kept: for a
+  quieter moment on a shared machine.
 * ``--before CHECKOUT``: the same commands run on the code of another checkout (e.g. ``git worktree
   add /tmp/base COMMIT``), for the before/after table.
 
@@ -116,8 +119,9 @@ def make_capture(folder: Path) -> None:
 
 # ----------------------------------------------------------------------------- measuring
 def child_env(code: str | None, cache: Path, **extra) -> dict:
-    """The environment of a measured process: whose code (PYTHONPATH), which decoder cache."""
-    env = dict(os.environ, LFPROC_CACHE_DIR=str(cache), PYTHONPATH=str(code or ROOT))
+    """The environment of a measured process: whose code (PYTHONPATH, and the folder it runs in: see
+    :func:`run_command`), which decoder cache."""
+    env = dict(os.environ, LFPROC_CACHE_DIR=str(cache), PYTHONPATH=str(Path(code or ROOT).resolve()))
     env.pop("LFPROC_NO_CACHE", None)
     env.update(extra)
     return env
@@ -125,7 +129,13 @@ def child_env(code: str | None, cache: Path, **extra) -> dict:
 
 def run_command(argv: list[str], env: dict | None = None) -> dict:
     """Wall time, CPU time and peak RSS of one fresh process running ``argv`` (``python -m lfproc …`` if it
-    starts with a command name)."""
+    starts with a command name).
+
+    The process runs in the folder of the code it measures (``env``'s PYTHONPATH): ``python -m`` puts
+    the working folder first on ``sys.path``, so run from another checkout it would import that
+    checkout's lfproc, whatever PYTHONPATH says (how an earlier ``--before`` column measured the new
+    code). Every path in ``argv`` is absolute."""
+    cwd = (env or {}).get("PYTHONPATH", str(ROOT))
     if not argv[0].startswith("/"):
         argv = [sys.executable, "-m", "lfproc", *argv]
     code = ("import resource, subprocess, sys, time, json\n"
@@ -136,7 +146,7 @@ def run_command(argv: list[str], env: dict | None = None) -> dict:
             "print(json.dumps({'rc': p.returncode, 'seconds': dt, 'cpu_s': r.ru_utime + r.ru_stime,\n"
             "                  'peak_bytes': r.ru_maxrss * 1024, 'stderr': p.stderr[-800:], 'stdout': p.stdout[-4000:]}))\n")
     proc = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, check=True,
-                          env=env)
+                          env=env, cwd=cwd)
     result = json.loads(proc.stdout)
     if result["rc"] != 0:
         raise SystemExit(f"{' '.join(argv[2:])} failed: {result['stderr']}")
@@ -228,9 +238,26 @@ def command_cases(folder: Path, quick: bool) -> list[tuple[str, list[str], dict]
     return cases
 
 
+def imported_lfproc(env: dict) -> str:
+    """The folder of the lfproc a measured process imports (the checkout it is meant to measure)."""
+    probe = run_command([sys.executable, "-c", "import lfproc, os; print(os.path.dirname(os.path.dirname("
+                                               "os.path.abspath(lfproc.__file__))))"], env)
+    return probe["stdout"].strip()
+
+
+def describe_checkout(path: str) -> str:
+    """``commit abc1234 (PATH)`` for a git checkout, else the path."""
+    proc = subprocess.run(["git", "-C", path, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    return f"commit {proc.stdout.strip()} ({path})" if proc.returncode == 0 else path
+
+
 def run_commands(folder: Path, code: str | None, quick: bool, tag: str) -> list[dict]:
     cache = folder / f"cache-{tag}"
     shutil.rmtree(cache, ignore_errors=True)
+    env = child_env(code, cache)
+    imported = imported_lfproc(env)
+    if Path(imported).resolve() != Path(env["PYTHONPATH"]):
+        raise SystemExit(f"[{tag}] the measured processes import lfproc from {imported}, not {env['PYTHONPATH']}")
     rows = []
     for label, argv, extra in command_cases(folder, quick):
         out = Path(argv[argv.index("-o") + 1])
@@ -244,28 +271,68 @@ def run_commands(folder: Path, code: str | None, quick: bool, tag: str) -> list[
     return rows
 
 
+#: the batch runs: (key, workers, extra environment); "one thread" keeps OpenCV and numba to one thread
+BATCH_RUNS = (("workers_1", 1, {}), ("workers_1_one_thread", 1, {"NUMBA_NUM_THREADS": "1", "OPENCV_FOR_THREADS_NUM": "1"}),
+              ("workers_2", 2, {}))
+
+
 def batch(folder: Path, count: int, env: dict) -> dict:
-    """``lfproc batch`` of ``count`` captures with one white image, 1 then 2 workers (cache ready)."""
+    """``lfproc batch`` of ``count`` captures with one white image (cache ready): 1 worker (in the batch's own
+    process, OpenCV's and numba's threads on every core), 1 worker with one thread, 2 worker processes."""
     inputs = folder / "batch-in"
     shutil.rmtree(inputs, ignore_errors=True)
     inputs.mkdir()
     for i in range(count):
         os.link(folder / "capture.png", inputs / f"c{i:02d}.png")
     result = {"captures": count}
-    for workers in (1, 2):
-        out = folder / f"batch-out-{workers}"
+    for key, workers, extra in BATCH_RUNS:
+        out = folder / f"batch-out-{key}"
         shutil.rmtree(out, ignore_errors=True)
         run = run_command(["batch", *sorted(map(str, inputs.iterdir())), "--camera", str(folder / "camera.toml"),
                            "--calib", str(folder / "grid.json"), "--a", "-1:3", "--workers", str(workers), "-o",
-                           str(out)], env)
+                           str(out)], dict(env, **extra))
         shutil.rmtree(out, ignore_errors=True)
-        result[f"workers_{workers}"] = {"seconds": run["seconds"], "per_capture_s": run["seconds"] / count,
-                                        "cpu_s": run["cpu_s"], "peak_gb": run["peak_bytes"] / 1e9}
-        print(f"batch of {count}, {workers} worker(s): {run['seconds']:.1f} s, "
-              f"{run['seconds'] / count:.2f} s per capture", flush=True)
+        result[key] = {"seconds": run["seconds"], "per_capture_s": run["seconds"] / count, "cpu_s": run["cpu_s"],
+                       "peak_gb": run["peak_bytes"] / 1e9, "workers": workers, "one_thread": bool(extra)}
+        print(f"batch of {count}, {key}: {run['seconds']:.1f} s, {run['seconds'] / count:.2f} s per capture, "
+              f"CPU {run['cpu_s']:.1f} s", flush=True)
     shutil.rmtree(inputs, ignore_errors=True)
     result["speedup"] = result["workers_1"]["seconds"] / result["workers_2"]["seconds"]
     return result
+
+
+def batch_lines(b: dict, cores: int | None) -> list[str]:
+    """The batch table and what its numbers say about the 2-worker speed-up."""
+    labels = {"workers_1": "1 (the batch's process, all threads)", "workers_1_one_thread": "1, one thread",
+              "workers_2": "2 (processes, cores ÷ 2 threads each)"}
+    lines = ["| workers | wall s | s per capture | CPU s | CPU s per capture | cores busy | peak GB (largest process) |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for key in ("workers_1", "workers_1_one_thread", "workers_2"):
+        row = b.get(key)
+        if row:
+            lines.append(f"| {labels[key]} | {row['seconds']:.1f} | {row['per_capture_s']:.2f} | {row['cpu_s']:.1f} | "
+                         f"{row['cpu_s'] / b['captures']:.2f} | {row['cpu_s'] / row['seconds']:.2f} | "
+                         f"{row['peak_gb']:.2f} |")
+    one, two = b["workers_1"], b["workers_2"]
+    text = (f"2 workers: {b['speedup']:.2f}× one (target ≥ {TARGETS['batch_speedup']:g}×); target "
+            f"≤ {TARGETS['batch_s_per_capture']:g} s per capture. *Cores busy* = CPU time ÷ wall time.")
+    single = b.get("workers_1_one_thread")
+    if single:
+        text += (f" One worker gets {single['seconds'] / one['seconds']:.2f}× from its threads (OpenCV's remap and "
+                 f"demosaicing, numba's refocusing): 2 workers run {single['seconds'] / two['seconds']:.2f}× one "
+                 f"single-threaded worker, but against the threaded one a second process gains only the part of "
+                 f"each capture that runs on one core.")
+    growth = two["cpu_s"] / one["cpu_s"]
+    text += (f" The 2 workers spent {growth:.2f}× the CPU time of one for the same captures " +
+             ("(two processes share the memory bandwidth and caches; each starts, imports and reads the decoder "
+              "cache once)" if growth > 1.02 else "(sharing the memory bandwidth cost them nothing measurable; "
+                                                  "one worker's threads cost some CPU time of their own)"))
+    if cores:
+        text += (f", and kept {two['cpu_s'] / two['seconds']:.2f} of {cores} cores busy (anything below "
+                 f"{min(cores, 2)} is time the workers waited: for the machine's other work, the disk, or the "
+                 "batch's own process)")
+    lines += ["", text + "."]
+    return lines
 
 
 def disk_floor_and_views(folder: Path, repeats: int = 3) -> dict:
@@ -389,6 +456,8 @@ def markdown(r: dict) -> str:
                       f"(before the commands) and {load['after']['load_factor']:.1f}× (after) its CPU time in wall "
                       "time (1.0 = an idle core): wall times below are inflated by about that much; CPU times "
                       "and memory are not."]
+    if r.get("note"):
+        lines += ["", r["note"]]
     if r.get("commands") and r.get("load"):
         lines += ["", "## Targets (issue 24)", "", *targets_table(r), "",
                   "*wall ÷ load factor* divides the wall time by the slowdown the load gauge measured in this run: "
@@ -438,20 +507,12 @@ def markdown(r: dict) -> str:
             f"{ph['phase']} {ph['cpu_s']:.2f} s ({100 * ph['cpu_s'] / total_c:.0f} %)" for ph in largest) + "."]
     if r.get("batch"):
         b = r["batch"]
-        lines += ["", f"## Batch: {b['captures']} captures, one white image (cache ready)", "",
-                  "| workers | wall s | s per capture | CPU s | peak GB (largest process) |",
-                  "| --- | --- | --- | --- | --- |"]
-        for w in (1, 2):
-            row = b[f"workers_{w}"]
-            lines.append(f"| {w} | {row['seconds']:.1f} | {row['per_capture_s']:.2f} | {row['cpu_s']:.1f} | "
-                         f"{row['peak_gb']:.2f} |")
-        lines += ["", f"2 workers: {b['speedup']:.2f}× one (target ≥ {TARGETS['batch_speedup']:g}×); target "
-                      f"≤ {TARGETS['batch_s_per_capture']:g} s per capture. One worker runs in the batch's own process "
-                      "with OpenCV's and numba's threads on every core (remapping, refocusing); pool workers run one "
-                      "thread each. So on 2 cores a second worker gains only the single-threaded parts (reading the "
-                      "PNG, demosaicing, the hexagonal resampling, writing), and on a machine busy with other work "
-                      "neither worker gets a whole core. The decoder is derived once, by the batch's parent, and "
-                      "read from the cache by each worker."]
+        lines += ["", f"## Batch: {b['captures']} captures, one white image (cache ready)", ""]
+        if r.get("batch_load"):
+            bl = r["batch_load"]
+            lines += [f"Run again on its own (`--batch-only`): the load gauge read {bl['before']['load_factor']:.1f}× "
+                      f"before and {bl['after']['load_factor']:.1f}× after these runs.", ""]
+        lines += batch_lines(b, r.get("cores"))
     if r.get("disk"):
         d = r["disk"]
         lines += ["", "## Writing the views against the disk", "",
@@ -477,16 +538,24 @@ def main(argv=None) -> int:
     parser.add_argument("--before", metavar="CHECKOUT", help="also run the commands on this checkout's code")
     parser.add_argument("--batch", type=int, metavar="N", help="captures in the batch (default 20, --quick 4)")
     parser.add_argument("--disk-only", action="store_true", help="only the view-writing measurement")
+    parser.add_argument("--batch-only", action="store_true", help="only the batch runs (and the load gauge)")
+    parser.add_argument("--note", default="", help="a paragraph for the page about this run (e.g. the machine's load)")
     parser.add_argument("--markdown", action="store_true", help="also print the tables (markdown) to stdout")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    folder = Path(args.keep or tempfile.mkdtemp(prefix="lfproc-bench-"))
+    folder = Path(args.keep or tempfile.mkdtemp(prefix="lfproc-bench-")).resolve()
     folder.mkdir(parents=True, exist_ok=True)
     new = {"date": time.strftime("%Y-%m-%d"), "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
-           "sensor": list(SENSOR)}
+           "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
+           "sensor": list(SENSOR), "note": args.note}
     try:
-        if not args.disk_only:
+        if args.batch_only:
+            make_capture(folder)
+            load_before = reference_load()
+            new["batch"] = batch(folder, args.batch or 20, child_env(None, folder / "cache-now"))
+            new["batch_load"] = {"before": load_before, "after": reference_load()}
+        elif not args.disk_only:
             t = time.perf_counter()
             make_capture(folder)
             print(f"capture ready in {time.perf_counter() - t:.1f} s", flush=True)
@@ -495,13 +564,13 @@ def main(argv=None) -> int:
             new["commands"] = run_commands(folder, None, args.quick, "now")
             if args.before:
                 new["before_commands"] = run_commands(folder, args.before, args.quick, "before")
-                new["before_code"] = args.before
+                new["before_code"] = describe_checkout(args.before)
             env = child_env(None, folder / "cache-now")
             new["phases"] = phases(folder, env)
             new["floors"] = floors(folder, env)
             new["batch"] = batch(folder, args.batch or (4 if args.quick else 20), env)
             new["load"] = {"before": load_before, "after": reference_load()}
-        if args.disk_only or not args.quick:
+        if args.disk_only or not (args.quick or args.batch_only):
             new["disk"] = disk_floor_and_views(folder)
     finally:
         if not args.keep:
@@ -509,6 +578,8 @@ def main(argv=None) -> int:
     json_path = out / "benchmarks-commands.json"
     previous = json.loads(json_path.read_text()) if json_path.is_file() else None
     results = merge_results(previous, new)
+    if "batch" in new and "batch_load" not in new:      # a full run's batch: no note of an earlier batch-only run
+        results.pop("batch_load", None)
     json_path.write_text(json.dumps(results, indent=1) + "\n")
     page = markdown(results)
     (out / "benchmarks-commands.md").write_text(page)

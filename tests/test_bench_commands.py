@@ -50,3 +50,14 @@ def test_disk_only_run_into_a_new_folder(tmp_path, monkeypatch):
     results = json.loads((out / "benchmarks-commands.json").read_text())
     assert results["disk"] == DISK
     assert "1221" in (out / "benchmarks-commands.md").read_text()
+
+
+def test_measured_processes_import_the_checkout_they_measure(tmp_path, monkeypatch):
+    """``--before CHECKOUT`` measures CHECKOUT's code even when the script runs from another checkout
+    (``python -m`` and ``-c`` put the working folder first on sys.path: the old column measured the new code)."""
+    other = tmp_path / "before"
+    (other / "lfproc").mkdir(parents=True)
+    (other / "lfproc" / "__init__.py").write_text("")
+    monkeypatch.chdir(ROOT)
+    assert bc.imported_lfproc(bc.child_env(str(other), tmp_path / "cache")) == str(other.resolve())
+    assert bc.imported_lfproc(bc.child_env(None, tmp_path / "cache")) == str(ROOT.resolve())

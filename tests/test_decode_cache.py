@@ -7,7 +7,6 @@ test takes well under a second. Nothing here depends on timing.
 import dataclasses
 import json
 import os
-import struct
 import threading
 
 import numpy as np
@@ -95,16 +94,39 @@ def test_cached_decoder_equals_a_fresh_one_field_by_field(folder):
             assert np.array_equal(a.centers_xy_px(), b.centers_xy_px()), f.name
         else:
             assert a == b, f.name
-    # the zero views are not stored: the entry holds its header, the delivered views of the inverse white
-    # image and the other arrays (at most), not the rest of the inverse white
-    assert not fresh.views_delivered.all()
-    with open(path, "rb") as fh:
-        fh.seek(len(dc.MAGIC))
-        header = len(dc.MAGIC) + 8 + struct.unpack("<Q", fh.read(8))[0]
-    others = sum(getattr(fresh, f.name).nbytes + dc.ALIGN for f in dataclasses.fields(fresh)
-                 if f.name != "inverse_white" and isinstance(getattr(fresh, f.name), np.ndarray))
-    zero_views = fresh.inverse_white[~fresh.views_delivered].nbytes
-    assert os.path.getsize(path) < header + fresh.inverse_white[fresh.views_delivered].nbytes + others + zero_views // 2
+    assert not fresh.views_delivered.all()    # zero views: stored as holes (test_zero_blocks_take_no_disk_space)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Entry:
+    views: np.ndarray
+    mask: np.ndarray
+    name: str
+
+
+def test_zero_blocks_take_no_disk_space_and_large_arrays_come_back_mapped(tmp_path):
+    """An entry's zero views are holes (no disk space; the entry takes less than a third of the array for a
+    quarter of the views set); a large array is mapped read-only from the file, a small one is an ordinary
+    writable copy; both come back exactly."""
+    views = np.zeros((6, 6, 64, 80, 3), np.float32)             # 61 kB per view: many file-system blocks each
+    views[1:4, 2:5] = np.random.default_rng(0).random((3, 3, 64, 80, 3), dtype=np.float32)
+    entry = _Entry(views, views.any(axis=(2, 3, 4)), "x")
+    path = str(tmp_path / "k.lfdec")
+    dc.store(path, "k", entry)
+    assert dc.disk_bytes(path) < views.nbytes / 3
+    loaded = dc.load(path, "k", _Entry)
+    assert np.array_equal(loaded.views, views) and np.array_equal(loaded.mask, entry.mask) and loaded.name == "x"
+    assert views.nbytes >= dc.MAP_BYTES and not loaded.views.flags.writeable
+    assert loaded.mask.flags.writeable
+
+
+def test_truncated_entry_is_not_mapped_past_its_end(tmp_path):
+    views = np.ones((2, 2, 256, 256, 3), np.float32)
+    path = str(tmp_path / "k.lfdec")
+    dc.store(path, "k", _Entry(views, views.any(axis=(2, 3, 4)), "x"))
+    with open(path, "r+b") as fh:
+        fh.truncate(os.path.getsize(path) // 2)      # inside the large array
+    assert dc.load(path, "k", _Entry) is None
 
 
 def key_of(folder, camera=None, grid=GRID, **options):
@@ -230,7 +252,7 @@ def test_concurrent_users_derive_once(folder):
 def test_cache_is_bounded_least_recently_used_first(folder, monkeypatch):
     decode_with_calib(folder)
     (entry,) = cache_entries()
-    size = os.path.getsize(entry)
+    size = dc.disk_bytes(entry)
     monkeypatch.setenv("LFPROC_CACHE_MAX_GB", str(1.5 * size / 1e9))
     decode_with_calib(folder, interpolation="nearest")     # a second entry: the first one goes
     (left,) = cache_entries()

@@ -22,7 +22,7 @@ from collections import deque
 
 from ._jobs import Job, JobResult
 from ._signals import Cancelled, StopSignals, signals_blocked
-from ._worker import _portable_setups, init_pool_worker, run_job
+from ._worker import _portable_setups, init_pool_worker, run_job, worker_threads
 
 #: seconds a worker has to answer a stop (a capture that is computing is abandoned at once)
 STOP_GRACE_S = 0.5
@@ -68,9 +68,9 @@ def _run_here(jobs, on_result, stop: StopSignals) -> None:
 class _Worker:
     """One worker process, its end of the pipe and the job it runs (None when idle)."""
 
-    def __init__(self, context, setups: dict):
+    def __init__(self, context, setups: dict, threads: int = 1):
         self.conn, child = context.Pipe()
-        self.process = context.Process(target=_worker_main, args=(child, setups), daemon=True,
+        self.process = context.Process(target=_worker_main, args=(child, setups, threads), daemon=True,
                                        name="lfproc-batch-worker")
         with signals_blocked():  # a Ctrl-C to the process group cannot hit its start-up
             self.process.start()
@@ -128,7 +128,7 @@ def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignal
                 return
             worker = next((w for w in pool if w.job is None), None)
             if worker is None:
-                worker = _Worker(context, setups)
+                worker = _Worker(context, setups, worker_threads(workers))
                 pool.append(worker)
             job = queue.popleft()
             if not worker.send(job):
@@ -199,14 +199,14 @@ def _stop_workers(pool, busy, collect, wait) -> None:
         worker.job = None
 
 
-def _worker_main(conn, setups: dict) -> None:
+def _worker_main(conn, setups: dict, threads: int = 1) -> None:
     """A worker process: run the jobs the parent sends until it sends None, the pipe closes or SIGTERM."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for the parent, which stops the workers
     _die_with_parent()
     with StopSignals((signal.SIGTERM,)) as stop:
         signal.pthread_sigmask(signal.SIG_UNBLOCK, (signal.SIGINT, signal.SIGTERM))  # blocked since the start
         try:
-            init_pool_worker(setups)
+            init_pool_worker(setups, threads)
             while not stop.requested:
                 with stop.interruptible():
                     job = conn.recv()

@@ -110,13 +110,23 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
                          time.perf_counter() - start)
 
 
-def init_pool_worker(setups: dict | None = None) -> None:
-    """Set up a local pool process: the parent's decode setups (no second calibration), one thread for
-    numba and OpenCV (parallelism comes from the processes)."""
+def worker_threads(workers: int) -> int:
+    """Threads for each of ``workers`` pool processes: the CPUs this process may use, shared out (at least 1),
+    so that the workers' OpenCV and numba threads together do not outnumber the cores."""
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        cpus = os.cpu_count() or 1
+    return max(1, cpus // max(1, workers))
+
+
+def init_pool_worker(setups: dict | None = None, threads: int = 1) -> None:
+    """Set up a local pool process: the parent's decode setups (no second calibration), ``threads`` threads
+    for numba and OpenCV (:func:`worker_threads`: parallelism comes mostly from the processes)."""
     _SETUP_CACHE.update(setups or {})
-    os.environ.setdefault("NUMBA_NUM_THREADS", "1")  # read when numba is first imported, later in run_job
+    os.environ.setdefault("NUMBA_NUM_THREADS", str(threads))  # read when numba is first imported, later in run_job
     try:
         import cv2
-        cv2.setNumThreads(1)
+        cv2.setNumThreads(threads)
     except ImportError:  # pragma: no cover
         pass

@@ -2,22 +2,25 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import LfprocError
 from ..grid import LensGrid
-from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_quantized, quantize,
+from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_method, demosaic_u16, quantize,
                         quantized_zero, to_channels)
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
-from ._positions import band_maps, check_m_hat, sensor_rows_read
-from ._resample import INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, masked
+from ._positions import check_m_hat, lens_centers, lens_offsets_px, sensor_rows_read
+from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
+from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, masked
 from ._luma import inverse_mosaic_white, luminance_views, with_colour
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
+#: interpolations whose weights are >= 0 (each sample within its taps' range: safe on 16-bit data)
+CONVEX_INTERPOLATIONS = ("nearest", "linear")
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
@@ -45,60 +48,149 @@ def view_runs(delivered) -> list[tuple[int, int, int]]:
 
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
               interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None,
-              runs: list | None = None) -> np.ndarray:
+              runs: list | None = None, scratch: dict | None = None, sink=None) -> np.ndarray | None:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
     ``shift`` moves each view's samples (:func:`view_offsets_px`); ``cells``, the sensor's lens class map
     (:mod:`._cells`), makes every lens read its own cell only (else the plain sensor image is read).
     With ``runs`` (:func:`view_runs`) only those views are read; the others are left undefined.
+    ``scratch`` (a dict kept by the caller across bands) lends the result's and the stack's memory: the
+    result is then valid until the next call with the same ``scratch``. With ``sink``, each run is handed
+    to ``sink(ky, kx0, kx1, views)`` (``views``: ``(1, kx1 − kx0, len(rows), cols, C)``, valid during the
+    call) as soon as it is read, while it is still in the processor's cache, and None is returned.
     """
     runs = [(ky, 0, m_hat) for ky in range(m_hat)] if runs is None else runs
     margin = DEMOSAIC_REACH_PX[demosaic_method] + INTERPOLATION_REACH_PX[interpolation] + 4
     y0, y1 = sensor_rows_read(grid, m_hat, rows, margin, sensor.shape[0], shift)
     channels = channel_count(sensor, cfa)
-    out = np.empty((m_hat, m_hat, len(rows), grid.cols, channels), dtype=np.float32)
+    n = len(rows)
+    out = None if sink is not None else borrowed(scratch, "views", (m_hat, m_hat, n, grid.cols, channels),
+                                                 np.float32)
+
+    def target(ky, kx0, kx1):
+        if out is not None:
+            return flat_out(out, ky, kx0, kx1)
+        return borrowed(scratch, "run", ((kx1 - kx0) * n, grid.cols, channels), np.float32)
+
+    def deliver(ky, kx0, kx1, block):
+        if sink is not None:
+            sink(ky, kx0, kx1, block.reshape(1, kx1 - kx0, n, grid.cols, channels))
+
     if y1 <= y0:
-        out[...] = 0.0
+        for ky, kx0, kx1 in runs:
+            block = target(ky, kx0, kx1)
+            block[...] = 0.0
+            deliver(ky, kx0, kx1, block)
         return out
+    reach = INTERPOLATION_REACH_PX[interpolation]     # a sample reads rows floor(y) - reach + 1 … floor(y) + reach
+    gap = 2 * reach
+    if cells is not None and CLASSES * (y1 - y0 + 2 * gap) >= CV_MAX_SIZE and n > 1:   # too tall for remap: halves
+        half = rows.start + n // 2
+        views = np.concatenate([read_band(sensor, grid, m_hat, part, cfa, demosaic_method, interpolation, shift,
+                                          cells, runs) for part in (range(rows.start, half), range(half, rows.stop))],
+                               axis=2)
+        for ky, kx0, kx1 in runs:
+            deliver(ky, kx0, kx1, views[ky, kx0:kx1])
+        return None if sink is not None else views
     flag = cv_flag(interpolation)
-    maps = band_maps(grid, m_hat, rows, y0, shift)
+    off_x, off_y = lens_offsets_px(grid, m_hat, rows, shift)
+    centers = lens_centers(grid, rows).astype(np.float32)
+    cx, cy = centers[None, :, :, 0], centers[None, :, :, 1] - np.float32(y0)
+
+    def run_maps(ky, kx0, kx1):
+        """The remap maps of views ``(ky, kx0:kx1)``, rows over (kx, r): :func:`band_maps`' run of them."""
+        return ((cx + off_x[ky, kx0:kx1].astype(np.float32)).reshape(-1, grid.cols),
+                (cy + off_y[ky, kx0:kx1].astype(np.float32)).reshape(-1, grid.cols))
+
     if cells is None:
         strip = np.ascontiguousarray(to_channels(sensor[y0:y1], cfa, demosaic_method))
-        flat = out.reshape(m_hat, m_hat * len(rows), grid.cols, channels)
-        n = len(rows)
         for ky, kx0, kx1 in runs:   # map rows run over (kx, r): a run of views is a block of map rows
-            map_x, map_y = maps[ky]
-            remap_into(flat[ky, kx0 * n:kx1 * n], strip, map_x[kx0 * n:kx1 * n], map_y[kx0 * n:kx1 * n], flag)
+            block = target(ky, kx0, kx1)
+            remap_into(block, strip, *run_maps(ky, kx0, kx1), flag)
+            deliver(ky, kx0, kx1, block)
         return out
-    classes = cells[y0:y1]
-    raw = sensor[y0:y1]
-    if raw.ndim == 2 and cfa != "none":   # quantize the band's mosaic once, demosaic each class's cells
+    stack, scale, low, zero = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap,
+                                           interpolation in CONVEX_INTERPOLATIONS, scratch)
+    height = y1 - y0
+    r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
+    base = (gap + lens_class(r, q) * (height + 2 * gap)).astype(np.float32)   # each lens's strip in the stack
+    clipped = y0 == 0 or y1 == sensor.shape[0]     # only there can samples reach past the strip's gap rows
+    for ky, kx0, kx1 in runs:
+        map_x, map_y = run_maps(ky, kx0, kx1)
+        my = map_y.reshape(kx1 - kx0, n, grid.cols) + base
+        if clipped:    # reading past the gap, a sample reads only 0 in its own strip: so it does here
+            y = my - base
+            my[(y < reach - 1 - gap) | (y >= height + gap - reach)] = -2 * gap - 2
+        block = target(ky, kx0, kx1)
+        remap_into(block, stack, map_x, my.reshape(-1, grid.cols), flag, scale=scale, offset=low, border=zero)
+        deliver(ky, kx0, kx1, block)
+    return out
+
+
+def borrowed(scratch: dict | None, name: str, shape: tuple, dtype) -> np.ndarray:
+    """An uninitialised array: ``scratch[name]``'s memory (grown when too small) reused, or new without
+    ``scratch``. Reusing a band's buffers for the next band spares the kernel from mapping and zeroing
+    fresh pages for each (a band's stack and views are tens of MB; system time was a third of decoding)."""
+    size = int(np.prod(shape)) * np.dtype(dtype).itemsize
+    if scratch is None:
+        return np.empty(shape, dtype)
+    if name not in scratch or scratch[name].nbytes < size:
+        scratch[name] = np.empty(size, np.uint8)
+    return scratch[name][:size].view(dtype).reshape(shape)
+
+
+def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
+    """``out[ky, kx0:kx1]`` as map rows over (kx, r): ``((kx1 − kx0)·rows, cols, C)``."""
+    m_hat, _, rows, cols, channels = out.shape
+    return out.reshape(m_hat, m_hat * rows, cols, channels)[ky, kx0 * rows:kx1 * rows]
+
+
+def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method: str, grid: LensGrid,
+                 rows: range, gap: int, convex: bool = True,
+                 scratch: dict | None = None) -> tuple[np.ndarray, float | None, float, int]:
+    """The sensor strip once per lens class, masked to that class's cells and converted to channels,
+    stacked vertically (class c at rows ``gap + c·(h + 2·gap)``) with ``gap`` rows of 0 around each, so
+    that one ``remap`` reads every lens from its own class's strip, as if from that strip alone.
+
+    A Bayer mosaic is quantized once (:func:`quantize`) and its classes demosaiced straight into a
+    uint16 stack: returns ``(stack, 1 / scale, low, zero)``, ``linear = value / scale + low`` (``zero``: the
+    value that stands for 0, :func:`quantized_zero`, read outside the stack), so that only the resampled
+    samples are converted to float (the remap rounds them to the 16-bit unit, as the mosaic was). Other
+    images, and every image when the interpolation is not ``convex`` (its negative lobes over- and
+    undershoot the 16-bit range), give a float32 linear stack and ``(stack, None, 0.0, 0)``.
+    """
+    height, width = raw.shape[:2]
+    channels = channel_count(raw, cfa)
+    present = set(np.unique(lens_class(*np.meshgrid(np.arange(rows.start, min(rows.start + 2, rows.stop)),
+                                                    np.arange(min(2, grid.cols)), indexing="ij"))).tolist())
+    quantized = raw.ndim == 2 and cfa != "none"
+    if quantized:
         as_u16, low, scale = quantize(raw)
         zero = quantized_zero(low, scale)
-
-        def class_channels(cls):
-            return demosaic_quantized(masked(as_u16, classes, cls, zero), low, scale, cfa, demosaic_method)
     else:
-        def class_channels(cls):
-            return to_channels(masked(raw, classes, cls), cfa, demosaic_method)
+        low, scale, zero = 0.0, None, 0
+    stack = borrowed(scratch, "stack", (CLASSES * (height + 2 * gap), width, channels),
+                     np.uint16 if quantized else np.float32)
     for cls in range(CLASSES):
-        first_row = rows.start + ((cls // 2 - rows.start) % 2)      # the band's first row of this class
-        first_col = cls % 2
-        if first_row >= rows.stop or first_col >= grid.cols:
-            continue
-        rsel = slice(first_row - rows.start, None, 2)
-        qsel = slice(first_col, None, 2)
-        strip = np.ascontiguousarray(class_channels(cls))
-        for ky, kx0, kx1 in runs:
-            map_x, map_y = maps[ky]
-            mx = np.ascontiguousarray(map_x.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
-            my = np.ascontiguousarray(map_y.reshape(m_hat, len(rows), grid.cols)[kx0:kx1, rsel, qsel])
-            part = np.empty(mx.shape + (channels,), dtype=np.float32)
-            remap_into(part.reshape(-1, mx.shape[2], channels), strip, mx.reshape(-1, mx.shape[2]),
-                       my.reshape(-1, mx.shape[2]), flag)
-            out[ky][kx0:kx1, rsel, qsel] = part
-    return out
+        top = gap + cls * (height + 2 * gap)
+        stack[top - gap:top] = zero
+        stack[top + height:top + height + gap] = zero
+        dst = stack[top:top + height]
+        if cls not in present:
+            dst[...] = zero
+        elif quantized:
+            demosaic_u16(masked(as_u16, classes, cls, zero), cfa, demosaic_method, dst=dst)
+        else:
+            dst[...] = to_channels(masked(raw, classes, cls), cfa, demosaic_method)
+    if scale is None:
+        return stack, None, 0.0, 0
+    if not convex:
+        linear = stack.astype(np.float32)
+        linear *= np.float32(1.0 / scale)
+        linear += np.float32(low)
+        return linear, None, 0.0, 0
+    return stack, 1.0 / scale, low, zero
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,23 +242,28 @@ class Decoder:
         runs = view_runs(self.views_delivered)
         runs = [(ky, 0, m) for ky in range(m)] if runs is None else runs
         step = _band_rows(m, grid.cols, self.channels)
+        scratch = {}   # the bands share their scratch memory (see borrowed)
         for r0 in range(0, out_grid.rows, step):
             out_rows = range(r0, min(r0 + step, out_grid.rows))
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
-            views = read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
-                              self.view_shift_px, self.cells, runs)
-            for ky, kx0, kx1 in runs:
-                run = views[ky:ky + 1, kx0:kx1]
-                run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
-                dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
-                if grid.kind == "hexagonal":
-                    hex_rows_to_rect(run, rows.start, out_rows, dst)
-                else:
-                    dst[...] = run
+            read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
+                      self.view_shift_px, self.cells, runs, scratch, functools.partial(self._devignette, out, rows,
+                                                                                       out_rows))
         if self.luma_views is not None and self.luma_views.any():     # their colour from the nominal reading
             luma = luminance_views(sensor, self)
             out[self.luma_views] = with_colour(luma, out[self.luma_views])
         return out
+
+    def _devignette(self, out: np.ndarray, rows: range, out_rows: range, ky: int, kx0: int, kx1: int,
+                    run: np.ndarray) -> None:
+        """Devignette a run of raw views of lens ``rows`` (:func:`read_band`'s ``sink``) into ``out[..., out_rows]``
+        (resampled to rectangular rows on a hexagonal grid)."""
+        run *= self.inverse_white[ky:ky + 1, kx0:kx1, rows.start:rows.stop]
+        dst = out[ky:ky + 1, kx0:kx1, out_rows.start:out_rows.stop]
+        if self.grid.kind == "hexagonal":
+            hex_rows_to_rect(run, rows.start, out_rows, dst)
+        else:
+            dst[...] = run
 
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,

@@ -50,12 +50,18 @@ def quantized_zero(low: float, scale: float) -> int:
     return int(min(max((0.0 - low) * scale + 0.5, 0), 65535))
 
 
-def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, method: str = "fast") -> np.ndarray:
-    """:func:`demosaic` of a mosaic that :func:`quantize` made: ``(H, W, 3)`` RGB float32, linear."""
+def demosaic_u16(as_u16: np.ndarray, cfa: str, method: str = "fast", dst: np.ndarray | None = None) -> np.ndarray:
+    """OpenCV's demosaicing of a mosaic that :func:`quantize` made, left in its 16-bit units: ``(H, W, 3)``
+    uint16 RGB (written into ``dst``, a C-contiguous array of that shape, when given)."""
     import cv2
 
     code = getattr(cv2, f"COLOR_{_CV_BAYER[cfa]}2RGB" + ("_EA" if method == "careful" else ""))
-    rgb = cv2.cvtColor(as_u16, code).astype(np.float32)
+    return cv2.cvtColor(as_u16, code, dst=dst)
+
+
+def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, method: str = "fast") -> np.ndarray:
+    """:func:`demosaic` of a mosaic that :func:`quantize` made: ``(H, W, 3)`` RGB float32, linear."""
+    rgb = demosaic_u16(as_u16, cfa, method).astype(np.float32)
     rgb *= np.float32(1.0 / scale)
     rgb += np.float32(low)
     return rgb

@@ -27,9 +27,12 @@ def cv_flag(interpolation: str) -> int:
             "lanczos": cv2.INTER_LANCZOS4}[interpolation]
 
 
-def remap_into(dst: np.ndarray, image: np.ndarray, map_x: np.ndarray, map_y: np.ndarray, flag: int) -> None:
+def remap_into(dst: np.ndarray, image: np.ndarray, map_x: np.ndarray, map_y: np.ndarray, flag: int,
+               scale: float | None = None, offset: float = 0.0, border: float = 0) -> None:
     """``dst[i, j, :] = image`` read at ``(map_x[i, j], map_y[i, j])``, 0 outside; blocks of rows and of
-    4 channels (OpenCV's limits: sides below 32767, at most 4 channels per call)."""
+    4 channels (OpenCV's limits: sides below 32767, at most 4 channels per call). With ``scale``, ``dst``
+    (float32) receives ``value · scale + offset``: the conversion of a quantized image's samples, which
+    reads ``border`` outside (the value that stands for 0)."""
     import cv2
 
     channels = image.shape[2]
@@ -39,8 +42,15 @@ def remap_into(dst: np.ndarray, image: np.ndarray, map_x: np.ndarray, map_y: np.
             ch1 = min(ch0 + 4, channels)
             plane = np.ascontiguousarray(image[:, :, ch0:ch1] if channels > 1 else image[:, :, 0])
             res = cv2.remap(plane, map_x[r0:r1], map_y[r0:r1], flag, borderMode=cv2.BORDER_CONSTANT,
-                            borderValue=0)
-            dst[r0:r1, :, ch0:ch1] = res.reshape(r1 - r0, map_x.shape[1], ch1 - ch0)
+                            borderValue=(border,) * 4)
+            block = dst[r0:r1, :, ch0:ch1]
+            res = res.reshape(block.shape)
+            if scale is None:
+                block[...] = res
+            else:
+                np.multiply(res, np.float32(scale), out=block)
+                if offset:
+                    block += np.float32(offset)
 
 
 def check_remap_size(height: int, width: int, cols: int) -> None:
