@@ -21,11 +21,6 @@ from ..grid import ROW_SPACING, LensGrid
 
 #: lens classes whose cells are read separately (see the module docstring)
 CLASSES = 4
-#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
-MIN_OWN_WEIGHT = 0.05
-#: a sample carries signal where its white is at least this fraction of the bright level (per unit of
-#: its kernel's weight on its own cell): ``make_decoder``'s default ``dark_fraction``
-DARK_FRACTION = 0.05
 #: sensor rows converted at a time (bounded float64 temporaries)
 _CHUNK_ROWS = 256
 
@@ -86,28 +81,3 @@ def masked(image: np.ndarray, classes: np.ndarray, cls: int, fill=0) -> np.ndarr
     if image.ndim == 3:
         keep = keep[:, :, None]
     return np.where(keep, image, np.asarray(fill, dtype=image.dtype))
-
-
-def own_parts(grid: LensGrid, r: int, q: int, xx: np.ndarray, yy: np.ndarray, own: np.ndarray,
-              samples: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per pixel (sensor coordinates ``xx``, ``yy``; ``own``: those in lens (r, q)'s cell), from ``samples`` ×
-    ``samples`` points each: the share of its area nearer to lens (r, q) than to any other (0 off the cell),
-    and the centre of that part (x, y) from the pixel centre. Where micro images touch, the rest of a pixel on
-    the cell boundary holds the neighbour's light: rays from the other side of the main lens, a faint
-    ghost image rather than a shift, so it carries no parallax of this lens."""
-    sub = (np.arange(samples) + 0.5) / samples - 0.5
-    share, ox, oy = np.where(own, 1.0, 0.0), np.zeros_like(xx), np.zeros_like(xx)
-    inner = own.copy()
-    inner[1:] &= own[:-1]
-    inner[:-1] &= own[1:]
-    inner[:, 1:] &= own[:, :-1]
-    inner[:, :-1] &= own[:, 1:]
-    edge = own & ~inner
-    sx, sy = (v.ravel()[None] for v in np.meshgrid(sub, sub))
-    rr, qq = nearest_lens(grid, xx[edge][:, None] + sx, yy[edge][:, None] + sy)
-    mine = (rr == r) & (qq == q)
-    n = np.maximum(mine.sum(axis=1), 1)
-    share[edge] = mine.mean(axis=1)
-    ox[edge] = (mine * sx).sum(axis=1) / n
-    oy[edge] = (mine * sy).sum(axis=1) / n
-    return share, ox, oy

@@ -14,8 +14,7 @@ from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_metho
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import check_m_hat, lens_centers, lens_offsets_px, sensor_rows_read
 from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._cells import CLASSES, DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, masked
-from ._luma import inverse_mosaic_white, luminance_views, with_colour
+from ._cells import CLASSES, cell_classes, lens_class, masked
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 
@@ -25,6 +24,8 @@ CONVEX_INTERPOLATIONS = ("nearest", "linear")
 BAND_BYTES = 32 * 2**20
 #: samples of the white image's views used for its bright level (a strided subset beyond this)
 LEVEL_SAMPLES = 4_000_000
+#: a sample read from its own cell needs at least this share of its kernel on the cell's pixels
+MIN_OWN_WEIGHT = 0.05
 
 
 def _band_rows(m_hat: int, cols: int, channels: int) -> int:
@@ -213,9 +214,6 @@ class Decoder:
     view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
     cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
     view_centre: tuple = None            # (c_y, c_x) samples: the central view read off the lens centres, or None
-    luma_views: np.ndarray = None        # (m̂, m̂) bool: delivered views read from the Bayer mosaic (._luma), or None
-    luma_shift_px: np.ndarray = None     # (m̂, m̂, 2) where those are read off nominal (sensor px x, y)
-    inverse_luma: np.ndarray = None      # (n, rows, cols, 1) 1 / the white's mosaic readings of those n views
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -249,9 +247,6 @@ class Decoder:
             read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
                       self.view_shift_px, self.cells, runs, scratch, functools.partial(self._devignette, out, rows,
                                                                                        out_rows))
-        if self.luma_views is not None and self.luma_views.any():     # their colour from the nominal reading
-            luma = luminance_views(sensor, self)
-            out[self.luma_views] = with_colour(luma, out[self.luma_views])
         return out
 
     def _devignette(self, out: np.ndarray, rows: range, out_rows: range, ky: int, kx0: int, kx1: int,
@@ -307,7 +302,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
 
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
                  interpolation: str = "linear", demosaic_method: str = "fast",
-                 dark_fraction: float = DARK_FRACTION, centroid_tolerance: float | None = 0.1,
+                 dark_fraction: float = 0.05, centroid_tolerance: float | None = 0.1,
                  whole_lenses: bool = True) -> Decoder:
     """Prepare a :class:`Decoder`: the views it delivers, the lenses it keeps, the white's inverse views.
 
@@ -347,40 +342,28 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
-    luma = luma_shift = inverse_luma = None
     if centroid_tolerance is None:
         delivered, shift, cells, view_centre = np.ones((m_hat, m_hat), dtype=bool), None, None, None
     else:
         sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
         delivered, shift = sampling.delivered, sampling.shift_px
         view_centre = centre_in_samples(sampling.centre_offset_px, grid, m_hat) if sampling.centred else None
-        if sampling.luma is not None and sampling.luma.any():
-            luma, luma_shift = sampling.luma, sampling.luma_shift_px
     if whole_lenses:
-        reach = shift if luma is None else np.where(luma[..., None], luma_shift, shift)
-        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, reach)
+        grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
     if grid.kind == "hexagonal":
         check_hex_size(grid.rows, grid.cols)
     if centroid_tolerance is not None:
         cells = cell_classes(grid, white.shape)
     inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
                              shift, cells)
-    if luma is not None:      # views read from the mosaic: the white's mosaic readings there
-        inverse_luma = inverse_mosaic_white(white, grid, m_hat, cells, luma, luma_shift, dark_fraction)
-        kept = carrying_views(inverse_luma, luma)
-        delivered = delivered & ~(luma & ~kept)
-        inverse_luma, luma = inverse_luma[kept[luma]], kept
     if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
         kept = carrying_views(inverse, delivered)
-        if luma is not None:   # the colour of a mosaic-read view may be missing at some lenses: it is neutral there
-            kept |= luma
         inverse[~kept] = 0.0
         delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre, luma,
-                   luma_shift, inverse_luma)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre)
 
 
 def centre_in_samples(offset_px, grid: LensGrid, m_hat: int) -> tuple:

@@ -28,23 +28,17 @@ off, so that nearest-neighbour reading is not counted against the white image:
    division by the white image would amplify them.
 3. **Where to read them.** A view whose centroid is right at nominal (within ``tolerance`` at
    :data:`REQUIRED_FRACTION` of the lenses it is lit on) is read there. Any other view is moved off
-   nominal until the centroid of its samples' own light, averaged over the probed lenses on which they
-   carry signal in every channel (as the decoder decides, at :data:`COVERED_FRACTION` of them), is the
-   nominal position (:data:`ITERATIONS` fixed-point steps, at most :data:`MAX_SHIFT` effective pixels).
-   A pixel the rim of the micro image crosses counts at the centre of its lit part
-   (:func:`_lit_part_offsets`); a pixel on the cell boundary of micro images that touch counts with its
-   own part only (:func:`._cells.own_parts`: the rest is the neighbour's light, a ghost without this
-   lens's parallax; counted as own, the outer ring stayed 1.5 % compressed, also on mono sensors).
-4. **Bayer: from the mosaic.** Views that demosaicing cannot reach (red and blue at the rim are two
-   pixels apart) are read from the mosaic as it is (linear interpolation), every pixel for its own rays (:mod:`._luma`), if
-   there their centroid is within :data:`LUMA_TOLERANCE` of ``tolerance`` and they still read the lit
-   micro image (not stray light in the gaps).
+   nominal until the white-weighted centroid of its samples, averaged over the probed lenses on which
+   they read light in every channel, is the nominal position (:data:`ITERATIONS` fixed-point steps, at
+   most :data:`MAX_SHIFT` effective pixels; a larger move over-corrected the renders, +0.011 in a). A
+   pixel the rim of the micro image crosses counts at the centre of its lit part
+   (:func:`_lit_part_offsets`): without that the outer ring stayed compressed (−0.03…−0.07 in a).
 
 A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its
 (corrected) centroid is right (a moved view: the mean residual of it and its mirror images, which are
-delivered together, within ``tolerance``; their differences are the probe's noise); the set is made
-symmetric (a view and its mirror images both or neither), so slices stay evenly bright, and
-:func:`carrying_views` drops views whose samples carry no signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
+delivered together, within ``tolerance``; their differences are the probe's noise); the set is made symmetric (a view and its mirror images both or
+neither), so slices stay evenly bright, and :func:`carrying_views` drops views whose samples carry no
+signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
 """
 
 from __future__ import annotations
@@ -55,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..grid import LensGrid
-from ._cells import DARK_FRACTION, MIN_OWN_WEIGHT, cell_classes, lens_class, own_parts
+from ._cells import cell_classes, lens_class
 from ._demosaic import to_channels
 from ._disc_centre import measure_disc_centre
 from ._positions import view_offsets_px
@@ -67,9 +61,6 @@ PROBED_LENSES = 400
 MIN_PROBED = 4
 #: a view is delivered where it is lit (and right) at this fraction of the probed lenses
 REQUIRED_FRACTION = 0.9
-#: a moved view's samples must carry signal at this share of the lenses it is lit on: a margin over
-#: REQUIRED_FRACTION, which the decoder checks again on all the central lenses (the probe sees up to 400)
-COVERED_FRACTION = 0.95
 #: a view is lit at a lens where its white reaches this fraction of the central view's (channel mean)
 LIT_FRACTION = 0.4
 #: the lit disc is decoded centred when its centre is further than this (effective pixels) off the grid's
@@ -80,17 +71,6 @@ CENTRE_DECODING = True
 MAX_SHIFT = 0.75
 #: fixed-point steps of the centroid correction
 ITERATIONS = 10
-#: count the neighbour's light in pixels on the cell boundary as a ghost without parallax (:func:`._cells.own_parts`)
-GHOSTS = True
-#: sub-pixel samples per axis that measure a boundary pixel's own part
-_SUBSAMPLES = 4
-#: Bayer mosaics: deliver the views demosaicing cannot reach by reading their luminance from the mosaic
-MOSAIC_LUMA = True
-#: their centroid tolerance, as a fraction of the others': they are the outermost views, which refocusing weighs
-#: most, and their residual is always inwards (they are read as far out as their samples carry signal)
-LUMA_TOLERANCE = 0.5
-#: probe planes per channel: white; own light's two first moments and level; flat, its moments; own cell
-PLANES = 8
 
 
 @dataclass(frozen=True)
@@ -110,8 +90,6 @@ class ViewSampling:
     centred: bool
     residual: np.ndarray
     lit: np.ndarray
-    luma: np.ndarray = None
-    luma_shift_px: np.ndarray = None
 
 
 def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, int]]:
@@ -126,21 +104,18 @@ def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, 
 @dataclass(frozen=True)
 class _Probe:
     """The probed lenses' patches side by side: ``tiles`` is a list of contiguous ``(L·S, S, ≤4)`` float32
-    images holding, per lens, :data:`PLANES` planes of ``C`` channels (the demosaiced white, or for a mosaic
-    probe its lit fraction; its own light's first moments and level; a flat image and its first moments;
-    the own cell); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments`` ``(L, 3)`` the
-    raw own-cell white's sum and first moments (for the disc centre); ``bright`` the white's bright level."""
+    images holding, per lens, the demosaiced white, its first moments, and those of a flat image
+    (channels ``6C`` in all); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments``
+    ``(L, 3)`` the raw own-cell white's sum and first moments (for the disc centre)."""
 
     tiles: list
     origin: np.ndarray
     moments: np.ndarray
     channels: int
-    bright: float
 
 
-def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) -> _Probe | None:
-    """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor); ``mosaic``: a Bayer mosaic read
-    as it is, one channel (each pixel for what it saw), not demosaiced."""
+def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | None:
+    """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor)."""
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
     size = 2 * half + 2
@@ -156,24 +131,17 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) 
         patch[ys - y0:ye - y0, xs - x0:xe - x0] = white[ys:ye, xs:xe]
         yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
-        share, ox, oy = np.ones_like(dx), np.zeros_like(dx), np.zeros_like(dx)
         if own_cells:
             own = ((cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q))
                    & (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
-            if GHOSTS:
-                share, ox, oy = own_parts(grid, r, q, xx, yy, own, _SUBSAMPLES)
         if patch.ndim == 3:
-            dx, dy, share, ox, oy = (v[..., None] for v in (dx, dy, share, ox, oy))
-        rx, ry, frac = _lit_part_offsets(patch, dx + ox, dy + oy, cfa, share)   # where each pixel's own lit rays are
+            dx, dy = dx[..., None], dy[..., None]
+        rx, ry = _lit_part_offsets(patch, dx, dy, cfa)      # where each pixel's lit rays are
         ones = np.ones_like(patch)
-        own_light = patch * share
-        # the white; its own light's first moments and level; the same of a flat image (the kernel's own
-        # centroid)
-        cell = ones * (own[..., None] if patch.ndim == 3 else own) if own_cells else ones
-        planes = [to_channels(p.astype(np.float32), "none" if mosaic else cfa, demosaic_method)
-                  for p in (frac * (patch > 0) if mosaic else patch, own_light * rx, own_light * ry, own_light,
-                            ones, ones * dx, ones * dy, cell)]
+        # the white, its first moments, and the same of a flat image (the kernel's own centroid)
+        planes = [to_channels(p.astype(np.float32), cfa, demosaic_method)
+                  for p in (patch, patch * rx, patch * ry, ones, ones * dx, ones * dy)]
         tiles.append(np.concatenate(planes, axis=-1))
         origin.append((cx - x0, cy - y0 + len(origin) * size))
         moments.append((np.sum(patch), np.sum(patch * dx), np.sum(patch * dy)))   # raw, no demosaic
@@ -181,18 +149,15 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, mosaic=False) 
         return None
     stack = np.concatenate(tiles, axis=0)
     groups = [np.ascontiguousarray(stack[..., c0:c0 + 4]) for c0 in range(0, stack.shape[2], 4)]
-    channels = stack.shape[2] // PLANES
-    bright = float(np.percentile(stack[..., :channels], 99))
-    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), channels, bright)
+    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), stack.shape[2] // 6)
 
 
-def _lit_part_offsets(patch, dx, dy, cfa, width=1.0):
+def _lit_part_offsets(patch, dx, dy, cfa):
     """Where each pixel's lit rays are, from the lens centre: a pixel the rim of the micro image crosses is
     lit over its inner part only (lit fraction f of the full level), so its rays sit (1 − f)/2 px inwards
     of its centre along the radius. The full level is the median of the well lit pixels (above half the
     brightest) of the same Bayer phase (mono: of the patch), so that the gentle fall-off of the interior
-    does not count as a rim. ``width``: of the pixel's own part along the radius (a pixel on the cell
-    boundary, :func:`._cells.own_parts`). Returns the rays' position (x, y) and f."""
+    does not count as a rim."""
     frac = np.zeros_like(patch)
     phases = [(slice(py, None, 2), slice(px, None, 2)) for py in (0, 1) for px in (0, 1)] if (
         cfa != "none" and patch.ndim == 2) else [(slice(None), slice(None))]
@@ -203,16 +168,15 @@ def _lit_part_offsets(patch, dx, dy, cfa, width=1.0):
         ref = float(np.median(lit)) if lit.size else 0.0
         frac[sy, sx] = np.clip(sub / ref, 0.0, 1.0) if ref > 0 else 0.0
     rho = np.maximum(np.hypot(dx, dy), 1e-9)
-    pull = 0.5 * (1.0 - frac) * width
-    return dx - pull * dx / rho, dy - pull * dy / rho, frac
+    pull = 0.5 * (1.0 - frac)
+    return dx - pull * dx / rho, dy - pull * dy / rho
 
 
-def _centroids(probe: _Probe, off_x, off_y, flag, per_weight=False):
-    """Per lens: white level ``(L, m̂, m̂, C)`` (0 where the sample carries no signal, as the decoder decides;
-    ``per_weight``: per unit of the kernel's weight on the own cell) and the centroid (x, y) of the samples'
-    own light, all channels together, from the lens centre, less the kernel's own centroid plus the sample
-    position (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the
-    sample position (nearest neighbour) is not a fault of the white image."""
+def _centroids(probe: _Probe, off_x, off_y, flag):
+    """Per lens: white level ``(L, m̂, m̂, C)`` and the white-weighted centroid (x, y) of the samples, all
+    channels together, from the lens centre, less the kernel's own centroid plus the sample position
+    (``(L, m̂, m̂)`` each; NaN where the white reads 0): a kernel that reads the sensor off the sample
+    position (nearest neighbour) is not a fault of the white image."""
     import cv2
 
     n, m = probe.origin.shape[0], off_x.shape[0]
@@ -222,20 +186,12 @@ def _centroids(probe: _Probe, off_x, off_y, flag, per_weight=False):
                                     borderValue=0).reshape(n, m, m, -1) for t in probe.tiles],
                          axis=-1).astype(np.float64)
     c = probe.channels
-
-    def plane(i):       # plane i (white; own light's moments and level; flat, its moments), channels summed
-        return got[..., i * c:(i + 1) * c].sum(axis=-1)
-    lvl, total, flat = got[..., :c], plane(3), plane(4)
-    weight = got[..., 7 * c:8 * c]
-    # as the decoder does: a sample carries signal where its kernel weighs its own cell and the white there
-    lvl = np.where((weight > MIN_OWN_WEIGHT) & (lvl > DARK_FRACTION * probe.bright * weight), lvl, 0.0)
-    if per_weight:      # the level the sample stands for: its own cell's pixels only
-        lvl = lvl / np.maximum(weight, MIN_OWN_WEIGHT)
+    lvl, total, flat = got[..., :c], got[..., :c].sum(axis=-1), got[..., 3 * c:4 * c].sum(axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        own_x = plane(5) / flat - off_x
-        own_y = plane(6) / flat - off_y
-        gx = np.where(total > 0, plane(1) / total - own_x, np.nan)
-        gy = np.where(total > 0, plane(2) / total - own_y, np.nan)
+        own_x = got[..., 4 * c:5 * c].sum(axis=-1) / flat - off_x
+        own_y = got[..., 5 * c:].sum(axis=-1) / flat - off_y
+        gx = np.where(total > 0, got[..., c:2 * c].sum(axis=-1) / total - own_x, np.nan)
+        gy = np.where(total > 0, got[..., 2 * c:3 * c].sum(axis=-1) / total - own_y, np.nan)
     return lvl, gx, gy
 
 
@@ -259,7 +215,7 @@ def _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff):
     for i in range(ITERATIONS + 1):
         ex, ey, covered = _mean_error(planes, nom_x, nom_y, tx, ty, shift, lit, flag)
         err = np.hypot(ex, ey)
-        better = (err < best_err) & (covered >= COVERED_FRACTION)
+        better = (err < best_err) & (covered >= REQUIRED_FRACTION)
         best[better], best_err[better] = shift[better], err[better]
         if i == ITERATIONS:
             break
@@ -324,26 +280,7 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     delivered[c, c] = delivered[c, c] or not lit.any()
     delivered = symmetric(delivered)
     shift[~delivered] = 0.0
-    luma, luma_shift = np.zeros((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2))
-    if (MOSAIC_LUMA and cfa != "none" and white.ndim == 2 and interpolation == "linear"
-            and np.any((lit_share >= REQUIRED_FRACTION) & ~delivered)):
-        # Bayer: the views demosaicing cannot reach, read from the mosaic as it is (every pixel for its rays)
-        mosaic = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True,
-                         mosaic=True)
-        start = np.where(delivered[..., None], 0.0, shift)
-        luma_shift, luma_residual = _corrected(mosaic, nom_x, nom_y, tx, ty, start, lit, flag, eff)
-        # where they are read, they still read the lit micro image (not stray light in the gaps between them)
-        moved, _, _ = _centroids(mosaic, nom_x + luma_shift[..., 0], nom_y + luma_shift[..., 1], flag,
-                                 per_weight=True)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            moved_lit = np.nan_to_num(moved[..., 0] / moved[:, c:c + 1, c:c + 1, 0], nan=0.0) >= LIT_FRACTION
-        luma = symmetric((lit_share >= REQUIRED_FRACTION) & ~delivered
-                         & ((moved_lit & lit).sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1))
-                         & (mirror_mean(luma_residual) <= LUMA_TOLERANCE * tolerance))
-        residual = np.where(luma, luma_residual, residual)
-        luma_shift[~luma] = 0.0
-        delivered = delivered | luma
-    return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share, luma, luma_shift)
+    return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share)
 
 
 def mirror_mean(values: np.ndarray) -> np.ndarray:
@@ -353,15 +290,11 @@ def mirror_mean(values: np.ndarray) -> np.ndarray:
 
 def carrying_views(inverse: np.ndarray, delivered: np.ndarray) -> np.ndarray:
     """``delivered`` less the views whose samples carry signal (non-zero inverse white) at fewer than
-    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric. ``inverse`` is ``(m̂, m̂, rows, cols,
-    C)``, or ``(n, rows, cols, C)`` holding only the ``delivered`` views (row-major)."""
-    rows, cols = inverse.shape[-3:-1]
+    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric."""
+    rows, cols = inverse.shape[2:4]
     r0, r1 = (int(0.2 * rows), int(math.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
     q0, q1 = (int(0.2 * cols), int(math.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
-    carried = (inverse[..., r0:r1, q0:q1, :] != 0).any(axis=-1).mean(axis=(-2, -1))
-    share = carried if inverse.ndim == 5 else np.zeros(delivered.shape)
-    if inverse.ndim == 4:
-        share[delivered] = carried
+    share = (inverse[:, :, r0:r1, q0:q1] != 0).any(axis=-1).mean(axis=(2, 3))
     return symmetric(delivered & (share >= REQUIRED_FRACTION))
 
 
