@@ -35,8 +35,7 @@ off, so that nearest-neighbour reading is not counted against the white image:
    (:func:`_lit_part_offsets`): without that the outer ring stayed compressed (−0.03…−0.07 in a).
 
 A view is delivered where it is lit at :data:`REQUIRED_FRACTION` of the probed lenses and its
-(corrected) centroid is right (a moved view: the mean residual of it and its mirror images, which are
-delivered together, within ``tolerance``; their differences are the probe's noise); the set is made symmetric (a view and its mirror images both or
+(corrected) centroid is right; the set is made symmetric (a view and its mirror images both or
 neither), so slices stay evenly bright, and :func:`carrying_views` drops views whose samples carry no
 signal on most lenses after all. Everything is a pure function of (white, grid, m̂, CFA, settings).
 """
@@ -274,18 +273,13 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     moved, moved_residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
     shift = np.where(fine[..., None], shift, moved)
     residual = np.where(fine, residual, moved_residual)
-    right = right | (~fine & (mirror_mean(moved_residual) <= tolerance))[None] & lit
+    right = right | (~fine & (moved_residual <= tolerance))[None] & lit
     delivered = ((lit_share >= REQUIRED_FRACTION)
                  & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)))
     delivered[c, c] = delivered[c, c] or not lit.any()
     delivered = symmetric(delivered)
     shift[~delivered] = 0.0
     return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share)
-
-
-def mirror_mean(values: np.ndarray) -> np.ndarray:
-    """Mean of ``values`` (m̂, m̂) over each view and its mirror images (about either axis and the centre)."""
-    return 0.25 * (values + values[::-1] + values[:, ::-1] + values[::-1, ::-1])
 
 
 def carrying_views(inverse: np.ndarray, delivered: np.ndarray) -> np.ndarray:
