@@ -139,6 +139,14 @@ def test_refocus_with_an_aperture_averages_only_the_views_inside_it(plane_views)
         lfproc.refocus(lf, 0.0, aperture=1.0)
 
 
+def test_an_aperture_keeps_where_the_views_were_read(plane_views):
+    """A light field decoded around an off-centre disc (``view_centre``) keeps it through ``with_aperture``:
+    its views' tags (angles, positions, aplanatic shifts) follow the sampling, with or without an aperture."""
+    views, _ = plane_views
+    lf = lfproc.LightField.from_views(views, LYTRO, view_centre=(0.3, -0.2))
+    assert lfproc.with_aperture(lf, 5.6).view_centre == pytest.approx((0.3, -0.2))
+
+
 def test_cli_aperture_tags_and_errors(tmp_path):
     sample = SAMPLES / "sample"
     base = [sample / "capture.png", "--camera", sample / "camera.toml", "--white", sample / "white.png"]
