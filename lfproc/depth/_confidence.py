@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._refine import aggregate, refine_minimum
+from ._refine import aggregate, minimum_position
 from ._search import dof_half_width_a
 
 #: estimates less confident than this are reported as unknown (NaN)
@@ -37,9 +37,10 @@ def cost_floor(luminance: np.ndarray) -> float:
     return (NOISE_CONTRAST * max(level, 1e-12)) ** 2
 
 
-def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
+def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray, lenses: np.ndarray | None = None) -> np.ndarray:
     """The ``a`` of the sharpest slice per lens: largest aggregated gradient energy of the refocused luminance
-    (``(K, Ny, Nx)``), refined between slices like the correspondence cost."""
+    (``(K, Ny, Nx)``), refined between slices like the correspondence cost. With ``lenses`` (``(Ny, Nx)``
+    booleans) only those lenses' slices are searched (NaN elsewhere); their ``a`` is the same."""
     energy = np.zeros_like(luminance)
     if luminance.shape[1] > 1:      # squared forward differences, each shared by the two lenses it joins
         d = np.diff(luminance, axis=1)
@@ -52,8 +53,12 @@ def defocus_estimate(luminance: np.ndarray, a_values: np.ndarray) -> np.ndarray:
         energy[:, :, 1:] += d
         energy[:, :, :-1] += d
     energy = aggregate(energy)
-    np.subtract(energy.max(), energy, out=energy)
-    return refine_minimum(energy, a_values, 0.0).a
+    top = energy.max()
+    if lenses is None:
+        return minimum_position(np.subtract(top, energy, out=energy), a_values)
+    a = np.full(energy.shape[1:], np.nan)
+    a[lenses] = minimum_position(np.subtract(top, energy[:, lenses]), a_values)
+    return a
 
 
 #: share of the views a slice must average at a lens for its sharpness (the defocus cue) to count there

@@ -189,19 +189,68 @@ def half_aperture_weights(n: int, weight: np.ndarray | None) -> list[np.ndarray]
 
 
 def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str = "linear",
-                          bin_lenses: int = 1) -> list[CostVolume]:
+                          bin_lenses: int = 1, all_views: bool = False) -> list[CostVolume]:
     """The cost volume of each half aperture (:func:`half_aperture_weights`), exact at the image border.
 
     Near the border of the image and next to a nearer occluder, some views of a lens see something else
     (they shift off the image, or onto the occluder), and the variance over all views has no clean
     minimum. The views on one side of the centre usually all see the surface: a lens at the right border
     keeps every view that looks left, a surface left of an occluder every view that looks away from it
-    (the angular split of occlusion-aware depth estimation, Wang et al., ICCV 2015). One fused refocus
-    per axis computes, for both halves of that axis, the sums of ``w``, ``w·Y`` and ``w·Y²`` over the
-    views inside the image; their ratios are each half's mean and mean square over exactly the views
-    it has there. Where a half has lost views off the image (:data:`HALF_APERTURE_COMPLETE`) its cost is
-    ``inf``: a half counts only where it is whole.
+    (the angular split of occlusion-aware depth estimation, Wang et al., ICCV 2015). Each half's mean
+    and mean square are the sums of ``w·Y`` and ``w·Y²`` over the views of the half inside the image
+    divided by the sum of their weights ``w``. Where a half has lost views off the image
+    (:data:`HALF_APERTURE_COMPLETE`) its cost is ``inf``: a half counts only where it is whole.
+
+    A half is a block of whole view columns (or rows), so it is refocused alone
+    (:func:`lfproc.refocus._block.refocus_view_block`: only its views are read, 2 channels) and the
+    weights' sums come from the sampling plans; ``all_views=True`` (and a per-view shift table, a
+    microscope's) takes the straightforward way instead: one fused refocus of ``w``, ``w·Y`` and
+    ``w·Y²`` of both halves of an axis over every view of the sweep (the views outside a half are zero
+    channels), the same volumes up to float rounding at 2.5 × the refocusing work.
     """
+    if all_views or sweep.slopes is not None:
+        return _half_aperture_volumes_all_views(sweep, a_values, interpolation, bin_lenses)
+    from ..refocus._block import refocus_view_block, view_weight_inside
+
+    a = np.asarray(a_values, dtype=np.float64)
+    shift = a * sweep.view_step / bin_lenses
+    n = sweep.y.shape[0]
+    centre = (n - 1) // 2
+    halves = half_aperture_weights(n, sweep.weight)
+    union = (sweep.weight > 0 if sweep.weight is not None else np.ones((n, n), bool)).astype(np.float32)
+    y = binned(sweep.y, bin_lenses)
+    union_inside = view_weight_inside(shift, union, y.shape[2:4], interpolation)
+    volumes = []
+    for h, (axis, side) in enumerate(HALF_APERTURES):
+        block = slice(0, centre + 1) if side < 0 else slice(centre, n)
+        rows, cols = (slice(0, n), block) if axis == "x" else (block, slice(0, n))
+        w = halves[h][rows, cols]
+        yb = y[rows, cols]
+        channels = np.empty(yb.shape + (2,), dtype=np.float32)
+        np.multiply(yb, w[:, :, None, None], out=channels[..., 0])
+        np.multiply(channels[..., 0], yb, out=channels[..., 1])
+        stack, share = refocus_view_block(channels, shift, n, rows, cols, w, interpolation)
+        del channels
+        complete_share = float(halves[h].sum() / union.sum())
+        whole = (share >= HALF_APERTURE_COMPLETE * complete_share * union_inside) & (share > 0)
+        volumes.append(_half_volume(a, stack[..., 0], stack[..., 1], whole, sweep.view_step))
+    return volumes
+
+
+def _half_volume(a, mean, mean_sq, whole, view_step) -> CostVolume:
+    """A half aperture's :class:`CostVolume` from its mean and mean square; ``inf`` cost (and NaN luminance)
+    where it is not ``whole``: fewer samples give a smaller variance and false minima."""
+    cost = mean_sq - mean * mean
+    empty = ~whole
+    cost[empty] = np.inf
+    mean[empty] = np.nan
+    np.maximum(cost, np.float32(0), out=cost)
+    return CostVolume(a, cost.astype(np.float32, copy=False), mean.astype(np.float32, copy=False), view_step)
+
+
+def _half_aperture_volumes_all_views(sweep, a_values, interpolation, bin_lenses) -> list[CostVolume]:
+    """:func:`half_aperture_volumes` the straightforward way: one fused refocus per axis of ``w``, ``w·Y``
+    and ``w·Y²`` of both its halves over every view; the ratios are each half's mean and mean square."""
     from ..lightfield import LightField
     from ..refocus import refocus
 
@@ -226,14 +275,9 @@ def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str
             share = stack[..., 3 * slot]
             with np.errstate(divide="ignore", invalid="ignore"):
                 mean = stack[..., 3 * slot + 1] / share
-                cost = stack[..., 3 * slot + 2] / share - mean * mean
-            # a half that lost views off the image (its share of the views there below its share of all
-            # views) is incomplete: fewer samples give a smaller variance and false minima; leave it out
+                mean_sq = stack[..., 3 * slot + 2] / share
+            # the half's share of the views there below its share of all views: it lost views off the image
             complete_share = float(halves[h].sum() / union.sum())
-            empty = ~(share >= HALF_APERTURE_COMPLETE * complete_share)
-            cost[empty] = np.inf
-            mean[empty] = np.nan
-            np.maximum(cost, np.float32(0), out=cost)
-            volumes.append(CostVolume(a, cost.astype(np.float32, copy=False), mean.astype(np.float32, copy=False),
-                                      sweep.view_step))
+            volumes.append(_half_volume(a, mean, mean_sq, share >= HALF_APERTURE_COMPLETE * complete_share,
+                                        sweep.view_step))
     return volumes

@@ -200,10 +200,17 @@ def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf
             continue
         cost = np.where(finite, cost, np.float32(10.0 * float(cost[finite].max()) + 1.0))
         found = refine_minimum(aggregate_edge_aware(cost), a_values, floor)
+        usable = found.interior & finite.all(axis=0) & textured
+        # the defocus cue only lowers a confidence (agreement ≤ 1; with a_defocus = a_corr it is 1): where the
+        # correspondence part alone does not beat the current confidence, the half cannot win: no cue there
+        upper = confidence(found.a, found.a_low, found.a_high, found.a, center_index, resolution=bin_lenses)
+        lenses = usable & (upper > conf)
+        if not lenses.any():
+            continue
         lum = np.where(np.isfinite(half.luminance), half.luminance, volume.luminance)
-        conf_half = confidence(found.a, found.a_low, found.a_high, defocus_estimate(lum, a_values), center_index,
-                               resolution=bin_lenses)
-        conf_half = np.where(found.interior & finite.all(axis=0) & textured, conf_half, np.float32(0.0))
+        conf_half = confidence(found.a, found.a_low, found.a_high, defocus_estimate(lum, a_values, lenses),
+                               center_index, resolution=bin_lenses)
+        conf_half = np.where(lenses, conf_half, np.float32(0.0))
         take = conf_half > conf
         if take.any():
             pick = lambda new, old: np.where(take, new, old)

@@ -54,18 +54,24 @@ def aggregate_edge_aware(cost: np.ndarray, window: int = AGGREGATION_WINDOW) -> 
     if window <= 1 or min(cost.shape[1:]) <= window:
         return centred
     h = window // 2
-    ny, nx = cost.shape[1:]
-    best = centred
-    best_min = centred.min(axis=0)
-    for axis, step in ((1, h), (1, -h), (2, h), (2, -h)):
-        index = np.clip(np.arange(ny if axis == 1 else nx) + step, 0, (ny if axis == 1 else nx) - 1)
-        shifted = np.take(centred, index, axis=axis)
-        shifted_min = shifted.min(axis=0)
+    shifts = ((0, h), (0, -h), (1, h), (1, -h))     # (lens axis, lenses)
+    best_min = centred.min(axis=0)   # a shifted box's least cost is the centred boxes' least cost, shifted
+    centred_min = best_min
+    choice = np.zeros(best_min.shape, dtype=np.int8)
+    for i, (axis, step) in enumerate(shifts, 1):
+        index = np.clip(np.arange(best_min.shape[axis]) + step, 0, best_min.shape[axis] - 1)
+        shifted_min = np.take(centred_min, index, axis=axis)
         better = shifted_min < best_min
         if better.any():
-            best = np.where(better[None], shifted, best)
             best_min = np.where(better, shifted_min, best_min)
-    return best
+            choice[better] = i
+    ys, xs = np.nonzero(choice)
+    if ys.size:   # each lens takes its chosen box's cost curve: one gather, not a copy of the volume per shift
+        axis, step = np.array(shifts)[choice[ys, xs] - 1].T
+        src_y = np.where(axis == 0, np.clip(ys + step, 0, best_min.shape[0] - 1), ys)
+        src_x = np.where(axis == 1, np.clip(xs + step, 0, best_min.shape[1] - 1), xs)
+        centred[:, ys, xs] = centred[:, src_y, src_x]
+    return centred
 
 
 def parabola_vertex(c0, c1, c2):
@@ -92,6 +98,20 @@ def refine_minimum(cost: np.ndarray, a_values: np.ndarray, floor: float) -> Cost
     -------
     CostMinimum
     """
+    best, interior, c1, offset, curvature, a = _vertex(cost, a_values)
+    c_min = np.maximum(c1 - 0.5 * curvature * offset * offset, 0.0) if cost.shape[0] >= 3 else c1
+    level = c_min + np.maximum(c_min, floor)
+    a_low, a_high = _basin(cost, np.asarray(a_values, dtype=np.float64), best, level)
+    return CostMinimum(a=a, cost=c_min, a_low=np.minimum(a_low, a), a_high=np.maximum(a_high, a), interior=interior)
+
+
+def minimum_position(cost: np.ndarray, a_values: np.ndarray) -> np.ndarray:
+    """The ``a`` of :func:`refine_minimum` alone (no basin): for cost arrays ``(K, …)`` of any lens shape."""
+    return _vertex(cost, a_values)[-1]
+
+
+def _vertex(cost, a_values):
+    """Best slice, whether it is interior, its cost, the parabola's offset (steps) and curvature, and ``a``."""
     k = cost.shape[0]
     a_values = np.asarray(a_values, dtype=np.float64)
     step = float(a_values[1] - a_values[0]) if k > 1 else 0.0
@@ -102,13 +122,9 @@ def refine_minimum(cost: np.ndarray, a_values: np.ndarray, floor: float) -> Cost
     if k >= 3:
         offset, curvature = parabola_vertex(take(np.maximum(best - 1, 0)), c1, take(np.minimum(best + 1, k - 1)))
         offset = np.where(interior, offset, 0.0)
-        c_min = np.maximum(c1 - 0.5 * curvature * offset * offset, 0.0)
     else:
-        offset, c_min = np.zeros_like(c1), c1
-    a = a_values[best] + offset * step
-    level = c_min + np.maximum(c_min, floor)
-    a_low, a_high = _basin(cost, a_values, best, level)
-    return CostMinimum(a=a, cost=c_min, a_low=np.minimum(a_low, a), a_high=np.maximum(a_high, a), interior=interior)
+        offset, curvature = np.zeros_like(c1), np.zeros_like(c1)
+    return best, interior, c1, offset, curvature, a_values[best] + offset * step
 
 
 def _basin(cost, a_values, best, level):

@@ -93,7 +93,7 @@ def _gather_band(views, channels, first_y, ntaps_y, lo_y, hi_y, first_x, lo_x, h
     for ky in range(m):
         sy_lo, sy_hi = _source_rows(ky, row0, row1, first_y, ntaps_y, lo_y, hi_y, src_rows, need_lo, need_hi)
         part[:] = 0
-        for kx in range(m):
+        for kx in range(views.shape[1]):
             for sy in range(sy_lo, sy_hi + 1):
                 for k in range(n_slices):
                     jy = sy - first_y[k, ky]
@@ -224,7 +224,7 @@ def _interpolated_band(views, channels, s, first_y, ntaps_y, w_y, lo_y, hi_y,
                     x_sum = ring[k, slot]
                     if ring_row[k, slot] != sy:
                         x_sum[:] = 0
-                        for kx in range(m):
+                        for kx in range(views.shape[1]):
                             _add_row(x_sum, views[ky, kx, sy], channels, s, src_cols,
                                      first_x[k, kx], ntaps_x[k, kx], w_x[k, kx], lo_x[k, kx], hi_x[k, kx])
                         ring_row[k, slot] = sy
@@ -304,7 +304,7 @@ def _interpolated_rows_band(views, channels, first_y, ntaps_y, w_y, lo_y, hi_y,
         if sy_lo > sy_hi:
             continue
         xs = np.zeros((n_slices, sy_hi - sy_lo + 1, row_len), dtype=part_kind.dtype)
-        for kx in range(m):
+        for kx in range(views.shape[1]):
             view = views[ky, kx]
             for k in range(n_slices):
                 lo = lo_x[k, kx]
