@@ -189,6 +189,9 @@ def test_output_folder_is_checked_before_any_capture_is_read(sample, tmp_path):
     assert_clean_error(run_cli("refocus", bad, *decode_args(sample), "--a", "0", "-o", blocker / "out"),
                        str(blocker))
     assert_clean_error(run_cli("views", bad, *decode_args(sample), "-o", "/proc/lfproc-out"), "/proc/lfproc-out")
+    # decode's -o is a file: a folder given for it is refused before the capture is read, naming the fix
+    assert_clean_error(run_cli("decode", bad, *decode_args(sample), "-o", tmp_path), str(tmp_path), "is a folder",
+                       "capture.lfp.npz")
 
 
 def test_duplicate_a_is_refused_before_decoding(sample, tmp_path):

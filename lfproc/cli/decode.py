@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import os
-
-from .capture_loop import add_decode_options, require_output_folder, setup_from_args
+from .capture_loop import add_decode_options, require_output_file, setup_from_args
 
 
 def register(sub) -> None:
@@ -20,7 +18,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..pipeline import load_lightfield
 
-    require_output_folder(os.path.dirname(os.path.abspath(args.output)))
+    require_output_file(args.output, "-o LF_FILE", "capture.lfp.npz")
     setup = setup_from_args(args)
     lf = load_lightfield(args.raw, setup)
     lf.save(args.output)
