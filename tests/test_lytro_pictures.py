@@ -208,6 +208,11 @@ def test_export_stack_depth_and_views(tmp_path, capsys, pictures):
         view = read_image(out / f"IMG_0001-stk_parallax_{k:02d}.tif")
         np.testing.assert_allclose(view, srgb_decode(rgb / 255.0), atol=0.02)  # YCbCr 8-bit round trip
         assert json.loads((out / f"IMG_0001-stk_parallax_{k:02d}.json").read_text())["coord"] == [x, y]
+    # lfproc info prints a nested tag (the exported depth map's camera) as its own lines, not a Python dict
+    nested = [k for k, v in meta.items() if isinstance(v, dict)]
+    assert nested
+    status, text, _ = cli(capsys, "info", out / "IMG_0001-dm_depth.tif")
+    assert status == 0 and "{'" not in text and f"  {nested[0]}:" in text
 
 
 def _without_metadata(jpeg: bytes) -> bytes:

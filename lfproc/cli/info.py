@@ -65,6 +65,9 @@ def format_info(info: dict) -> str:
                 if _is_records(v):      # a z-stack's slices: one line each
                     lines.append(f"  {k} ({len(v)}):")
                     lines += ["    " + ", ".join(f"{name} {_fmt(x)}" for name, x in row.items()) for row in v]
+                elif isinstance(v, dict):   # a nested record (an exported Lytro picture's camera): its own lines
+                    lines.append(f"  {k}:")
+                    lines += [f"    {name:18s} {_fmt(x)}" for name, x in v.items()]
                 else:
                     lines.append(f"  {k:20s} {_fmt(v)}")
             continue
