@@ -55,19 +55,8 @@ def test_only_views_inside_the_lit_disc_are_delivered(kind, cfa, pedestal):
         assert np.all(np.abs(brightness[delivered] / brightness[c, c] - 1) < 0.1)
 
 
-@pytest.mark.parametrize("sample", [
-    pytest.param("lytro", marks=pytest.mark.xfail(strict=True, reason=(
-        "hexagonal GRBG, 14.3 px lenses: 105 of 121 views; its (1, 3) group reads 0.095-0.1004 effective "
-        "pixel off and delivering it cost the sample's depth map 7 % of its lenses (docs/decoding.md)"))),
-    pytest.param("sample", marks=pytest.mark.xfail(strict=True, reason=(
-        "rectangular RGGB, 11.1 px lenses: 69 of 97 views; its outer ring would have to be read at the rim "
-        "of the micro image, where a view changes by 0.06-0.11 RMS with a calibration's grid error "
-        "(docs/decoding.md, 'What still blocks 90 %')"))),
-])
-def test_the_bundled_samples_deliver_nine_tenths_of_the_views_inside_the_aperture(sample, capsys):
-    """Issue 20: >= 90 % of the views inside the main lens aperture (the geometry's, independent of the
-    decoder) on the Illum-like Lytro sample (hexagonal GRBG, 14.3 px, m̂ = 13) and the
-    demo's sample (rectangular RGGB)."""
+def _sample_views(sample):
+    """(delivered, inside the main lens aperture) view masks of a bundled sample's decoder."""
     from conftest import SAMPLES
     from lfproc import Camera
     from lfproc.pipeline import camera_for_captures, prepare_decoding
@@ -80,8 +69,32 @@ def test_the_bundled_samples_deliver_nine_tenths_of_the_views_inside_the_apertur
         capture = str(SAMPLES / "sample" / "capture.png")
         camera = Camera.from_toml(str(SAMPLES / "sample" / "camera.toml"))
         setup = prepare_decoding(camera, white=str(SAMPLES / "sample" / "white.png"), captures=[capture])
-    delivered = np.asarray(setup.decoder_for((), "none").views_delivered)
-    inside = geometry.views_inside_aperture(camera)
-    assert not np.any(delivered & ~inside)
+    return np.asarray(setup.decoder_for((), "none").views_delivered), geometry.views_inside_aperture(camera)
+
+
+@pytest.mark.parametrize("sample", ["lytro", "sample"])
+def test_the_bundled_samples_deliver_only_symmetric_views_inside_the_aperture(sample):
+    """The bundled samples' delivered views lie inside the main lens aperture (the geometry's, independent
+    of the decoder) and are symmetric; this always holds (the 90 % below does not yet)."""
+    delivered, inside = _sample_views(sample)
+    assert delivered[inside].any() and not np.any(delivered & ~inside)
     assert np.array_equal(delivered, delivered[::-1]) and np.array_equal(delivered, delivered[:, ::-1])
+
+
+# Issue 20's target is not met on either sample: strict xfails, so that the day it is met shows as XPASS
+# (a failure under strict) and the marker must go. Only the count is under the marker; the invariants
+# above are checked unmarked.
+@pytest.mark.parametrize("sample", [
+    pytest.param("lytro", marks=pytest.mark.xfail(strict=True, reason=(
+        "hexagonal GRBG, 14.3 px lenses: 105 of 121 views; its (1, 3) group reads 0.095-0.1004 effective "
+        "pixel off and delivering it cost the sample's depth map 7 % of its lenses (docs/decoding.md)"))),
+    pytest.param("sample", marks=pytest.mark.xfail(strict=True, reason=(
+        "rectangular RGGB, 11.1 px lenses: 69 of 97 views; its outer ring would have to be read at the rim "
+        "of the micro image, where a view changes by 0.06-0.11 RMS with a calibration's grid error "
+        "(docs/decoding.md, 'What still blocks 90 %')"))),
+])
+def test_the_bundled_samples_deliver_nine_tenths_of_the_views_inside_the_aperture(sample):
+    """Issue 20: >= 90 % of the views inside the main lens aperture on the Illum-like Lytro sample
+    (hexagonal GRBG, 14.3 px, m̂ = 13) and the demo's sample (rectangular RGGB)."""
+    delivered, inside = _sample_views(sample)
     assert delivered.sum() >= 0.9 * inside.sum()
