@@ -18,7 +18,7 @@ from lfproc.depth import _estimate
 from lfproc.depth._confidence import confidence, cost_floor
 from lfproc.depth._cost import delivered_views, half_aperture_volumes, sweep_luminance
 from lfproc.depth._estimate import central_texture
-from lfproc.depth._refine import CostMinimum, aggregate, refine_minimum
+from lfproc.depth._refine import aggregate, refine_minimum
 from lfproc.lightfield import LightField
 
 
@@ -67,10 +67,7 @@ def straightforward_best_of_half_apertures(all_views):
             conf_half = confidence(found.a, found.a_low, found.a_high, sharpest_slice(lum, a_values), center_index,
                                    resolution=bin_lenses)
             take = np.where(found.interior & finite.all(axis=0) & textured, conf_half, np.float32(0.0)) > conf
-            pick = lambda new, old: np.where(take, new, old)
-            best = CostMinimum(a=pick(found.a, best.a), cost=pick(found.cost, best.cost),
-                               a_low=pick(found.a_low, best.a_low), a_high=pick(found.a_high, best.a_high),
-                               interior=pick(found.interior, best.interior))
+            best = found.where(take, best)
             conf = np.where(take, conf_half, conf)
         return best, conf
     return best_of

@@ -188,7 +188,7 @@ def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf
     (:func:`lfproc.depth._cost.half_aperture_volumes`); returns the chosen :class:`CostMinimum` and confidence."""
     from ._confidence import confidence, cost_floor, defocus_estimate
     from ._cost import half_aperture_volumes
-    from ._refine import CostMinimum, aggregate_edge_aware, refine_minimum
+    from ._refine import aggregate_edge_aware, refine_minimum
 
     floor = cost_floor(volume.luminance)
     textured = central_texture(sweep, bin_lenses)
@@ -213,10 +213,7 @@ def best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf
         conf_half = np.where(lenses, conf_half, np.float32(0.0))
         take = conf_half > conf
         if take.any():
-            pick = lambda new, old: np.where(take, new, old)
-            best = CostMinimum(a=pick(found.a, best.a), cost=pick(found.cost, best.cost),
-                               a_low=pick(found.a_low, best.a_low), a_high=pick(found.a_high, best.a_high),
-                               interior=pick(found.interior, best.interior))
+            best = found.where(take, best)
             conf = np.where(take, conf_half, conf)
     return best, conf
 

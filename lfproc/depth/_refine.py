@@ -14,7 +14,7 @@ one a wide, flat one; a basin that reaches an end of the sweep may continue beyo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -34,6 +34,10 @@ class CostMinimum:
     a_low: np.ndarray
     a_high: np.ndarray
     interior: np.ndarray
+
+    def where(self, take: np.ndarray, other: "CostMinimum") -> "CostMinimum":
+        """This minimum where ``take`` (``(Ny, Nx)`` bool), ``other`` elsewhere, field by field."""
+        return CostMinimum(*(np.where(take, getattr(self, f.name), getattr(other, f.name)) for f in fields(self)))
 
 
 def aggregate(cost: np.ndarray, window: int = AGGREGATION_WINDOW) -> np.ndarray:
