@@ -104,12 +104,10 @@ def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, 
 class _Probe:
     """The probed lenses' patches side by side: ``tiles`` is a list of contiguous ``(L·S, S, ≤4)`` float32
     images holding, per lens, the demosaiced white, its first moments, and those of a flat image
-    (channels ``6C`` in all); ``origin`` ``(L, 2)`` the lens centres in tile coordinates; ``moments``
-    ``(L, 3)`` the raw own-cell white's sum and first moments (for the disc centre)."""
+    (channels ``6C`` in all); ``origin`` ``(L, 2)`` the lens centres in tile coordinates."""
 
     tiles: list
     origin: np.ndarray
-    moments: np.ndarray
     channels: int
 
 
@@ -118,7 +116,7 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
     size = 2 * half + 2
-    tiles, origin, moments = [], [], []
+    tiles, origin = [], []
     for r, q in lenses:
         cx, cy = (float(v) for v in grid.lens_xy(r, q))
         x0, y0 = int(math.floor(cx)) - half & ~1, int(math.floor(cy)) - half & ~1   # even: the CFA phase stays
@@ -143,12 +141,11 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
                   for p in (patch, patch * rx, patch * ry, ones, ones * dx, ones * dy)]
         tiles.append(np.concatenate(planes, axis=-1))
         origin.append((cx - x0, cy - y0 + len(origin) * size))
-        moments.append((np.sum(patch), np.sum(patch * dx), np.sum(patch * dy)))   # raw, no demosaic
     if not tiles:
         return None
     stack = np.concatenate(tiles, axis=0)
     groups = [np.ascontiguousarray(stack[..., c0:c0 + 4]) for c0 in range(0, stack.shape[2], 4)]
-    return _Probe(groups, np.array(origin), np.array(moments, dtype=np.float64), stack.shape[2] // 6)
+    return _Probe(groups, np.array(origin), stack.shape[2] // 6)
 
 
 def _lit_part_offsets(patch, dx, dy, cfa):
