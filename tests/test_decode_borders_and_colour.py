@@ -100,7 +100,8 @@ def test_a_grey_card_decodes_grey_within_the_noise(grey_card, method):
     delivered = views[decoder.views_delivered]
     # the outer views (won back, issue 20) stand for the partly lit pixels at the micro image's rim: a
     # sample whose white is a fraction f of the bright level has the noise of a pixel at f, σ/√f
-    white_views = 1.0 / decoder.inverse_white[:, :, 1:-1, 1:-1][decoder.views_delivered]
+    inverse = np.broadcast_to(decoder.inverse_white, decoder.inverse_white.shape[:4] + (3,))  # one channel: all
+    white_views = 1.0 / inverse[:, :, 1:-1, 1:-1][decoder.views_delivered]
     bright = np.percentile(white_views, 99, axis=(0, 1, 2))
     for ch in range(3):
         values = delivered[..., ch]

@@ -81,18 +81,7 @@ def test_the_bundled_samples_deliver_only_symmetric_views_inside_the_aperture(sa
     assert np.array_equal(delivered, delivered[::-1]) and np.array_equal(delivered, delivered[:, ::-1])
 
 
-# Issue 20's target is not met on either sample: strict xfails, so that the day it is met shows as XPASS
-# (a failure under strict) and the marker must go. Only the count is under the marker; the invariants
-# above are checked unmarked.
-@pytest.mark.parametrize("sample", [
-    pytest.param("lytro", marks=pytest.mark.xfail(strict=True, reason=(
-        "hexagonal GRBG, 14.3 px lenses: 105 of 121 views; its (1, 3) group reads 0.095-0.1004 effective "
-        "pixel off and delivering it cost the sample's depth map 7 % of its lenses (docs/decoding.md)"))),
-    pytest.param("sample", marks=pytest.mark.xfail(strict=True, reason=(
-        "rectangular RGGB, 11.1 px lenses: 69 of 97 views; its outer ring would have to be read at the rim "
-        "of the micro image, where a view changes by 0.06-0.11 RMS with a calibration's grid error "
-        "(docs/decoding.md, 'What still blocks 90 %')"))),
-])
+@pytest.mark.parametrize("sample", ["lytro", "sample"])
 def test_the_bundled_samples_deliver_nine_tenths_of_the_views_inside_the_aperture(sample):
     """Issue 20: >= 90 % of the views inside the main lens aperture on the Illum-like Lytro sample
     (hexagonal GRBG, 14.3 px, m̂ = 13) and the demo's sample (rectangular RGGB)."""

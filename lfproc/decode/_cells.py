@@ -81,3 +81,81 @@ def masked(image: np.ndarray, classes: np.ndarray, cls: int, fill=0) -> np.ndarr
     if image.ndim == 3:
         keep = keep[:, :, None]
     return np.where(keep, image, np.asarray(fill, dtype=image.dtype))
+
+
+#: width (px) over which a pixel on the border between two cells passes from one lens to the other
+SHARE_WIDTH_PX = 1.0
+
+
+def _neighbour_offsets(grid: LensGrid, odd_row: bool) -> list[tuple[int, int, np.ndarray]]:
+    """``(dr, dq, offset_xy)`` of a lens's neighbours (rigid lattice; a smooth deviation barely changes them)."""
+    u, v = (np.asarray(a, dtype=np.float64) for a in grid.axes)
+    spacing = ROW_SPACING[grid.kind] * grid.pitch_px
+    if grid.kind == "hexagonal":
+        side = (0, 1) if odd_row else (-1, 0)
+        steps = [(0, -1), (0, 1)] + [(dr, dq) for dr in (-1, 1) for dq in side]
+    else:
+        steps = [(dr, dq) for dr in (-1, 0, 1) for dq in (-1, 0, 1) if (dr, dq) != (0, 0)]
+    out = []
+    for dr, dq in steps:
+        along_u = dq + (0.5 * (1 if not odd_row else -1) if grid.kind == "hexagonal" and dr else 0.0)
+        out.append((dr, dq, along_u * grid.pitch_px * u + dr * spacing * v))
+    return out
+
+
+def cell_shares(grid: LensGrid, sensor_shape, y0: int = 0, x0: int = 0,
+                classes: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(second, share)``: per pixel, the class of the lens across the nearest cell border (``uint8``) and
+    the pixel's share in its own (nearest) lens, 0.5 … 1 as ``uint8`` 128 … 255.
+
+    A pixel on the border between two cells sees both micro images; a hard border would hand it from
+    one lens to the other as the grid moves by a hundredth of a pixel, and a sample that reads it would
+    jump. Here it passes over :data:`SHARE_WIDTH_PX`: the share is ``0.5 + t / width`` (at most 1), t the
+    pixel's distance from the perpendicular bisector to the nearest neighbour's centre. ``classes``: the
+    :func:`cell_classes` map of the same pixels, when already at hand.
+    """
+    height, width = sensor_shape[:2]
+    second = np.empty((height, width), dtype=np.uint8)
+    share = np.empty((height, width), dtype=np.uint8)
+    offsets = {odd: _neighbour_offsets(grid, odd) for odd in (False, True)}
+    if grid.deviation is None and type(grid).lens_xy is LensGrid.lens_xy:    # rigid: the compiled kernel
+        from ._rim_kernel import cell_shares_rigid
+
+        u, v = grid.axes
+        lattice = np.array([grid.origin_xy_px[0], grid.origin_xy_px[1], u[0], u[1], v[0], v[1], grid.pitch_px,
+                            grid.row_spacing_px, 1.0 if grid.kind == "hexagonal" else 0.0])
+        steps = [np.array([[dr, dq, off[0], off[1]] for dr, dq, off in offsets[odd]]) for odd in (False, True)]
+        classes = cell_classes(grid, sensor_shape, y0, x0) if classes is None else classes
+        cell_shares_rigid(classes, y0, x0, lattice, steps[0], steps[1], SHARE_WIDTH_PX, second, share)
+        return second, share
+    xs = np.arange(x0, x0 + width, dtype=np.float64)
+    for r0 in range(0, height, _CHUNK_ROWS):
+        r1 = min(r0 + _CHUNK_ROWS, height)
+        yy, xx = np.meshgrid(np.arange(y0 + r0, y0 + r1, dtype=np.float64), xs, indexing="ij")
+        r, q = nearest_lens(grid, xx, yy)
+        centre = grid.lens_xy(r, q)
+        dx, dy = xx - centre[..., 0], yy - centre[..., 1]
+        best = np.full(r.shape, np.inf)
+        best_cls = np.zeros(r.shape, dtype=np.uint8)
+        odd = (r % 2 == 1) if grid.kind == "hexagonal" else np.zeros(r.shape, bool)
+        for parity in (False, True):
+            rows = odd == parity
+            if not rows.any():
+                continue
+            for dr, dq, off in offsets[parity]:
+                length = float(np.hypot(*off))
+                t = 0.5 * length - (dx * off[0] + dy * off[1]) / length
+                closer = rows & (t < best)
+                best = np.where(closer, t, best)
+                best_cls = np.where(closer, lens_class(r + dr, q + dq), best_cls).astype(np.uint8)
+        second[r0:r1] = best_cls
+        frac = np.clip(0.5 + np.maximum(best, 0.0) / SHARE_WIDTH_PX, 0.5, 1.0)
+        share[r0:r1] = np.rint(frac * 255).astype(np.uint8)
+    return second, share
+
+
+def class_weight(classes: np.ndarray, second: np.ndarray, share: np.ndarray, cls: int) -> np.ndarray:
+    """Each pixel's weight (float32, 0 … 1) in the lenses of class ``cls``: its share where it is their cell,
+    the rest where it borders it (:func:`cell_shares`)."""
+    own = share.astype(np.float32) * np.float32(1 / 255)
+    return np.where(classes == cls, own, np.where(second == cls, np.float32(1.0) - own, np.float32(0.0)))

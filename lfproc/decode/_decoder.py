@@ -14,9 +14,13 @@ from ._demosaic import (DEMOSAIC_REACH_PX, channel_count, check_cfa, check_metho
 from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_grid_of, rect_row_count
 from ._positions import check_m_hat, lens_centers, lens_offsets_px, sensor_rows_read
 from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
-from ._cells import CLASSES, cell_classes, lens_class, masked
+from ._cells import CLASSES, cell_classes, cell_shares, class_weight, lens_class, masked
 from ._view_mask import carrying_views, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
+from ._rim_demosaic import RATIO_FLOOR, RATIO_LIMIT, balanced_white, phase_channels
+
+#: decode Bayer mosaics rim-aware (:mod:`._rim_demosaic`): every view read like a mono sensor's
+RIM_AWARE = True
 
 #: interpolations whose weights are >= 0 (each sample within its taps' range: safe on 16-bit data)
 CONVEX_INTERPOLATIONS = ("nearest", "linear")
@@ -49,7 +53,8 @@ def view_runs(delivered) -> list[tuple[int, int, int]]:
 
 def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: str, demosaic_method: str,
               interpolation: str, shift: np.ndarray | None = None, cells: np.ndarray | None = None,
-              runs: list | None = None, scratch: dict | None = None, sink=None) -> np.ndarray | None:
+              runs: list | None = None, scratch: dict | None = None, sink=None,
+              rim: tuple | None = None, shares: tuple | None = None) -> np.ndarray | None:
     """The raw (not devignetted) views of lens ``rows``: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip those lenses read is converted (demosaiced): no full-size temporaries.
@@ -111,8 +116,13 @@ def read_band(sensor: np.ndarray, grid: LensGrid, m_hat: int, rows: range, cfa: 
             remap_into(block, strip, *run_maps(ky, kx0, kx1), flag)
             deliver(ky, kx0, kx1, block)
         return out
-    stack, scale, low, zero = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows, gap,
-                                           interpolation in CONVEX_INTERPOLATIONS, scratch)
+    if rim is not None:
+        stack, scale, low, zero = _rim_stack(sensor[y0:y1], rim[0][y0:y1], cells[y0:y1],
+                                             tuple(a[y0:y1] for a in shares), cfa, rim[1], grid, y0, gap, scratch)
+    else:
+        stack, scale, low, zero = _class_stack(sensor[y0:y1], cells[y0:y1], cfa, demosaic_method, grid, rows,
+                                               gap, interpolation in CONVEX_INTERPOLATIONS, scratch,
+                                               None if shares is None else tuple(a[y0:y1] for a in shares))
     height = y1 - y0
     r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(grid.cols), indexing="ij")
     base = (gap + lens_class(r, q) * (height + 2 * gap)).astype(np.float32)   # each lens's strip in the stack
@@ -149,7 +159,7 @@ def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
 
 def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method: str, grid: LensGrid,
                  rows: range, gap: int, convex: bool = True,
-                 scratch: dict | None = None) -> tuple[np.ndarray, float | None, float, int]:
+                 scratch: dict | None = None, shares: tuple | None = None) -> tuple[np.ndarray, float | None, float, int]:
     """The sensor strip once per lens class, masked to that class's cells and converted to channels,
     stacked vertically (class c at rows ``gap + c·(h + 2·gap)``) with ``gap`` rows of 0 around each, so
     that one ``remap`` reads every lens from its own class's strip, as if from that strip alone.
@@ -166,6 +176,7 @@ def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method
     present = set(np.unique(lens_class(*np.meshgrid(np.arange(rows.start, min(rows.start + 2, rows.stop)),
                                                     np.arange(min(2, grid.cols)), indexing="ij"))).tolist())
     quantized = raw.ndim == 2 and cfa != "none"
+    assert shares is None or not quantized, "cell shares weigh float images only"
     if quantized:
         as_u16, low, scale = quantize(raw)
         zero = quantized_zero(low, scale)
@@ -182,6 +193,9 @@ def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method
             dst[...] = zero
         elif quantized:
             demosaic_u16(masked(as_u16, classes, cls, zero), cfa, demosaic_method, dst=dst)
+        elif shares is not None:
+            weight = class_weight(classes, *shares, cls)
+            dst[...] = to_channels(raw * (weight if raw.ndim == 2 else weight[..., None]), cfa, demosaic_method)
         else:
             dst[...] = to_channels(masked(raw, classes, cls), cfa, demosaic_method)
     if scale is None:
@@ -192,6 +206,20 @@ def _class_stack(raw: np.ndarray, classes: np.ndarray, cfa: str, demosaic_method
         linear += np.float32(low)
         return linear, None, 0.0, 0
     return stack, 1.0 / scale, low, zero
+
+
+def _rim_stack(raw, wb, classes, shares, cfa, levels, grid, y0, gap, scratch=None):
+    """:func:`_class_stack` for rim-aware decoding (:mod:`._rim_demosaic`): each class's ``ŵ·rgb``, float32."""
+    from ._rim_kernel import rim_stack
+
+    height, width = raw.shape[:2]
+    stack = borrowed(scratch, "stack", (CLASSES * (height + 2 * gap), width, 3), np.float32)
+    u, v = grid.axes
+    lattice = np.array([grid.origin_xy_px[0], grid.origin_xy_px[1], u[0], u[1], v[0], v[1], grid.pitch_px,
+                        grid.row_spacing_px, 1.0 if grid.kind == "hexagonal" else 0.0])
+    rim_stack(raw, wb, classes, shares[0], shares[1], (1.0 / np.asarray(levels, np.float64)),
+              phase_channels(cfa).astype(np.int64), y0, lattice, gap, RATIO_FLOOR, RATIO_LIMIT, stack)
+    return stack, None, 0.0, 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -208,12 +236,26 @@ class Decoder:
     demosaic_method: str
     sensor_shape: tuple          # (H, W) of the white image, which every capture must share
     channels: int
-    inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C) on ``grid``: 1 / white views where delivered, else 0
+    inverse_white: np.ndarray    # (m̂, m̂, rows, cols, C or 1) on ``grid``: 1 / white views where delivered, else 0
     output_grid: LensGrid        # lens positions of the decoded light field (rectangular, also for hex input)
     views_delivered: np.ndarray = None   # (m̂, m̂) bool: the views that are not 0 everywhere
     view_shift_px: np.ndarray = None     # (m̂, m̂, 2) sensor px (x, y) each view's samples sit off nominal, or None
     cells: np.ndarray = None             # (H, W) uint8 lens class of each pixel (own-cell reading), or None
     view_centre: tuple = None            # (c_y, c_x) samples: the central view read off the lens centres, or None
+    balanced_white: np.ndarray = None    # (H, W) float32 white per Bayer phase level (rim-aware decoding), or None
+    phase_levels: np.ndarray = None      # (4,) the Bayer phases' bright levels (rim-aware decoding), or None
+    border_class: np.ndarray = None      # (H, W) uint8 class of the lens across the nearest cell border, or None
+    border_share: np.ndarray = None      # (H, W) uint8 each pixel's share in its own lens (128 … 255), or None
+
+    @property
+    def rim(self) -> tuple | None:
+        """``(balanced white, phase levels)`` of rim-aware Bayer decoding (:mod:`._rim_demosaic`), or None."""
+        return None if self.balanced_white is None else (self.balanced_white, self.phase_levels)
+
+    @property
+    def shares(self) -> tuple | None:
+        """``(border class, border share)`` (:func:`._cells.cell_shares`), or None (hard cell borders)."""
+        return None if self.border_class is None else (self.border_class, self.border_share)
 
     def __call__(self, sensor: np.ndarray, cfa: str | None = None) -> np.ndarray:
         """Views ``(m̂, m̂, Ny, Nx, C)`` float32 of one sensor image.
@@ -246,7 +288,8 @@ class Decoder:
             rows = hex_rows_read(out_rows, grid.rows) if grid.kind == "hexagonal" else out_rows
             read_band(sensor, grid, m, rows, self.cfa, self.demosaic_method, self.interpolation,
                       self.view_shift_px, self.cells, runs, scratch, functools.partial(self._devignette, out, rows,
-                                                                                       out_rows))
+                                                                                       out_rows), self.rim,
+                      self.shares)
         return out
 
     def _devignette(self, out: np.ndarray, rows: range, out_rows: range, ky: int, kx0: int, kx1: int,
@@ -263,12 +306,16 @@ class Decoder:
 
 def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
                    interpolation: str, dark_fraction: float, delivered: np.ndarray, shift=None,
-                   cells=None) -> np.ndarray:
-    """1 / white views where the white carries signal in every channel and the view is delivered, else 0.
+                   cells=None, shares=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(inverse, signal)``: 1 / white views where the white carries signal in every channel and the view is
+    delivered, else 0; and the share of each view's samples that carry signal over the central 60 % of the
+    lenses (:func:`carrying_views`).
 
     Reading own cells (``cells``), a sample's white is compared with the threshold per unit of its kernel's
     weight on its own cell: a view read near the micro image's edge puts little weight on the lit pixels
-    but stands for them alone (the weight cancels in capture / white).
+    but stands for them alone (the weight cancels in capture / white). With cell ``shares`` (rim-aware
+    decoding) a sample below the threshold is not set to 0 but divided by the threshold: it fades out
+    as its white does, so that a grid a hundredth of a pixel off does not switch it on or off.
     """
     channels = channel_count(white, cfa)
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, channels), dtype=np.float32)
@@ -276,7 +323,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     bands = [range(r0, min(r0 + step, grid.rows)) for r0 in range(0, grid.rows, step)]
     for rows in bands:
         inverse[:, :, rows.start:rows.stop] = read_band(white, grid, m_hat, rows, cfa, demosaic_method,
-                                                        interpolation, shift, cells)
+                                                        interpolation, shift, cells, shares=shares)
     flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0
@@ -284,20 +331,38 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
         raise LfprocError("the white image is black at every lens centre; check the white image and the grid")
     threshold = np.float32(dark_fraction * bright)
     ones = None if cells is None else np.broadcast_to(np.float32(1.0), white.shape)   # no full-size copy
+    counted = np.zeros((m_hat, m_hat))
+    r0, r1, q0, q1 = central_lenses(grid.rows, grid.cols)
     for rows in bands:
         band = inverse[:, :, rows.start:rows.stop]
         weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
-                                                      interpolation, shift, cells)
+                                                      interpolation, shift, cells, shares=shares)
         for ky in range(m_hat):      # per view row: the boolean temporaries stay small
             w = band[ky]
             # a sample carries signal only where every channel does: one dark channel alone would turn a
             # neutral sample magenta or green
             lit = w > threshold if weight is None else (weight[ky] > MIN_OWN_WEIGHT) & (w > threshold * weight[ky])
-            signal = np.broadcast_to(lit.all(axis=-1, keepdims=True), w.shape)
+            all_lit = lit.all(axis=-1)
+            inner = all_lit[:, max(r0 - rows.start, 0):max(r1 - rows.start, 0), q0:q1]
+            counted[ky] += inner.sum(axis=(1, 2))
+            if shares is not None:     # fade out below the threshold (continuous in the grid)
+                floor = threshold * weight[ky]
+                signal = floor > 0
+                np.divide(np.float32(1.0), np.maximum(w, floor), out=w, where=signal)
+                w[~signal] = 0.0
+                continue
+            signal = np.broadcast_to(all_lit[..., None], w.shape)
             np.divide(np.float32(1.0), w, out=w, where=signal)
             w[~signal] = 0.0
     inverse[~delivered] = 0.0
-    return inverse
+    return inverse, counted / max(1, (r1 - r0) * (q1 - q0))
+
+
+def central_lenses(rows: int, cols: int) -> tuple[int, int, int, int]:
+    """``(r0, r1, q0, q1)``: the central 60 % of a grid's lenses (all of a small grid)."""
+    r0, r1 = (int(0.2 * rows), int(np.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
+    q0, q1 = (int(0.2 * cols), int(np.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
+    return r0, r1, q0, q1
 
 
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
@@ -342,28 +407,40 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     if not np.all(np.isfinite(white)):  # before demosaicing, which would report the mosaic instead
         raise LfprocError("the white image contains NaN or infinite pixels; use a clean white image")
     check_remap_size(white.shape[0], white.shape[1], grid.cols)
+    rim = None
+    if RIM_AWARE and centroid_tolerance is not None and white.ndim == 2 and cfa != "none" and (
+            demosaic_method == "fast"):
+        rim = balanced_white(white, dark_fraction)
     if centroid_tolerance is None:
         delivered, shift, cells, view_centre = np.ones((m_hat, m_hat), dtype=bool), None, None, None
     else:
-        sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance)
+        sampling = view_sampling(white, grid, m_hat, cfa, demosaic_method, interpolation, centroid_tolerance,
+                                 probe_white=None if rim is None else rim[0])
         delivered, shift = sampling.delivered, sampling.shift_px
         view_centre = centre_in_samples(sampling.centre_offset_px, grid, m_hat) if sampling.centred else None
     if whole_lenses:
         grid = crop_to_whole_lenses(grid, m_hat, delivered, white.shape, shift)
     if grid.kind == "hexagonal":
         check_hex_size(grid.rows, grid.cols)
+    shares = None
     if centroid_tolerance is not None:
         cells = cell_classes(grid, white.shape)
-    inverse = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction, delivered,
-                             shift, cells)
+        if rim is not None:
+            shares = cell_shares(grid, white.shape, classes=cells)
+    if rim is None:
+        inverse, signal = _inverse_white(white, grid, m_hat, cfa, demosaic_method, interpolation, dark_fraction,
+                                         delivered, shift, cells)
+    else:
+        inverse, signal = _inverse_white(rim[0], grid, m_hat, "none", demosaic_method, interpolation, dark_fraction,
+                                         delivered, shift, cells, shares)
     if centroid_tolerance is not None:     # a view is delivered only where its samples really carry signal
-        kept = carrying_views(inverse, delivered)
+        kept = carrying_views(signal, delivered)
         inverse[~kept] = 0.0
         delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre)
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre, *(rim or (None, None)), *(shares or (None, None)))
 
 
 def centre_in_samples(offset_px, grid: LensGrid, m_hat: int) -> tuple:

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..grid import LensGrid
-from ._cells import cell_classes, lens_class
+from ._cells import cell_classes, cell_shares, class_weight, lens_class
 from ._demosaic import to_channels
 from ._disc_centre import measure_disc_centre
 from ._positions import view_offsets_px
@@ -68,6 +68,8 @@ CENTRE_TOLERANCE = 0.1
 CENTRE_DECODING = True
 #: the furthest (effective pixels) a view's samples are moved off their nominal position
 MAX_SHIFT = 0.75
+#: a view moved this share of MAX_SHIFT or further counts as not found
+CONVERGED_SHARE = 0.98
 #: fixed-point steps of the centroid correction
 ITERATIONS = 10
 
@@ -111,7 +113,7 @@ class _Probe:
     channels: int
 
 
-def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | None:
+def _planes(white, grid, cfa, demosaic_method, lenses, own_cells, soft=False) -> _Probe | None:
     """The :class:`_Probe` of ``lenses`` (those whose patch lies on the sensor)."""
     h, w = white.shape[:2]
     half = int(math.ceil(grid.pitch_px)) + 6
@@ -128,7 +130,12 @@ def _planes(white, grid, cfa, demosaic_method, lenses, own_cells) -> _Probe | No
         patch[ys - y0:ye - y0, xs - x0:xe - x0] = white[ys:ye, xs:xe]
         yy, xx = np.mgrid[y0:y0 + size, x0:x0 + size].astype(np.float64)
         dx, dy = xx - cx, yy - cy
-        if own_cells:
+        if own_cells and soft:
+            classes = cell_classes(grid, patch.shape, y0, x0)
+            own = (class_weight(classes, *cell_shares(grid, patch.shape, y0, x0, classes), lens_class(r, q))
+                   * (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
+            patch = patch * (own[..., None] if patch.ndim == 3 else own)
+        elif own_cells:
             own = ((cell_classes(grid, patch.shape, y0, x0) == lens_class(r, q))
                    & (np.hypot(dx, dy) < 1.5 * grid.pitch_px))
             patch = patch * (own[..., None] if patch.ndim == 3 else own)
@@ -228,12 +235,17 @@ def symmetric(views: np.ndarray) -> np.ndarray:
 
 
 def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
-                  interpolation: str, tolerance: float, lenses=None) -> ViewSampling:
-    """Delivered views and where to read them (see the module docstring); ``tolerance`` in effective pixels."""
+                  interpolation: str, tolerance: float, lenses=None, probe_white=None) -> ViewSampling:
+    """Delivered views and where to read them (see the module docstring); ``tolerance`` in effective pixels.
+
+    ``probe_white``: the white that the samples' kernel weighs (rim-aware Bayer decoding reads every
+    channel like a mono sensor, weighted by the phase-balanced white); the lit disc is fitted on ``white``."""
     flag = cv_flag(interpolation)
     eff = grid.pitch_px / m_hat
     c = (m_hat - 1) // 2
-    planes = _planes(white, grid, cfa, demosaic_method, probe_lenses(grid) if lenses is None else lenses, True)
+    probe_cfa = cfa if probe_white is None else "none"
+    planes = _planes(white if probe_white is None else probe_white, grid, probe_cfa, demosaic_method,
+                     probe_lenses(grid) if lenses is None else lenses, True, soft=probe_white is not None)
     nom_x, nom_y = view_offsets_px(grid, m_hat)
     if planes is None:
         return ViewSampling(np.ones((m_hat, m_hat), bool), np.zeros((m_hat, m_hat, 2)), (0.0, 0.0), False,
@@ -267,10 +279,15 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     residual = np.sort(np.where(lit, err, np.inf), axis=0)[median]
     # the views not right at nominal are read where their mean centroid is
     fine = right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)
+    base = shift.copy()
     moved, moved_residual = _corrected(planes, nom_x, nom_y, tx, ty, shift, lit, flag, eff)
     shift = np.where(fine[..., None], shift, moved)
     residual = np.where(fine, residual, moved_residual)
-    right = right | (~fine & (moved_residual <= tolerance))[None] & lit
+    # a correction that ran into MAX_SHIFT did not find the view's rays (its residual is what was left at
+    # the limit, and the renders' parallax there was off by 0.03–0.1 in a): not delivered
+    moved_by = np.hypot(*np.moveaxis(moved - base, -1, 0)) / eff
+    converged = moved_by < CONVERGED_SHARE * MAX_SHIFT
+    right = right | (~fine & converged & (moved_residual <= tolerance))[None] & lit
     delivered = ((lit_share >= REQUIRED_FRACTION)
                  & (right.sum(axis=0) >= REQUIRED_FRACTION * np.maximum(lit.sum(axis=0), 1)))
     delivered[c, c] = delivered[c, c] or not lit.any()
@@ -279,14 +296,10 @@ def view_sampling(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demos
     return ViewSampling(delivered, shift, centre, bool(centred), residual, lit_share)
 
 
-def carrying_views(inverse: np.ndarray, delivered: np.ndarray) -> np.ndarray:
-    """``delivered`` less the views whose samples carry signal (non-zero inverse white) at fewer than
-    :data:`REQUIRED_FRACTION` of the central 60 % of lenses; symmetric."""
-    rows, cols = inverse.shape[2:4]
-    r0, r1 = (int(0.2 * rows), int(math.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
-    q0, q1 = (int(0.2 * cols), int(math.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
-    share = (inverse[:, :, r0:r1, q0:q1] != 0).any(axis=-1).mean(axis=(2, 3))
-    return symmetric(delivered & (share >= REQUIRED_FRACTION))
+def carrying_views(signal: np.ndarray, delivered: np.ndarray) -> np.ndarray:
+    """``delivered`` less the views whose samples carry signal at fewer than :data:`REQUIRED_FRACTION` of the
+    central 60 % of lenses (``signal``: that share per view, ``(m̂, m̂)``); symmetric."""
+    return symmetric(delivered & (np.asarray(signal) >= REQUIRED_FRACTION))
 
 
 def centroid_errors(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demosaic_method: str,
