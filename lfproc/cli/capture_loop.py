@@ -29,7 +29,8 @@ def add_decode_options(p) -> None:
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
-                   help="Bayer demosaicing: fast = bilinear, careful = edge-aware (default fast)")
+                   help="Bayer demosaicing: fast = rim-aware (each channel at its pixel's own ray, the hue of its "
+                        "micro image), careful = OpenCV edge-aware (default fast)")
 
 
 def add_dark_option(p) -> None:

@@ -23,9 +23,13 @@ over bands of lens rows:
 * **Whole lenses** (``_whole_lenses``): by default the grid is cropped to the lenses whose delivered
   samples all lie on the sensor, so no partial lens leaks black or extrapolated samples; the light
   field's grid is the cropped one, so lens indices stay those of refocusing and depth.
-* **Demosaicing** (``_demosaic``, Bayer captures) of the sensor strip a band reads, before resampling:
-  ``"fast"`` is bilinear (linear, so the ratio above stays an exact weighted average of radiance);
-  ``"careful"`` is OpenCV's edge-aware (EA) variant.
+* **Demosaicing** (Bayer captures) of the sensor strip a band reads, before resampling. ``"fast"`` (the
+  default) is *rim-aware* (``_rim_demosaic``, kernel ``_rim_kernel``): every pixel keeps its own
+  devignetted value and takes the other channels from the hue of its micro image, so every channel of
+  a sample stands for the pixel's own ray, up to the rim (bilinear red and blue there are read from
+  further in); samples are read like a mono sensor's, weighted by the white, and pixels on a cell
+  border count for both lenses by their distance from it (``_cells.cell_shares``). ``"careful"`` is
+  OpenCV's edge-aware (EA) demosaicing of each class's cells (``_demosaic``), as before.
 * **Interpolation** (``_resample``): ``"nearest"``, ``"linear"``, ``"cubic"``, ``"lanczos"``.
 * **Hexagonal grids** (``_hexagonal``) are decoded at their own lens centres, then each view is
   resampled onto a rectangular lens grid of the same pitch (:func:`hex_to_rect`), band by band.

@@ -384,6 +384,10 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
     dark_fraction : float
         Samples whose white value is below this fraction of the white's bright level (its 99th
         percentile) in any channel carry no signal and decode to 0 in every channel.
+    demosaic_method : str
+        Bayer mosaics: ``"fast"`` decodes rim-aware (:mod:`._rim_demosaic`: every channel at the pixel's
+        own ray, the hue from its micro image; the outer views are delivered), ``"careful"`` demosaics
+        each lens class's cells with OpenCV's edge-aware method.
     centroid_tolerance : float or None
         A view is delivered only where it is lit at its nominal position and its samples' white-weighted
         centroid lies (at nominal, or read further out: :mod:`lfproc.decode._view_mask`) within this many

@@ -70,11 +70,12 @@ def _lens_range(height, width, y0, lattice):
 
 
 @njit(cache=True, parallel=True)
-def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums):
+def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other):
     """sums[chunk, r − r_lo, q − q_lo, ch, 0 / 1] += share·capture / share·ŵ of each lit pixel of a chunk
     of rows (its lens and the lens across the border by their shares); the caller adds the chunks."""
     height, width = raw.shape
     chunks = sums.shape[0]
+    cols = sums.shape[2]
     for k in prange(chunks):
         for i in range(k * height // chunks, (k + 1) * height // chunks):
             y = float(y0 + i)
@@ -88,10 +89,12 @@ def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_cha
                 s = share[i, j] * (1.0 / 255.0)
                 r0, q0 = _rigid_lens(float(j), y, lattice)
                 r, q = _lens_of_class(float(j), y, r0, q0, cells[i, j], lattice)
+                own[i, j] = (r - r_lo) * cols + q - q_lo
                 sums[k, r - r_lo, q - q_lo, ch, 0] += s * value
                 sums[k, r - r_lo, q - q_lo, ch, 1] += s * w
                 if s < 1.0:
                     r, q = _lens_of_class(float(j), y, r0, q0, border[i, j], lattice)
+                    other[i, j] = (r - r_lo) * cols + q - q_lo
                     sums[k, r - r_lo, q - q_lo, ch, 0] += (1.0 - s) * value
                     sums[k, r - r_lo, q - q_lo, ch, 1] += (1.0 - s) * w
 
@@ -113,12 +116,10 @@ def _write(stack, row, j, lens_sums, rho, w, own_ch, floor, limit):
 
 
 @njit(cache=True, parallel=True)
-def _fill(stack, raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, gap,
-          floor, limit):
+def _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, sums, gap, floor, limit):
     height, width = raw.shape
     step = height + 2 * gap
     for i in prange(height):
-        y = float(y0 + i)
         for c in range(4):
             stack[gap + c * step + i] = 0.0
         for j in range(width):
@@ -129,13 +130,10 @@ def _fill(stack, raw, wb, cells, border, share, y0, lattice, phase_gain, phase_c
             ch = phase_channel[p]
             rho = raw[i, j] * phase_gain[p] / w
             s = share[i, j] * (1.0 / 255.0)
-            r0, q0 = _rigid_lens(float(j), y, lattice)
-            r, q = _lens_of_class(float(j), y, r0, q0, cells[i, j], lattice)
-            _write(stack, gap + cells[i, j] * step + i, j, sums[r - r_lo, q - q_lo], rho, s * w, ch, floor, limit)
+            _write(stack, gap + cells[i, j] * step + i, j, sums[own[i, j]], rho, s * w, ch, floor, limit)
             if s < 1.0:
-                r, q = _lens_of_class(float(j), y, r0, q0, border[i, j], lattice)
-                _write(stack, gap + border[i, j] * step + i, j, sums[r - r_lo, q - q_lo], rho, (1.0 - s) * w, ch,
-                       floor, limit)
+                _write(stack, gap + border[i, j] * step + i, j, sums[other[i, j]], rho, (1.0 - s) * w, ch, floor,
+                       limit)
 
 
 #: rows of a strip summed apart (in parallel) before their lens sums are added
@@ -147,14 +145,15 @@ def rim_stack(raw, wb, cells, border, share, phase_gain, phase_channel, y0, latt
     height, width = raw.shape
     r_lo, q_lo, r_hi, q_hi = _lens_range(height, width, y0, lattice)
     sums = np.zeros((_CHUNKS, r_hi - r_lo + 1, q_hi - q_lo + 1, 3, 2), np.float64)
-    _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums)
-    total = sums.sum(axis=0)
+    own = np.empty((height, width), np.int32)      # each lit pixel's lens (flat index into the sums)
+    other = np.empty((height, width), np.int32)    # and the lens across its cell border, where shared
+    _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other)
+    total = sums.sum(axis=0).reshape(-1, 3, 2)
     step = height + 2 * gap
     for c in range(4):
         stack[c * step:c * step + gap] = 0.0
         stack[c * step + gap + height:(c + 1) * step] = 0.0
-    _fill(stack, raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, total, gap,
-          floor, limit)
+    _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, total, gap, floor, limit)
 
 
 @njit(cache=True, parallel=True)
