@@ -218,7 +218,9 @@ def _rim_stack(raw, wb, classes, shares, cfa, levels, grid, y0, gap, scratch=Non
     lattice = np.array([grid.origin_xy_px[0], grid.origin_xy_px[1], u[0], u[1], v[0], v[1], grid.pitch_px,
                         grid.row_spacing_px, 1.0 if grid.kind == "hexagonal" else 0.0])
     rim_stack(raw, wb, classes, shares[0], shares[1], (1.0 / np.asarray(levels, np.float64)),
-              phase_channels(cfa).astype(np.int64), y0, lattice, gap, RATIO_FLOOR, RATIO_LIMIT, stack)
+              phase_channels(cfa).astype(np.int64), y0, lattice, gap, RATIO_FLOOR, RATIO_LIMIT, stack,
+              borrowed(scratch, "own lens", (height, width), np.int32),
+              borrowed(scratch, "other lens", (height, width), np.int32))
     return stack, None, 0.0, 0
 
 

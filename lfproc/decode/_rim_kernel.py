@@ -136,17 +136,29 @@ def _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, 
                        limit)
 
 
+def _read_only(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
 #: rows of a strip summed apart (in parallel) before their lens sums are added
 _CHUNKS = 8
 
 
-def rim_stack(raw, wb, cells, border, share, phase_gain, phase_channel, y0, lattice, gap, floor, limit, stack):
-    """Fill ``stack`` (``(4·(h + 2·gap), W, 3)`` float32) with each lens class's ``ŵ·rgb`` of the strip."""
+def rim_stack(raw, wb, cells, border, share, phase_gain, phase_channel, y0, lattice, gap, floor, limit, stack,
+              own=None, other=None):
+    """Fill ``stack`` (``(4·(h + 2·gap), W, 3)`` float32) with each lens class's ``ŵ·rgb`` of the strip;
+    ``own`` and ``other``, ``(h, W)`` int32 scratch (new ones when not given)."""
     height, width = raw.shape
+    # numba compiles one version per argument type, and a read-only array (the decoder's, mapped from its
+    # cache) is another type than a writable one: hand it read-only views always, so that one compiled
+    # version (kept on disk) serves every run, the first one after deriving a decoder included
+    raw, wb, cells, border, share = (_read_only(a) for a in (raw, wb, cells, border, share))
     r_lo, q_lo, r_hi, q_hi = _lens_range(height, width, y0, lattice)
     sums = np.zeros((_CHUNKS, r_hi - r_lo + 1, q_hi - q_lo + 1, 3, 2), np.float64)
-    own = np.empty((height, width), np.int32)      # each lit pixel's lens (flat index into the sums)
-    other = np.empty((height, width), np.int32)    # and the lens across its cell border, where shared
+    own = np.empty((height, width), np.int32) if own is None else own        # each lit pixel's lens (sums index)
+    other = np.empty((height, width), np.int32) if other is None else other  # the lens across its border
     _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other)
     total = sums.sum(axis=0).reshape(-1, 3, 2)
     step = height + 2 * gap
