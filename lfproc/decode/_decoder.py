@@ -15,7 +15,7 @@ from ._hexagonal import check_hex_size, hex_rows_read, hex_rows_to_rect, rect_gr
 from ._positions import check_m_hat, lens_centers, lens_offsets_px, sensor_rows_read
 from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX, check_remap_size, cv_flag, remap_into
 from ._cells import CLASSES, cell_classes, cell_shares, class_weight, lens_class, masked
-from ._view_mask import carrying_views, view_sampling
+from ._view_mask import carrying_views, central_range, view_sampling
 from ._whole_lenses import crop_to_whole_lenses
 from ._rim_demosaic import RATIO_FLOOR, RATIO_LIMIT, balanced_white, phase_channels
 
@@ -334,7 +334,7 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     threshold = np.float32(dark_fraction * bright)
     ones = None if cells is None else np.broadcast_to(np.float32(1.0), white.shape)   # no full-size copy
     counted = np.zeros((m_hat, m_hat))
-    r0, r1, q0, q1 = central_lenses(grid.rows, grid.cols)
+    (r0, r1), (q0, q1) = central_range(grid.rows), central_range(grid.cols)
     for rows in bands:
         band = inverse[:, :, rows.start:rows.stop]
         weight = None if cells is None else read_band(ones, grid, m_hat, rows, cfa, demosaic_method,
@@ -359,12 +359,6 @@ def _inverse_white(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str, demo
     inverse[~delivered] = 0.0
     return inverse, counted / max(1, (r1 - r0) * (q1 - q0))
 
-
-def central_lenses(rows: int, cols: int) -> tuple[int, int, int, int]:
-    """``(r0, r1, q0, q1)``: the central 60 % of a grid's lenses (all of a small grid)."""
-    r0, r1 = (int(0.2 * rows), int(np.ceil(0.8 * rows))) if rows >= 10 else (0, rows)
-    q0, q1 = (int(0.2 * cols), int(np.ceil(0.8 * cols))) if cols >= 10 else (0, cols)
-    return r0, r1, q0, q1
 
 
 def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none", *,
@@ -445,8 +439,11 @@ def make_decoder(white: np.ndarray, grid: LensGrid, m_hat: int, cfa: str = "none
         delivered = kept
     output_grid = rect_grid_of(grid) if grid.kind == "hexagonal" else grid
     assert grid.kind != "hexagonal" or output_grid.rows == rect_row_count(grid.rows)
+    balanced, levels = rim if rim is not None else (None, None)
+    border_class, border_share = shares if shares is not None else (None, None)
     return Decoder(grid, m_hat, cfa, interpolation, demosaic_method, tuple(white.shape[:2]),
-                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre, *(rim or (None, None)), *(shares or (None, None)))
+                   channel_count(white, cfa), inverse, output_grid, delivered, shift, cells, view_centre,
+                   balanced, levels, border_class, border_share)
 
 
 def centre_in_samples(offset_px, grid: LensGrid, m_hat: int) -> tuple:

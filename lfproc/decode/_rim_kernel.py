@@ -69,6 +69,14 @@ def _lens_range(height, width, y0, lattice):
     return r_lo - 2, q_lo - 2, r_hi + 2, q_hi + 2
 
 
+@njit(cache=True, inline="always")
+def _pixel(raw, share, phase_gain, phase_channel, i, j):
+    """(channel, capture in the balanced white's units, share in its own lens) of pixel (i, j) of a strip
+    that starts on an even row."""
+    p = 2 * (i % 2) + (j % 2)
+    return phase_channel[p], raw[i, j] * phase_gain[p], share[i, j] * (1.0 / 255.0)
+
+
 @njit(cache=True, parallel=True)
 def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other):
     """sums[chunk, r − r_lo, q − q_lo, ch, 0 / 1] += share·capture / share·ŵ of each lit pixel of a chunk
@@ -83,10 +91,7 @@ def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_cha
                 w = wb[i, j]
                 if w <= 0.0:
                     continue
-                p = 2 * (i % 2) + (j % 2)
-                ch = phase_channel[p]
-                value = raw[i, j] * phase_gain[p]
-                s = share[i, j] * (1.0 / 255.0)
+                ch, value, s = _pixel(raw, share, phase_gain, phase_channel, i, j)
                 r0, q0 = _rigid_lens(float(j), y, lattice)
                 r, q = _lens_of_class(float(j), y, r0, q0, cells[i, j], lattice)
                 own[i, j] = (r - r_lo) * cols + q - q_lo
@@ -126,10 +131,8 @@ def _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, 
             w = wb[i, j]
             if w <= 0.0:
                 continue
-            p = 2 * (i % 2) + (j % 2)
-            ch = phase_channel[p]
-            rho = raw[i, j] * phase_gain[p] / w
-            s = share[i, j] * (1.0 / 255.0)
+            ch, value, s = _pixel(raw, share, phase_gain, phase_channel, i, j)
+            rho = value / w
             _write(stack, gap + cells[i, j] * step + i, j, sums[own[i, j]], rho, s * w, ch, floor, limit)
             if s < 1.0:
                 _write(stack, gap + border[i, j] * step + i, j, sums[other[i, j]], rho, (1.0 - s) * w, ch, floor,

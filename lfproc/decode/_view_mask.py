@@ -93,10 +93,15 @@ class ViewSampling:
     lit: np.ndarray
 
 
+def central_range(n: int) -> tuple[int, int]:
+    """``(lo, hi)``: the central 60 % of ``n`` lens rows or columns (all of them below 10)."""
+    return (int(0.2 * n), int(math.ceil(0.8 * n))) if n >= 10 else (0, n)
+
+
 def probe_lenses(grid: LensGrid, count: int = PROBED_LENSES) -> list[tuple[int, int]]:
     """Up to ``count`` lens indices spread over the central 60 % of the grid (whole grid if it is small)."""
     def spread(n):
-        lo, hi = (int(0.2 * n), int(math.ceil(0.8 * n))) if n >= 10 else (0, n)
+        lo, hi = central_range(n)
         per_axis = max(1, int(math.sqrt(count)))
         return sorted({int(v) for v in np.linspace(lo, hi - 1, min(per_axis, hi - lo))})
     return [(r, q) for r in spread(grid.rows) for q in spread(grid.cols)]
