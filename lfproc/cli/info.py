@@ -96,4 +96,6 @@ def _fmt(value) -> str:
         return "inf" if math.isinf(value) else f"{value:.6g}"
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_fmt(v) for v in value) + "]"
+    if isinstance(value, dict):   # a record nested deeper (a sidecar's provenance): key value pairs
+        return "(" + ", ".join(f"{k} {_fmt(v)}" for k, v in value.items()) + ")"
     return str(value)

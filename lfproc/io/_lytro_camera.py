@@ -72,7 +72,7 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
                               f"by hand (see the README's camera file format)")
     provenance = [
         ("sensor.pixel_pitch_mm", "metadata: devices.sensor.pixelPitch"),
-        ("sensor.cfa", "metadata: image.rawDetails.mosaic.upperLeftPixel"),
+        ("sensor.cfa", f"metadata: {meta.raw_details_key}.mosaic.upperLeftPixel"),
         ("mla.pitch_mm", "metadata: devices.mla.lensPitch"),
         ("mla.focal_length_mm", "metadata: devices.mla.sensorOffset.z (MLA-to-sensor distance)"),
         ("mla.grid", "metadata: devices.mla.tiling"),
@@ -84,8 +84,8 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
     levels = {}
     if black.min() == black.max() and white.min() == white.max():
         levels = dict(black_level=float(black[0, 0]), white_level=float(white[0, 0]))
-        provenance += [("sensor.black_level", "metadata: image.rawDetails.pixelFormat.black"),
-                       ("sensor.white_level", "metadata: image.rawDetails.pixelFormat.white")]
+        provenance += [("sensor.black_level", f"metadata: {meta.raw_details_key}.pixelFormat.black"),
+                       ("sensor.white_level", f"metadata: {meta.raw_details_key}.pixelFormat.white")]
     if meta.f_number is not None:
         provenance.append(("main_lens.f_number", "metadata: devices.lens.fNumber"))
     if meta.exit_pupil_at_infinity:

@@ -37,7 +37,22 @@ def decode_views(picture) -> list[np.ndarray]:
     return frames[:len(block.views)] if block.views else frames
 
 
-def decode_h264(data: bytes, where: str) -> list[np.ndarray]:
+def decode_stack_block(picture, reference: str, count: int) -> list[np.ndarray]:
+    """The frames of a refocus stack stored as an H.264 block (``count`` listed in its ``metadataArray``).
+
+    Raises
+    ------
+    LfprocError
+        This OpenCV cannot decode H.264, or the stream holds fewer frames than the metadata lists.
+    """
+    frames = decode_h264(picture.image_bytes(reference), picture.path, "refocus stack")
+    if len(frames) < count:
+        raise LfprocError(f"{picture.path}: the refocus stack's H.264 block decodes to {len(frames)} images, its "
+                          f"metadata lists {count}; the stream is damaged, re-copy the file")
+    return frames[:count]
+
+
+def decode_h264(data: bytes, where: str, what: str = "edofParallax") -> list[np.ndarray]:
     """Every frame of an H.264 Annex B stream, 8-bit RGB."""
     import cv2
 
@@ -50,7 +65,7 @@ def decode_h264(data: bytes, where: str) -> list[np.ndarray]:
         frames = []
         try:
             if not capture.isOpened():
-                raise LfprocError(f"{where}: OpenCV cannot open the edofParallax H.264 stream (this OpenCV build has "
+                raise LfprocError(f"{where}: OpenCV cannot open the {what} H.264 stream (this OpenCV build has "
                                   f"no H.264 decoder, or the stream is damaged); export the focus stack and depth "
                                   f"map, which need no video decoder")
             while True:
@@ -63,6 +78,6 @@ def decode_h264(data: bytes, where: str) -> list[np.ndarray]:
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     if not frames:
-        raise LfprocError(f"{where}: the edofParallax H.264 stream decodes to no frames (damaged stream or no H.264 "
+        raise LfprocError(f"{where}: the {what} H.264 stream decodes to no frames (damaged stream or no H.264 "
                           f"decoder in this OpenCV build); re-copy the file")
     return frames

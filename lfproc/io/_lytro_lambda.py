@@ -110,3 +110,38 @@ def lambda_map(meta) -> LambdaMap:
         (("main_lens.image_distance_mm", PROVENANCE),)
     camera = replace(built, image_distance_mm=image_distance, provenance=provenance)
     return LambdaMap(camera=camera, f_number=meta.f_number, lens_pitch_mm=pitch, infinity_lambda=meta.infinity_lambda)
+
+
+CAMERA_PROVENANCE = "infinityLambda = (b_U - f_U) / (f_number x pitch_mm) of the camera file (the lambda reading)"
+
+
+def camera_lambda_map(camera, source: str) -> LambdaMap:
+    """The lambda map of a picture whose camera comes from a camera file (pictures without camera metadata).
+
+    The reading needs N and p_m (a(λ) = −λ·N·δ / (1 − κ·λ·N·p_m) does not depend on b_U) and takes the
+    camera's b_U as where the main lens focused: λ_∞ = (b_U − f_U) / (N·p_m).
+
+    Raises
+    ------
+    LfprocError
+        A microscope camera, or one without ``f_number``.
+    """
+    if camera.is_microscope or camera.main_focal_length_mm is None:
+        raise LfprocError(f"{source}: describes a microscope, not a Lytro camera; pass a camera file with a "
+                          f"[main_lens] (e.g. from 'lfproc camera' on a Lytro file of the same camera)")
+    if camera.f_number is None or camera.f_number <= 0:
+        raise LfprocError(f"{source}: [main_lens] has no f_number, which turns lambda into distances; add "
+                          f"f_number (the Lytro F01 is f/1.91; 'lfproc camera' writes it from a Lytro file's metadata)")
+    pitch = camera.mla_pitch_mm
+    infinity = (camera.image_distance_mm - camera.main_focal_length_mm) / (camera.f_number * pitch)
+    return LambdaMap(camera=camera, f_number=camera.f_number, lens_pitch_mm=pitch, infinity_lambda=infinity)
+
+
+def refocused_map(mapping: LambdaMap, focus_distance_mm: float) -> LambdaMap:
+    """The lambda map with the main lens focused at ``focus_distance_mm`` from the sensor (b_U from the
+    thin-lens equation, λ_∞ = (b_U − f_U) / (N·p_m)); a(λ) is unchanged."""
+    camera = mapping.camera.with_focus_distance(float(focus_distance_mm))
+    camera = replace(camera, provenance=camera.provenance + (
+        ("main_lens.image_distance_mm", f"flag: --focus-distance {focus_distance_mm:g} mm (thin-lens equation)"),))
+    infinity = (camera.image_distance_mm - camera.main_focal_length_mm) / mapping.unit_mm
+    return replace(mapping, camera=camera, infinity_lambda=infinity)

@@ -25,7 +25,8 @@ class LytroMetadata:
     """What lfproc uses from a Lytro frame's metadata (lengths in metres, angles in radians, as stored).
 
     ``black``/``white`` are ``(2, 2)`` tuples of the levels at (row % 2, column % 2), read per Bayer
-    channel from ``image.rawDetails.pixelFormat``. Optics are ``None`` where the file lacks them.
+    channel from ``image.rawDetails.pixelFormat`` (``image.pixelFormat`` in an Illum picture's metadata:
+    ``raw_details_key`` says which). Optics are ``None`` where the file lacks them.
     """
 
     source: str
@@ -51,6 +52,7 @@ class LytroMetadata:
     focus_step: float | None = None
     infinity_lambda: float | None = None
     modulation_frame: bool | None = None
+    raw_details_key: str = "image.rawDetails"
 
     @property
     def packed_bytes(self) -> int:
@@ -95,27 +97,30 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
     if representation != "rawPacked":
         raise LfprocError(f"{source}: holds no raw light field (its image is {representation!r}, not packed raw "
                           f"sensor data); pass the camera's original raw picture instead")
-    raw = _get(image, "rawDetails", source, dict, "image.")
-    packing = _get(raw, "pixelPacking", source, dict, "image.rawDetails.")
+    if not isinstance(image.get("rawDetails"), dict) and isinstance(image.get("pixelPacking"), dict):
+        raw, key = image, "image"   # the Illum picture schema: the raw frame's packing, levels, mosaic under image
+    else:
+        raw, key = _get(image, "rawDetails", source, dict, "image."), "image.rawDetails"
+    packing = _get(raw, "pixelPacking", source, dict, key + ".")
     width = _get(image, "width", source, int, "image.")
     height = _get(image, "height", source, int, "image.")
     if width <= 0 or height <= 0 or width * height > 1 << 40:  # no sensor has a trillion pixels
         raise LfprocError(f"{source}: image.width/height {width} x {height} is not a sensor size; "
                           f"the metadata is corrupt, re-copy it")
-    bits = _get(packing, "bitsPerPixel", source, int, "image.rawDetails.pixelPacking.")
+    bits = _get(packing, "bitsPerPixel", source, int, key + ".pixelPacking.")
     if not 1 <= bits <= 32:  # before 2 ** bits below: an absurd value would take for ever
-        raise LfprocError(f"{source}: image.rawDetails.pixelPacking.bitsPerPixel {bits} is not a sensor's bit "
+        raise LfprocError(f"{source}: {key}.pixelPacking.bitsPerPixel {bits} is not a sensor's bit "
                           f"depth; the metadata is corrupt, re-copy it")
-    endianness = str(_get(packing, "endianness", source, str, "image.rawDetails.pixelPacking.")).lower()
+    endianness = str(_get(packing, "endianness", source, str, key + ".pixelPacking.")).lower()
     mosaic = raw.get("mosaic") or _nested(metadata, "devices", "sensor", "mosaic") or {}
     mosaic = mosaic if isinstance(mosaic, dict) else {}
     cfa, channels = _bayer_layout(mosaic, source)
     pixel_format = raw.get("pixelFormat") if isinstance(raw.get("pixelFormat"), dict) else {}
     if pixel_format.get("rightShift", 0) not in (0, None):
-        raise LfprocError(f"{source}: image.rawDetails.pixelFormat.rightShift = {pixel_format['rightShift']} is not "
+        raise LfprocError(f"{source}: {key}.pixelFormat.rightShift = {pixel_format['rightShift']} is not "
                           f"supported; only unshifted raw data can be read")
-    black = _channel_levels(pixel_format.get("black"), channels, 0.0, source, "black")
-    white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source, "white")
+    black = _channel_levels(pixel_format.get("black"), channels, 0.0, source, f"{key}.pixelFormat.black")
+    white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source, f"{key}.pixelFormat.white")
     if any(not 0 <= b < w <= 2 ** bits for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
         raise LfprocError(f"{source}: white level {white} is not above the black level {black} within "
                           f"0..{2 ** bits} ({bits}-bit data); the metadata is corrupt, re-copy it")
@@ -140,6 +145,7 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
         focus_step=_number(lens.get("focusStep")),
         infinity_lambda=_number(lens.get("infinityLambda")),
         modulation_frame=modulation_frame,
+        raw_details_key=key,
     )
 
 
@@ -166,7 +172,7 @@ def _channel_levels(levels, channels, default: float, source: str, what: str) ->
     if isinstance(levels, (int, float)) and not isinstance(levels, bool) and _number(levels) is not None:
         return tuple(tuple(float(levels) for _ in row) for row in channels)
     if not isinstance(levels, dict) or any(_number(levels.get(name)) is None for row in channels for name in row):
-        raise LfprocError(f"{source}: image.rawDetails.pixelFormat.{what} must give a number for each of "
+        raise LfprocError(f"{source}: {what} must give a number for each of "
                           f"r, gr, gb, b; got {levels!r}")
     return tuple(tuple(float(levels[name]) for name in row) for row in channels)
 

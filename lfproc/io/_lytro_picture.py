@@ -39,6 +39,7 @@ class StackImage:
     representation: str = "jpeg"
     width: int | None = None
     height: int | None = None
+    frame: int | None = None     # the frame of an H.264 block (``reference``) holding it; None: a stored image
 
 
 @dataclass(frozen=True)
@@ -200,6 +201,8 @@ def read_picture(container: LytroContainer) -> LytroPicture:
             default_lambda = _number(content.get("defaultLambda"))
             for image in _list(content.get("imageArray")):
                 stack.append(_stack_image(len(stack), image, image.get("lambda"), container.path))
+            if not _list(content.get("imageArray")) and isinstance(content.get("blockOfImages"), dict):
+                stack += _stack_block(content["blockOfImages"], container.path, start=len(stack))
             table = content.get("depthLut")
             if isinstance(table, dict) and reference(table, "imageRef"):
                 lut = _depth_entry("depth lookup table", table, table)
@@ -220,7 +223,7 @@ def read_picture(container: LytroContainer) -> LytroPicture:
         raise LfprocError(f"{container.path}: holds no raw light field and no focus stack, depth map or perspective "
                           f"views lfproc knows; pass the camera's original raw picture (.lfr/.lfp) instead")
     metadata, private, raw_ref = _frame(container, generation)
-    wanted = [s.reference for s in stack] + ([depth.reference] if depth else []) + \
+    wanted = list(dict.fromkeys(s.reference for s in stack)) + ([depth.reference] if depth else []) + \
         ([parallax.reference] if parallax else [])
     missing = tuple(ref for ref in wanted if container.chunk(ref) is None)
     return LytroPicture(container=container, generation=generation, stack=tuple(stack), default_lambda=default_lambda,
@@ -236,6 +239,23 @@ def _stack_image(index: int, image: dict, lambda_value, path: str) -> StackImage
     return StackImage(index=index, lambda_=lam, reference=ref,
                       representation=str(image.get("representation", "jpeg")).lower(),
                       width=_int(image.get("width")), height=_int(image.get("height")))
+
+
+def _stack_block(block: dict, path: str, start: int = 0) -> list[StackImage]:
+    """The images of a refocus stack stored as one H.264 block (a later engine's ``blockOfImages``): one
+    ``metadataArray`` entry per frame, in stream order, with its ``lambda``, ``width`` and ``height``."""
+    ref = reference(block, "blockOfImagesRef")
+    if ref is None:
+        raise LfprocError(f"{path}: the refocus stack's blockOfImages has no blockOfImagesRef; {_FIX}")
+    images = []
+    for k, item in enumerate(_list(block.get("metadataArray"))):
+        lam = _number(item.get("lambda"))
+        if lam is None:
+            raise LfprocError(f"{path}: focus stack image {k} of the H.264 block has no lambda; {_FIX}")
+        images.append(StackImage(index=start + k, lambda_=lam, reference=ref,
+                                 representation=str(block.get("representation", "h264")).lower(),
+                                 width=_int(item.get("width")), height=_int(item.get("height")), frame=k))
+    return images
 
 
 def _depth_entry(kind: str, description: dict, image: dict, confidence=None) -> DepthEntry:

@@ -72,3 +72,35 @@ def image_size(data: bytes) -> tuple[int, int] | None:
             return image.size
     except (UnidentifiedImageError, OSError):
         return None
+
+
+def stack_images(picture: LytroPicture) -> list[tuple[bytes, np.ndarray | None]]:
+    """``(JPEG bytes, RGB or None)`` of each focus stack image, in stack order.
+
+    A stored JPEG is returned as it is (RGB None: decode it when needed); the frames of a refocus stack
+    stored as an H.264 block are decoded (8-bit RGB) and encoded as JPEG (quality 95, no chroma
+    subsampling) for the outputs that need one.
+    """
+    from ._lytro_h264 import decode_stack_block
+
+    decoded: dict = {}
+    out = []
+    for image in picture.stack:
+        if image.frame is None:
+            out.append((picture.image_bytes(image.reference), None))
+            continue
+        if image.reference not in decoded:
+            count = sum(1 for s in picture.stack if s.reference == image.reference)
+            decoded[image.reference] = decode_stack_block(picture, image.reference, count)
+        rgb = decoded[image.reference][image.frame]
+        out.append((encode_jpeg(rgb), rgb))
+    return out
+
+
+def encode_jpeg(rgb: np.ndarray, quality: int = 95) -> bytes:
+    """8-bit RGB as a baseline JPEG (Pillow, no chroma subsampling)."""
+    from PIL import Image
+
+    buffer = io.BytesIO()
+    Image.fromarray(np.asarray(rgb, np.uint8)).save(buffer, format="JPEG", quality=quality, subsampling=0)
+    return buffer.getvalue()

@@ -28,50 +28,73 @@ import numpy as np
 from ..errors import LfprocError
 
 
-def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> list[str]:
+def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, camera=None,
+                   camera_path: str | None = None, focus_distance_mm: float | None = None, views_jpeg: bool = False,
+                   wobble: bool = False) -> list[str]:
     """Write every image of the picture at ``path`` into ``outdir``; returns the image paths written.
+
+    Parameters
+    ----------
+    camera : Camera, optional
+        The camera (from ``camera_path``) for a picture whose metadata does not describe it, or to
+        override it: lambda becomes a and mm through its f_number, pitch and b_U (``docs/lytro.md``).
+    focus_distance_mm : float, optional
+        Where the main lens focused (mm from the sensor): b_U from the thin-lens equation instead of
+        the metadata's ``infinityLambda`` (or the camera file's b_U).
+    views_jpeg, wobble : bool
+        Perspective views also as sRGB JPEG (``STEM_parallax_KK.jpg``); an animation walking them
+        around the aperture (``STEM_wobble.gif``).
 
     Raises
     ------
     LfprocError
-        Not a picture, damaged, an undecodable depth map or H.264 block. Everything is read and
-        decoded before the first file is written.
+        Not a picture, damaged, an undecodable depth map or H.264 block, a focus distance without a
+        camera. Everything is read and decoded before the first file is written.
     """
     from ..io import confidence_map, depth_lambda, open_picture, picture_lambda_map
+    from ..io._lytro_lambda import camera_lambda_map, refocused_map
+    from ..io._lytro_picture_pixels import stack_images
+    from ._lytro_views import lambda_preview_writer, view_jobs
 
     picture = open_picture(path)
     source = os.path.abspath(path)
     meta, mapping, note = picture_lambda_map(picture)
-    common = {"source": source, "camera_model": meta.model if meta else None}
+    camera_from = "picture metadata"
+    if camera is not None:
+        mapping, camera_from = camera_lambda_map(camera, camera_path or "camera"), f"camera file {camera_path}"
+    if focus_distance_mm is not None:
+        if mapping is None:
+            raise LfprocError(f"{path}: --focus-distance needs the camera, and this picture's metadata does not "
+                              f"describe it ({note}); add --camera CAM.toml (e.g. from 'lfproc camera' on a Lytro "
+                              f"file of the same camera)")
+        mapping = refocused_map(mapping, focus_distance_mm)
+    common = {"source": source, "camera_model": meta.model if meta else None,
+              "provenance": _provenance(path, camera_path if camera is not None else None)}
     if mapping is None:
-        common["camera_note"] = f"no distances: {note}"
+        common["camera_note"] = (f"no distances: {note}; give the camera with --camera CAM.toml "
+                                 f"(and --focus-distance MM)")
     else:
-        common["camera"] = _camera_record(mapping)
+        common["camera"] = _camera_record(mapping, camera_from, focus_distance_mm)
     jobs = []        # (writer, path) run after everything is decoded
     records = mapping.slices([s.lambda_ for s in picture.stack]) if mapping and picture.stack else \
         [{"lambda": s.lambda_} for s in picture.stack]
-    for image, record in zip(picture.stack, records):
+    for image, record, (data, rgb) in zip(picture.stack, records, stack_images(picture)):
         name = os.path.join(outdir, f"{stem}_stack_{image.index:02d}")
-        data = picture.image_bytes(image.reference)
         metadata = dict(common, kind="focus stack image", index=image.index, **record)
-        metadata["encoding"] = "JPEG as stored (sRGB)" + ("; .tif: decoded, linear float32" if tiff else "")
+        stored = "JPEG as stored (sRGB)" if rgb is None else \
+            "H.264 frame of the refocus stack block, re-encoded as JPEG (quality 95, sRGB)"
+        metadata["encoding"] = stored + ("; .tif: decoded, linear float32" if tiff else "")
         jobs.append((name + ".jpg", _jpeg_writer(data, metadata)))
         if tiff:
-            jobs.append((name + ".tif", _image_writer(_linear_from_jpeg(data, path), metadata)))
+            linear = _linear_from_jpeg(data, path) if rgb is None else _linear(rgb)
+            jobs.append((name + ".tif", _image_writer(linear, metadata)))
     if picture.parallax is not None:
-        from ..io import srgb_decode
-        from ..io._lytro_h264 import decode_views
-
-        views = list(picture.parallax.views)
-        for k, rgb in enumerate(decode_views(picture)):
-            view = views[k] if k < len(views) else None
-            metadata = dict(common, kind="perspective view (edofParallax, all in focus)", index=k, **{"lambda": None},
-                            coord=None if view is None else [view[2], view[3]],
-                            encoding="H.264 decoded, linear float32")
-            jobs.append((os.path.join(outdir, f"{stem}_parallax_{k:02d}.tif"),
-                         _image_writer(srgb_decode(rgb.astype(np.float32) / 255.0), metadata)))
+        jobs += view_jobs(picture, common, outdir, stem, jpeg=views_jpeg, wobble=wobble)
     if picture.depth is not None:
-        jobs += _depth_jobs(picture, depth_lambda(picture), confidence_map(picture), mapping, common, outdir, stem)
+        lam = depth_lambda(picture)
+        jobs += _depth_jobs(picture, lam, confidence_map(picture), mapping, common, outdir, stem)
+        if mapping is None:
+            jobs.append((os.path.join(outdir, f"{stem}_depth_lambda_preview.png"), lambda_preview_writer(lam)))
     os.makedirs(outdir, exist_ok=True)
     written = []
     for target, write in jobs:
@@ -80,14 +103,40 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
     return written
 
 
-def _camera_record(mapping) -> dict:
+def _linear(rgb: np.ndarray) -> np.ndarray:
+    from ..io import srgb_decode
+
+    return srgb_decode(np.asarray(rgb, np.float32) / 255.0)
+
+
+def _provenance(path: str, camera_path: str | None) -> dict:
+    """The contract's provenance record: lfproc's version and each input's path and SHA-256."""
+    import hashlib
+
+    from .. import __version__
+
+    inputs = {}
+    for key, name in (("picture", path), ("camera", camera_path)):
+        if name is not None:
+            with open(name, "rb") as fh:
+                inputs[key] = {"path": str(name), "sha256": hashlib.sha256(fh.read()).hexdigest()}
+    return {"lfproc_version": __version__, "inputs": inputs}
+
+
+def _camera_record(mapping, camera_from: str, focus_distance_mm) -> dict:
     from ..geometry import slice_distance_mm
 
     cam = mapping.camera
-    return {"focal_length_mm": cam.main_focal_length_mm, "f_number": cam.f_number,
+    if focus_distance_mm is not None:
+        focus_from = f"--focus-distance {focus_distance_mm:g} mm (thin-lens equation)"
+    elif camera_from == "picture metadata":
+        focus_from = "lambda (infinityLambda x fNumber x lensPitch, docs/lytro.md)"
+    else:
+        focus_from = f"the {camera_from} (its b_U)"
+    return {"from": camera_from, "focal_length_mm": cam.main_focal_length_mm, "f_number": cam.f_number,
             "image_distance_mm": cam.image_distance_mm, "focus_distance_mm": slice_distance_mm(cam, 0.0),
             "infinity_lambda": mapping.infinity_lambda, "lambda_unit_mm": mapping.unit_mm,
-            "image_distance_from": "lambda (infinityLambda x fNumber x lensPitch, docs/lytro.md)"}
+            "image_distance_from": focus_from}
 
 
 def _depth_jobs(picture, lam, conf, mapping, common, outdir, stem) -> list:
