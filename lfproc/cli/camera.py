@@ -6,15 +6,17 @@ import sys
 
 
 def register(sub) -> None:
-    p = sub.add_parser("camera", help="write a camera file from a Lytro file's metadata",
+    p = sub.add_parser("camera", help="write a camera file from a Lytro file's or napari-LF's metadata",
                        description="Read the metadata of a Lytro capture or white image (.lfr/.lfp, or NAME.raw "
                                    "with NAME.txt/.json) and write a camera file: pixel and lens pitch, hexagonal "
                                    "tiling, micro lens focal length (MLA-to-sensor distance), main lens focal "
                                    "length and f-number at the capture's zoom, exit pupil distance, levels, CFA. "
                                    "What the metadata lacks (the focus distance, principal planes) comes from "
-                                   "--focus-distance or a default; the [provenance] table says which.")
+                                   "--focus-distance or a default; the [provenance] table says which. napari-LF's "
+                                   "metadata.txt gives a light-field microscope's camera file (docs/microscope.md).")
     p.add_argument("file", metavar="FILE", help="Lytro capture, white image or processed picture (Illum .LFP, first "
-                                                "generation -stk.lfp with its frame metadata)")
+                                                "generation -stk.lfp with its frame metadata), or napari-LF's "
+                                                "metadata.txt")
     p.add_argument("-o", "--output", required=True, metavar="CAMERA.toml", help="camera file to write")
     p.add_argument("--focus-distance", type=float, metavar="MM",
                    help="distance from the sensor the main lens was focused at, in mm (inf allowed); "
@@ -32,9 +34,13 @@ def run(args) -> int:
 
     require_output_file(args.output, "-o CAMERA.toml", "camera.toml")   # before any input is read
     path = existing_file(args.file)
+    from ..io._napari_metadata import is_napari_metadata
+
+    if not is_lytro_file(path) and is_napari_metadata(path):
+        return _napari(path, args)
     if not is_lytro_file(path):
-        raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata); only Lytro "
-                          f"metadata describes the camera: write other camera files by hand (README)")
+        raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata) nor napari-LF "
+                          f"metadata (metadata.txt); write other camera files by hand (README)")
     meta = camera_metadata(path)
     built = lytro_camera(meta, args.focus_distance)
     try:
@@ -61,3 +67,24 @@ def _lambda_note(meta) -> str:
         return ""
     return (f"# lambda reading (docs/lytro.md): infinityLambda {meta.infinity_lambda:g} puts the focus at "
             f"{focus:.1f} mm from the sensor; to use it: lfproc camera FILE --focus-distance {focus:.1f}\n")
+
+
+def _napari(path: str, args) -> int:
+    """A microscope camera file from napari-LF's metadata.txt (mapping: docs/microscope.md)."""
+    from ..atomic import write_text_atomic
+    from ..errors import LfprocError
+    from ..io._napari_metadata import napari_camera
+
+    if args.focus_distance is not None:
+        raise LfprocError(f"{path}: --focus-distance is for a camera's main lens; a microscope has none (its slices "
+                          f"are placed by z, lfproc refocus --z-range)")
+    camera, notes = napari_camera(path)
+    try:
+        write_text_atomic(args.output, "".join(f"# {note}\n" for note in notes) + camera.to_toml())
+    except OSError as exc:
+        raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
+    scope = camera.microscope
+    print(f"{args.output}: light-field microscope, {scope.objective_magnification:g}x/{scope.numerical_aperture:g} "
+          f"(n {scope.immersion_index:g}), {camera.pitch_px:.3f} px rectangular lenses (m = {camera.m_hat}), f_s "
+          f"{camera.mla_focal_length_mm:g} mm; every number's source in [provenance]", file=sys.stdout)
+    return 0

@@ -20,6 +20,17 @@ def register(sub) -> None:
                    help="folder for the outputs (created if missing); every image gets a NAME.json sidecar")
     p.add_argument("--tiff", action="store_true",
                    help="also write each stack image as linear float32 TIFF (the sRGB JPEG decoded and linearised)")
+    p.add_argument("--camera", metavar="CAM.toml",
+                   help="the camera, for pictures whose metadata does not describe it (first-generation stacks) or "
+                        "to override it: its f_number, lens pitch and b_U turn lambda into a and mm (e.g. a camera "
+                        "file from 'lfproc camera' on a Lytro file of the same camera)")
+    p.add_argument("--focus-distance", type=float, metavar="MM",
+                   help="distance from the sensor the main lens was focused at (mm): b_U by the thin-lens equation "
+                        "instead of the metadata's infinityLambda or the camera file's b_U")
+    p.add_argument("--views-jpeg", action="store_true",
+                   help="also write each perspective view as an sRGB JPEG (STEM_parallax_KK.jpg)")
+    p.add_argument("--wobble", action="store_true",
+                   help="also write STEM_wobble.gif, the perspective views walked around the aperture")
     p.set_defaults(func=run)
 
 
@@ -32,13 +43,33 @@ def run(args) -> int:
     from .capture_loop import require_output_folder
 
     require_output_folder(args.outdir)   # before any input is read
+    camera = None
+    if args.focus_distance is not None and not (args.focus_distance > 0):
+        raise LfprocError(f"--focus-distance must be a positive distance in mm (inf allowed), got {args.focus_distance:g}")
+    if args.camera is not None:
+        from ..camera import Camera
+        from ..io._lytro_lambda import camera_lambda_map
+
+        camera = Camera.from_toml(existing_file(args.camera))
+        camera_lambda_map(camera, args.camera)    # a camera that cannot map lambda fails before any work
     for path in args.pictures:   # cheap checks on every input before any work
         existing_file(path)
         if not (has_container_extension(path) or is_container(path)):
             raise LfprocError(f"{path}: not a Lytro picture (.lfp/.lfr container); lfproc export reads processed "
                               f"Lytro pictures, use lfproc refocus/views/depth for captures")
+    if args.focus_distance is not None and camera is None:   # every picture must know its camera: before any output
+        from ..io import open_picture, picture_lambda_map
+
+        for path in args.pictures:
+            _, mapping, why = picture_lambda_map(open_picture(path))
+            if mapping is None:
+                raise LfprocError(f"{path}: --focus-distance needs the camera, and this picture's metadata does not "
+                                  f"describe it ({why}); add --camera CAM.toml (e.g. from 'lfproc camera' on a Lytro "
+                                  f"file of the same camera)")
     stems = unique_stems(args.pictures)
     for path in args.pictures:
-        written = export_picture(path, args.outdir, stems[path], tiff=args.tiff)
+        written = export_picture(path, args.outdir, stems[path], tiff=args.tiff, camera=camera,
+                                 camera_path=args.camera, focus_distance_mm=args.focus_distance,
+                                 views_jpeg=args.views_jpeg, wobble=args.wobble)
         print(f"{path}: {len(written)} images -> {os.path.abspath(args.outdir)}")
     return 0

@@ -61,7 +61,10 @@ def _describe_lytro(path: str) -> dict:
             lytro = open_lytro(path, verify=False)
         except LfprocError as exc:
             if "holds no raw light field" not in str(exc):
-                raise
+                stripped = _without_image(container, info)
+                if stripped is None:
+                    raise
+                return stripped
             info.update(raw_light_field=False, content=picture_kind(container.toc), width=None, height=None,
                         camera_model=None)
             from ._describe_picture import describe_picture
@@ -78,6 +81,24 @@ def _describe_lytro(path: str) -> dict:
         size = os.path.getsize(path)
         info["size_matches_metadata"] = size == lytro.metadata.packed_bytes
     info["raw_light_field"] = all(s["sha1_ok"] for s in info["sections"]) and info.get("size_matches_metadata", True)
+    return info
+
+
+def _without_image(container, info: dict) -> dict | None:
+    """A container whose raw image section is absent but whose frame metadata is present (e.g. ExifTool's
+    test file, its 16 MB image removed): its metadata described, no raw light field, the image "missing"."""
+    from ._lytro_container import frame_without_image
+    from ._lytro_metadata import parse_metadata
+
+    found = frame_without_image(container)
+    if found is None:
+        return None
+    frame, reference = found
+    info.update(_metadata_fields(parse_metadata(frame.metadata, frame.private, container.path,
+                                                frame.modulation_frame)))
+    info.update(raw_light_field=False, raw_frame=f"missing: the raw image section {reference} named by the table "
+                f"of contents is not in the file (removed or an incomplete copy); the metadata is intact",
+                content="Lytro frame metadata without its raw image")
     return info
 
 
@@ -212,6 +233,8 @@ def _describe_image(path: str) -> dict:
         stack = describe_stack(path)
         if stack is not None:
             return stack
+    if tags is None:         # embedded tags gone (an image re-saved by another program): lfproc's sidecar tells
+        tags = _sidecar_tags(path)
     product = None if tags is None else lfproc_product(tags)
     if product is not None:   # a data product or a picture of one: no raw light field any more
         info.update(format="lfproc-output", product=product, raw_light_field=False)
@@ -249,10 +272,32 @@ def _lfproc_tags(spec) -> dict | None:
     return tags
 
 
+def _sidecar_tags(path: str) -> dict | None:
+    """The sidecar ``NAME.json`` beside an image, when it is one lfproc wrote for an exported Lytro picture's
+    image (``source``, ``kind`` and ``lambda``), else None."""
+    import json
+
+    stem, extension = os.path.splitext(path)
+    try:
+        with open(stem + ".json", encoding="utf-8") as fh:
+            tags = json.load(fh)
+    except (OSError, ValueError):
+        return None
+    if extension.lower() == ".json" or not isinstance(tags, dict) or not _is_picture_export(tags):
+        return None
+    return tags
+
+
+def _is_picture_export(tags: dict) -> bool:
+    return {"source", "kind", "lambda"} <= set(tags)
+
+
 def lfproc_product(tags: dict) -> str | None:
     """What an lfproc data product is, from its embedded tags (a refocused slice, a view, a view mosaic, a
-    depth map, a preview picture of one of these); None for anything else lfproc wrote (a simulated capture or
-    white image is still a capture)."""
+    depth map, a preview picture of one of these, an image exported from a processed Lytro picture); None for
+    anything else lfproc wrote (a simulated capture or white image is still a capture)."""
+    if _is_picture_export(tags):
+        return f"image of a processed Lytro picture ({tags['kind']}), exported by lfproc export"
     if "preview" in tags:
         return "preview picture"
     if "a" in tags:

@@ -244,3 +244,19 @@ def modulation_flag(entry: dict) -> bool | None:
 
 def has_container_extension(path: str) -> bool:
     return os.path.splitext(path)[1].lower() in CONTAINER_EXTENSIONS
+
+
+def frame_without_image(container: LytroContainer):
+    """``(RawFrame with empty data, raw image reference)`` of the first frame whose metadata section is present
+    but whose raw image section is not (a container whose image was removed, e.g. ExifTool's test file), else
+    None. Its metadata still describes the camera."""
+    for entry in frames(container.toc):
+        frame = entry.get("frame")
+        if not isinstance(frame, dict) or container.chunk(frame.get("imageRef")) is not None:
+            continue
+        metadata = container.json_chunk(frame.get("metadataRef"), "frame metadata")
+        if metadata is not None:
+            private = container.json_chunk(frame.get("privateMetadataRef"), "private metadata")
+            return (RawFrame(source=container.path, packed=b"", metadata=metadata, private=private,
+                             modulation_frame=modulation_flag(entry)), frame.get("imageRef"))
+    return None

@@ -81,6 +81,9 @@ def camera_metadata(path: str):
     from ._lytro_container import has_container_extension, is_container, read_container
     from ._lytro_read import read_lytro_metadata
 
+    from ._lytro_container import frame_without_image
+    from ._lytro_metadata import parse_metadata
+
     if has_container_extension(path) or is_container(path):
         container = read_container(path, verify=True)
         if is_picture(container):
@@ -89,6 +92,10 @@ def camera_metadata(path: str):
                 raise LfprocError(f"{path}: a processed Lytro picture whose metadata does not describe the camera "
                                   f"({why}); use the raw .lfr/.lfp the camera wrote, or write the camera file by hand")
             return meta
+        found = frame_without_image(container)
+        if found is not None:    # the raw image section is gone, its metadata is not: it still describes the camera
+            frame = found[0]
+            return parse_metadata(frame.metadata, frame.private, path, frame.modulation_frame)
     return read_lytro_metadata(path)
 
 

@@ -34,16 +34,20 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     """
     from ..io import depth_lambda, open_picture, picture_lambda_map
 
+    from ..io._lytro_picture_pixels import stack_images
+
     picture = open_picture(path)
     if not picture.stack:
+        if picture.parallax is not None:
+            return _views_page(picture, outdir, stem=stem, index_href=index_href)
         held = ", ".join(picture.contents)
         raise LfprocError(f"{path}: holds no raw light field but a processed Lytro picture ({held}) with no focus "
-                          f"stack to view; use 'lfproc export' for its images and depth map, or the "
+                          f"stack and no perspective views to view; use 'lfproc export' for its depth map, or the "
                           f"raw .lfp/.lfr the camera wrote")
     meta, mapping, why = picture_lambda_map(picture)
     lambdas = np.array([s.lambda_ for s in picture.stack])
     records = mapping.slices(lambdas) if mapping else [{"lambda": float(v)} for v in lambdas]
-    jpegs = [picture.image_bytes(s.reference) for s in picture.stack]
+    jpegs = [data for data, _ in stack_images(picture)]
     if picture.depth is not None and picture.depth.kind == "depth map":
         choice = nearest_lambda(depth_lambda(picture), lambdas)
         method = "sharpest image per region: the stack image whose lambda is nearest the picture's depth map there"
@@ -54,10 +58,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     images = []
     for image, record, data in zip(picture.stack, records, jpegs):
         relative = f"stack/{stem}_stack_{image.index:02d}.jpg"
-        target = os.path.join(outdir, relative)
-        os.makedirs(os.path.dirname(target), exist_ok=True)
-        with atomic_path(target) as tmp, open(tmp, "wb") as fh:
-            fh.write(data)
+        _write_bytes(os.path.join(outdir, relative), data)
         images.append(dict(record, image=relative))
     default = picture.default_lambda if picture.default_lambda is not None else float(np.median(lambdas))
     facts = [["source", os.path.abspath(path)], ["holds", ", ".join(picture.contents)]]
@@ -70,6 +71,59 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     data = {"format": "lfproc-picture-viewer-1", "source": os.path.abspath(path), "stem": stem, "images": images,
             "choice": encode_array(choice.astype(np.uint8)), "start": int(np.argmin(np.abs(lambdas - default))),
             "method": method, "facts": facts, "index_href": index_href}
+    return _write_page(outdir, stem, data)
+
+
+def _write_bytes(target: str, data: bytes) -> None:
+    os.makedirs(os.path.dirname(target), exist_ok=True)
+    with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+        fh.write(data)
+
+
+def _views_page(picture, outdir: str, *, stem: str, index_href: str | None) -> str:
+    """The page of a picture that holds only perspective views (an edofParallax block): a click shows the view
+    whose aperture coordinate is nearest the clicked point's position in the picture (left edge: the leftmost
+    view), the slider steps through them."""
+    from ..io._lytro_h264 import decode_views
+    from ..io._lytro_picture_pixels import encode_jpeg
+
+    frames = decode_views(picture)
+    views = list(picture.parallax.views)
+    coords = []
+    for k in range(len(frames)):
+        view = views[k] if k < len(views) else None
+        coords.append((view[2], view[3]) if view is not None and None not in view[2:] else (0.0, 0.0))
+    images = []
+    for k, (rgb, (x, y)) in enumerate(zip(frames, coords)):
+        relative = f"views/{stem}_parallax_{k:02d}.jpg"
+        _write_bytes(os.path.join(outdir, relative), encode_jpeg(rgb))
+        images.append({"image": relative, "x": x, "y": y, "label": f"perspective view {k}, aperture position "
+                                                                    f"({x:+.3g}, {y:+.3g})"})
+    choice = nearest_view(np.array(coords, dtype=np.float64))
+    facts = [["source", os.path.abspath(picture.path)], ["holds", ", ".join(picture.contents)],
+             ["views", f"{len(images)} all-in-focus perspective views (H.264 edofParallax block)"]]
+    data = {"format": "lfproc-picture-viewer-1", "source": os.path.abspath(picture.path), "stem": stem,
+            "images": images, "choice": encode_array(choice.astype(np.uint8)),
+            "start": int(np.argmin(np.hypot(*np.array(coords, dtype=np.float64).T))),
+            "method": "perspective view per region: the view whose aperture position is nearest the point's position "
+                      "in the picture", "facts": facts, "index_href": index_href, "kind": "perspective views",
+            "prompt": "Click the picture to look from that side of the aperture; the slider steps through the views."}
+    return _write_page(outdir, stem, data)
+
+
+def nearest_view(coords: np.ndarray, regions: int = REGIONS) -> np.ndarray:
+    """Per region of a ``regions`` x ``regions`` grid over the picture, the index of the view whose aperture
+    coordinate (scaled so the views span the grid) is nearest the region's centre."""
+    centre = coords.mean(axis=0)
+    half = np.abs(coords - centre).max(axis=0)
+    half = np.where(half > 0, half, 1.0)
+    t = (np.arange(regions) + 0.5) / regions * 2.0 - 1.0
+    gy, gx = np.meshgrid(t * half[1] + centre[1], t * half[0] + centre[0], indexing="ij")
+    distance = np.hypot(gx[..., None] - coords[:, 0], gy[..., None] - coords[:, 1])
+    return np.argmin(distance, axis=-1)
+
+
+def _write_page(outdir: str, stem: str, data: dict) -> str:
     page = os.path.join(outdir, "index.html")
     write_text_atomic(page, _asset("picture.html")
                       .replace("{{TITLE}}", html.escape(f"lfproc viewer: {stem}"))
@@ -135,7 +189,8 @@ def _entry(outdir: str, folder: str) -> dict:
     start = text.index('id="lfproc-data">') + len('id="lfproc-data">')
     data = json.loads(text[start:text.index("</script>", start)])
     relative = os.path.relpath(folder, outdir).replace(os.sep, "/")
-    lambdas = [s["lambda"] for s in data["images"]]
+    lambdas = [s["lambda"] for s in data["images"] if s.get("lambda") is not None]
+    span = f"lambda {min(lambdas):g} to {max(lambdas):g}" if lambdas else f"{len(data['images'])} perspective views"
     return {"stem": data["stem"], "href": f"{relative}/index.html",
             "thumbnail": f"{relative}/{data['images'][data['start']]['image']}", "source": data["source"],
-            "slices": len(lambdas), "range": f"lambda {min(lambdas):g} to {max(lambdas):g}"}
+            "slices": len(data["images"]), "range": span}
