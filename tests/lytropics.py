@@ -152,3 +152,101 @@ def illum_picture(lambdas=(-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 12.5), *, size=48
 def write(path, data: bytes):
     path.write_bytes(data)
     return path
+
+
+# ----------------------------------------------------------------------------- the real Illum picture schema
+
+def illum_schema_toc(lambdas=(-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 12.5), *, depth_size=(12, 8)) -> dict:
+    """A table of contents in the schema of a real Illum processed picture (``picture_schema`` 2.1.4, as the
+    real ``illum-picture-toc.json`` of ``../shared/real/lytro`` has it): ``frames[0].frame.metadata`` inline
+    with the raw frame's ``pixelPacking``, ``pixelFormat`` and ``mosaic`` directly under ``image`` (no
+    ``rawDetails``), ``camera.model`` "ILLUM", ``privateMetadata`` inline, no ``imageRef`` for the frame;
+    ``views[0].accelerations[0]`` a ``focusStack`` with ``perImage`` (``focus`` = lambda) and a ``depthMap``
+    of ``representation`` "packedFloat". Camera numbers from the Illum fixture; references are placeholders
+    (``illum_picture_from_toc`` fills them)."""
+    import copy
+
+    doc = lytrogen.illum_document(7728, 5368, modulation=False)
+    frame = copy.deepcopy(doc["master"]["picture"]["frameArray"][0]["frame"])
+    image = frame["metadata"]["image"]
+    raw = image.pop("rawDetails")
+    image.pop("representation", None)
+    image.update(pixelPacking=raw["pixelPacking"], pixelFormat=raw["pixelFormat"], mosaic=raw["mosaic"])
+    frame["metadata"]["camera"]["model"] = "ILLUM"
+    width, height = depth_size
+    return {"schema": "http://schema.lytro.com/lfp/picture/2.1.4/picture_schema.json", "thumbnails": [],
+            "frames": [{"frame": {"metadata": frame["metadata"], "privateMetadata": frame["privateMetadata"]}}],
+            "views": [{"recipe": {"viewFocus": 0}, "accelerations": [{
+                "kind": "focusStack", "width": 64, "height": 48, "representation": "jpeg",
+                "depthMap": {"width": width, "height": height, "imageRef": "sha1-" + "0" * 40,
+                             "representation": "packedFloat", "minLambda": min(lambdas), "maxLambda": max(lambdas)},
+                "perImage": [{"imageRef": "sha1-" + "0" * 40, "focus": lam} for lam in lambdas]}]}]}
+
+
+def illum_picture_from_toc(toc: dict, *, size=48, depth=None, **kwargs) -> tuple[bytes, dict]:
+    """A container around a real (or ``illum_schema_toc``) table of contents: its JSON kept as it is except
+    each image reference, which now names a section written here — one small JPEG per ``perImage`` entry
+    (``focus_scene``), the depth map as little-endian float32 of the TOC's ``width`` x ``height`` (a ramp
+    from ``minLambda`` to ``maxLambda`` unless ``depth`` is given). Returns (bytes, the TOC written)."""
+    import copy
+
+    toc = copy.deepcopy(toc)
+    stack = toc["views"][0]["accelerations"][0]
+    entries = stack["perImage"]
+    images = [jpeg(im) for im in focus_scene(len(entries), size)]
+    for entry, data in zip(entries, images):
+        entry["imageRef"] = sha1_ref(data)
+    table = stack["depthMap"]
+    if depth is None:
+        depth = np.linspace(table["minLambda"], table["maxLambda"], table["width"] * table["height"],
+                            dtype="<f4").reshape(table["height"], table["width"])
+    depth_bytes = np.asarray(depth, "<f4").tobytes()
+    table["imageRef"] = sha1_ref(depth_bytes)
+    return assemble(toc, [*images, depth_bytes], **kwargs), toc
+
+
+def first_gen_h264_stack(lambdas, parallax, *, with_metadata=True) -> bytes:
+    """A later engine's first-generation picture: the refocus stack as one H.264 block (``refocusStack``
+    ``vendorContent.blockOfImages``, ``metadataArray[]`` with each frame's ``lambda``) beside an
+    ``edofParallax`` block of perspective views, and a 20 x 20 depth lookup table. ``lambdas`` go with
+    ``focus_scene`` images of 32 x 32 pixels; ``parallax`` is a list of ``(rgb, x, y)``."""
+    import h264pcm
+
+    images = focus_scene(len(lambdas), 32)
+    stack_block = h264pcm.h264_stream(images)
+    views_block = h264pcm.h264_stream([rgb for rgb, _, _ in parallax])
+    lut = np.linspace(min(lambdas), max(lambdas), 400, dtype="<f4").reshape(20, 20).tobytes()
+    meta = json.dumps(lytrogen.f01_metadata(3280, 3280), indent=1).encode()
+    private = json.dumps({"camera": {"serialNumber": "A502030123"}}).encode()
+    height, width = parallax[0][0].shape[:2]
+    display = {"displayDimensions": {"mode": "fixedToValue", "value": {"width": 32, "height": 32}}}
+    accelerations = [
+        {"type": "com.lytro.acceleration.refocusStack", "vendorContent": {
+            "viewParameters": {}, "displayParameters": display, "defaultLambda": 0,
+            "depthLut": {"width": 20, "height": 20, "representation": "raw", "imageRef": sha1_ref(lut)},
+            "blockOfImages": {"representation": "h264", "blockOfImagesRef": sha1_ref(stack_block),
+                              "metadataArray": [{"width": 32, "height": 32, "lambda": float(lam)}
+                                                for lam in lambdas]}}},
+        {"type": "com.lytro.acceleration.edofParallax", "vendorContent": {
+            "displayParameters": display,
+            "blockOfImages": {"representation": "h264", "blockOfImagesRef": sha1_ref(views_block),
+                              "metadataArray": [{"width": width, "height": height, "coord": {"x": x, "y": y}}
+                                                for _, x, y in parallax]}}}]
+    frame = {"frame": {"metadataRef": sha1_ref(meta), "privateMetadataRef": sha1_ref(private), "imageRef": RAW_REF}}
+    chunks = [meta, private] if with_metadata else []
+    toc = {"picture": {"frameArray": [frame], "viewArray": [], "accelerationArray": accelerations,
+                       "derivationArray": [RAW_REF]}, "version": {"major": 1, "minor": 0}}
+    return assemble(toc, chunks + [stack_block, views_block, lut])
+
+
+def parallax_only(parallax) -> bytes:
+    """A first-generation picture holding only an edofParallax block of perspective views."""
+    import h264pcm
+
+    block = h264pcm.h264_stream([rgb for rgb, _, _ in parallax])
+    height, width = parallax[0][0].shape[:2]
+    toc = {"picture": {"frameArray": [{"frame": {"imageRef": RAW_REF}}], "accelerationArray": [
+        {"type": "com.lytro.acceleration.edofParallax", "vendorContent": {"blockOfImages": {
+            "representation": "h264", "blockOfImagesRef": sha1_ref(block),
+            "metadataArray": [{"width": width, "height": height, "coord": {"x": x, "y": y}} for _, x, y in parallax]}}}]}}
+    return assemble(toc, [block])
