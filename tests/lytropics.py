@@ -248,5 +248,6 @@ def parallax_only(parallax) -> bytes:
     toc = {"picture": {"frameArray": [{"frame": {"imageRef": RAW_REF}}], "accelerationArray": [
         {"type": "com.lytro.acceleration.edofParallax", "vendorContent": {"blockOfImages": {
             "representation": "h264", "blockOfImagesRef": sha1_ref(block),
-            "metadataArray": [{"width": width, "height": height, "coord": {"x": x, "y": y}} for _, x, y in parallax]}}}]}}
+            "metadataArray": [{"width": width, "height": height, "coord": {"x": x, "y": y}}
+                              for _, x, y in parallax]}}}]}}
     return assemble(toc, [block])

@@ -10,11 +10,13 @@ def register(sub) -> None:
                        description="For each processed Lytro picture (first generation NAME-stk.lfp / NAME-dm.lfp, "
                                    "Illum .LFP from the camera or Lytro Desktop): every focus stack image as the "
                                    "JPEG it is (and, with --tiff, as linear float TIFF) with its lambda and, where "
-                                   "the picture's metadata describes the camera, the refocus parameter a, distance "
-                                   "and depth of field from the sensor (derived from lambda: the README's Lytro section); each "
-                                   "perspective view of an edofParallax block with its aperture coordinate; the "
-                                   "depth map in lambda (STEM_depth_lambda.tif) and in mm (STEM_depth.tif) with a "
-                                   "preview in metres. Every image gets a NAME.json sidecar and embedded metadata.")
+                                   "the camera is known (the picture's metadata, or --camera), the refocus "
+                                   "parameter a, distance and depth of field from the sensor (derived from lambda: "
+                                   "docs/lytro.md); each perspective view of an edofParallax block with its aperture "
+                                   "coordinate (--views-jpeg, --wobble for pictures to share); the depth map in "
+                                   "lambda (STEM_depth_lambda.tif) and, where the camera is known, in mm "
+                                   "(STEM_depth.tif) with a preview in metres (in lambda otherwise). Every image gets "
+                                   "a NAME.json sidecar and embedded metadata.")
     p.add_argument("pictures", nargs="+", metavar="PICTURE", help="processed Lytro pictures (.lfp/.lfr/.LFP)")
     p.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
                    help="folder for the outputs (created if missing); every image gets a NAME.json sidecar")
@@ -45,7 +47,8 @@ def run(args) -> int:
     require_output_folder(args.outdir)   # before any input is read
     camera = None
     if args.focus_distance is not None and not (args.focus_distance > 0):
-        raise LfprocError(f"--focus-distance must be a positive distance in mm (inf allowed), got {args.focus_distance:g}")
+        raise LfprocError(f"--focus-distance must be a positive distance in mm (inf allowed), got "
+                          f"{args.focus_distance:g}")
     if args.camera is not None:
         from ..camera import Camera
         from ..io._lytro_lambda import camera_lambda_map

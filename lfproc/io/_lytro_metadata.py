@@ -120,7 +120,8 @@ def parse_metadata(metadata: dict, private: dict | None, source: str, modulation
         raise LfprocError(f"{source}: {key}.pixelFormat.rightShift = {pixel_format['rightShift']} is not "
                           f"supported; only unshifted raw data can be read")
     black = _channel_levels(pixel_format.get("black"), channels, 0.0, source, f"{key}.pixelFormat.black")
-    white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source, f"{key}.pixelFormat.white")
+    white = _channel_levels(pixel_format.get("white"), channels, float(2 ** bits - 1), source,
+                            f"{key}.pixelFormat.white")
     if any(not 0 <= b < w <= 2 ** bits for w_row, b_row in zip(white, black) for w, b in zip(w_row, b_row)):
         raise LfprocError(f"{source}: white level {white} is not above the black level {black} within "
                           f"0..{2 ** bits} ({bits}-bit data); the metadata is corrupt, re-copy it")
