@@ -13,7 +13,10 @@ def register(sub) -> None:
                                    "length and f-number at the capture's zoom, exit pupil distance, levels, CFA. "
                                    "What the metadata lacks (the focus distance, principal planes) comes from "
                                    "--focus-distance or a default; the [provenance] table says which. napari-LF's "
-                                   "metadata.txt gives a light-field microscope's camera file (docs/microscope.md).")
+                                   "metadata.txt gives a light-field microscope's camera file (docs/microscope.md). For a "
+                                   "processed Lytro picture without camera metadata (a first-generation stack), "
+                                   "write the camera file from another file of that camera and give it to "
+                                   "'lfproc export PICTURE --camera CAM.toml [--focus-distance MM]'.")
     p.add_argument("file", metavar="FILE", help="Lytro capture, white image or processed picture (Illum .LFP, first "
                                                 "generation -stk.lfp with its frame metadata), or napari-LF's "
                                                 "metadata.txt")
