@@ -12,6 +12,11 @@ def picture_metadata(picture: LytroPicture):
     from ._lytro_metadata import parse_metadata
 
     if picture.metadata is None:
+        named = [reference(entry.get("frame"), "metadataRef", "metadataUrl") for entry in frames(picture.container.toc)]
+        named = [ref for ref in named if ref is not None]
+        if named:
+            return None, (f"the picture carries no camera metadata (its frame metadata section {named[0]} is "
+                          f"referenced, not contained)")
         return None, "the picture carries no camera metadata"
     try:
         return parse_metadata(picture.metadata, picture.private, picture.path), None
