@@ -334,3 +334,17 @@ def test_napari_metadata_gives_a_microscope_camera_file(tmp_path, capsys):
     meta.write_text(json.dumps(settings))
     status, _, err = cli(capsys, "camera", meta, "-o", tmp_path / "x.toml")
     assert status == 2 and len(err) == 1 and "objective_na" in err[0] and not (tmp_path / "x.toml").exists()
+
+
+def test_export_camera_file_overrides_the_pictures_metadata(tmp_path, capsys):
+    """An Illum picture exported with an F01 camera file: the camera file's optics apply, and say so."""
+    pic = lytropics.write(tmp_path / "I.LFP", lytropics.illum_picture())
+    cam_path, cam = _f01_camera_file(tmp_path, focus_distance_mm=800.0)
+    status, _, err = cli(capsys, "export", pic, "--camera", cam_path, "-o", tmp_path / "out")
+    assert status == 0, err
+    sidecar = json.loads((tmp_path / "out" / "I_stack_00.json").read_text())
+    assert sidecar["camera_model"] == "B01" and sidecar["camera"]["from"] == f"camera file {cam_path}"
+    assert sidecar["camera"]["f_number"] == cam.f_number and sidecar["camera"]["focus_distance_mm"] == pytest.approx(800)
+    expected = newton_distance(-15.0, f_u=cam.main_focal_length_mm, n=cam.f_number, p_m=cam.mla_pitch_mm,
+                               f_s=cam.mla_focal_length_mm, b_u=cam.image_distance_mm)
+    assert sidecar["lambda"] == -15.0 and sidecar["distance_mm"] == pytest.approx(expected, rel=1e-9)
