@@ -118,7 +118,7 @@ def _prescription(reader: "_TableReader", main: dict):
         raise LfprocError(f"{source}: main_lens.prescription must be a file name (a .zmx lens file), got {name!r}")
     folder = os.path.dirname(os.path.abspath(source)) if os.path.exists(source) else os.getcwd()
     from ._zmx import read_zmx
-    return read_zmx(os.path.join(folder, os.path.expanduser(name)), wavelength)
+    return read_zmx(os.path.normpath(os.path.join(folder, os.path.expanduser(name))), wavelength)
 
 
 def _agree(reader: "_TableReader", main: dict, key: str, lens_value: float, what: str) -> None:

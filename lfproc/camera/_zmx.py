@@ -31,7 +31,8 @@ LENS_EXTRA_HINT = "pip install 'lfproc[lens]'"
 
 def _read_text(path: str) -> str:
     try:
-        raw = open(path, "rb").read()
+        with open(path, "rb") as fh:
+            raw = fh.read()
     except FileNotFoundError:
         raise LfprocError(f"{path}: lens prescription not found; give main_lens.prescription relative to the "
                           f"camera file") from None
