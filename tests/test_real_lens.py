@@ -295,3 +295,28 @@ def test_sidecars_of_a_prescription_camera_carry_the_real_rays(tmp_path):
     real = g.real_ray_views(cam, [-12, 12]).records()
     assert side["real_rays"] == {"position_mm": [real[0]["position_mm"], real[1]["position_mm"]],
                                  "tilt_deg": [real[0]["tilt_deg"], real[1]["tilt_deg"]]}
+
+
+def test_zmx_reader_units_model_glasses_utf16_and_refusals(tmp_path):
+    """A model-glass .zmx in inches and UTF-16 reads as the same lens as its inline table (no extra needed)."""
+    lines = ["VERS 140101", "UNIT IN X W X CM MR CPMM", "SURF 0", "  DISZ INFINITY",
+             "SURF 1", "  STOP", "  CURV " + repr(25.4 / 50.0), "  DISZ " + repr(8.0 / 25.4),
+             "  GLAS ___BLANK 1 0 1.5 6.4E+1", "  DIAM 0.4",
+             "SURF 2", "  CURV " + repr(-25.4 / 80.0), "  DISZ 1.0", "SURF 3", "  DISZ 0"]
+    path = tmp_path / "thick.zmx"
+    path.write_bytes(("\r\n".join(lines) + "\r\n").encode("utf-16"))
+    lens = read_zmx(path, 587.6)
+    ref = LensPrescription((Surface(50.0, 8.0, 1.5, stop=True), Surface(-80.0, 25.4, 1.0)))
+    assert [s.index for s in lens.surfaces] == [1.5, 1.0] and lens.surfaces[0].semi_diameter_mm == pytest.approx(10.16)
+    for key in ("focal_length_mm", "principal_plane_gap_mm", "exit_pupil_mm"):
+        assert getattr(lens, key) == pytest.approx(getattr(ref, key), rel=1e-12)
+    for bad, named in (("  TYPE EVENASPH", "EVENASPH"), ("  CONI -1.0", "conic"), ("  GLAS MIRROR", "mirror")):
+        broken = tmp_path / "bad.zmx"
+        broken.write_text("\n".join(lines[:8] + [bad] + lines[8:]) + "\n")
+        with pytest.raises(LfprocError, match=named):
+            read_zmx(broken, 587.6)
+    with pytest.raises(LfprocError, match="not found"):
+        read_zmx(tmp_path / "missing.zmx", 587.6)
+    two_stops = LensPrescription.__new__(LensPrescription)
+    with pytest.raises(LfprocError, match="exactly one surface"):
+        two_stops.__init__((Surface(50.0, 8.0, 1.5, stop=True), Surface(-80.0, 25.4, 1.0, stop=True)))
