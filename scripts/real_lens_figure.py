@@ -30,7 +30,8 @@ def camera(kind: str, extra_mm: float = 0.0, f_s: float = 2.749) -> Camera:
     name = "double-gauss-f100-telecentric.toml" if kind == "telecentric" else "double-gauss-f100.toml"
     cam = Camera.from_toml(CAMS / name)
     if f_s != cam.mla_focal_length_mm:
-        text = cam.to_toml().replace(f"focal_length_mm = {cam.mla_focal_length_mm!r}\n", f"focal_length_mm = {f_s!r}\n", 1)
+        old = f"focal_length_mm = {cam.mla_focal_length_mm!r}\n"
+        text = cam.to_toml().replace(old, f"focal_length_mm = {f_s!r}\n", 1)     # the [mla] one
         cam = Camera.from_toml_string(text, cam.source)
     return cam.with_main_lens(cam.main_lens_prescription, cam.main_focal_length_mm + extra_mm)
 
@@ -45,7 +46,8 @@ def table(cam: Camera, a_values) -> str:
     """Markdown rows as the paper's Table 2: prediction, real rays, deviation (Eq. 37)."""
     para = g.slice_geometry(cam, np.asarray(a_values, dtype=float))
     real = g.real_ray_slices(cam, a_values)
-    rows = ["| a | d_a− | d_a | d_a+ | real d_a− | real d_a | real d_a+ | spread | ERR_a− % | ERR_a % | ERR_a+ % |",
+    rows = ["| a | d_a− | d_a | d_a+ | real d_a− | real d_a | real d_a+ | spread "
+            "| ERR_a− % | ERR_a % | ERR_a+ % |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for k, a in enumerate(a_values):
         p = [para.near_mm[k], para.distance_mm[k], para.far_mm[k]]
@@ -58,7 +60,8 @@ def table(cam: Camera, a_values) -> str:
 def views_table(cam: Camera, i_values) -> str:
     real = g.real_ray_views(cam, i_values)
     pos, tilt = g.view_positions_mm(cam, np.asarray(i_values)), g.view_tilts_deg(cam, np.asarray(i_values))
-    rows = ["| i | F_i | Φ_i [°] | real F_i | real Φ_i [°] | real distance |", "| --- | --- | --- | --- | --- | --- |"]
+    rows = ["| i | F_i | Φ_i [°] | real F_i | real Φ_i [°] | real distance |",
+            "| --- | --- | --- | --- | --- | --- |"]
     for k, i in enumerate(i_values):
         rows.append(f"| {i} | {pos[k]:.4f} | {tilt[k]:.4f} | {real.position_mm[k]:.4f} | {real.tilt_deg[k]:.4f} | "
                     f"{real.distance_mm[k]:.3f} |")
@@ -166,8 +169,8 @@ def main() -> None:
             for kind in ("telecentric", "own"):
                 cam = camera(kind, extra, f_s)
                 d_a = "∞" if cam.telecentric else f"{cam.exit_pupil_distance_mm:.3f} mm"
-                print(f"\n#### f_s = {f_s} mm, b_U = f_U + {extra:g} mm, "
-                      f"{'stop at F1U (the paper’s experiment)' if kind == 'telecentric' else 'own stop'}, d_A = {d_a}\n")
+                stop = "stop at F1U (the paper’s experiment)" if kind == "telecentric" else "own stop"
+                print(f"\n#### f_s = {f_s} mm, b_U = f_U + {extra:g} mm, {stop}, d_A = {d_a}\n")
                 print(table(cam, [0, 1, 2, 3, 4, 5]))
     for extra in (0.0, 20.0):
         print(f"\n#### views, stop at F1U, b_U = f_U + {extra:g} mm\n")

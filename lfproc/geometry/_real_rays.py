@@ -122,7 +122,7 @@ def _axis_distance(frame: _Frame, y0, slope) -> np.ndarray:
 
 
 def slice_rays(camera: Camera, a, view_extent=None):
-    """The rays of each slice: (y0, slope) arrays of shape ``(3 + n, …)`` for d_a, d_a−, d_a+ and the n spread pairs.
+    """The rays of each slice: (y0, slope), shape ``(3 + n, …)``: d_a, d_a−, d_a+ and the n spread pairs.
 
     One ray of each symmetric pair (module docstring); the other is its mirror image.
     """
