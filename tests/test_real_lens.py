@@ -320,3 +320,39 @@ def test_zmx_reader_units_model_glasses_utf16_and_refusals(tmp_path):
     two_stops = LensPrescription.__new__(LensPrescription)
     with pytest.raises(LfprocError, match="exactly one surface"):
         two_stops.__init__((Surface(50.0, 8.0, 1.5, stop=True), Surface(-80.0, 25.4, 1.0, stop=True)))
+
+
+SINGLET = """[sensor]
+pixel_pitch_mm = 0.01
+[mla]
+pitch_mm = 0.25
+focal_length_mm = 2.749
+[main_lens]
+focus_distance_mm = inf
+[[main_lens.surfaces]]
+radius_mm = 40.0
+thickness_mm = 6.0
+index = 1.5
+stop = true
+[[main_lens.surfaces]]
+radius_mm = -40.0
+thickness_mm = 0.0
+[decode]
+micro_image_px = 25
+"""
+
+
+def test_a_paraxial_distance_outside_the_real_dof_is_marked(tmp_path):
+    """A fast biconvex singlet: near the lens its spherical aberration moves the DOF off the paraxial d_a."""
+    path = tmp_path / "singlet.toml"
+    path.write_text(SINGLET)
+    cam = Camera.from_toml(path)
+    para = g.slice_geometry(cam, np.array([1.0, 3.0]))
+    real = g.real_ray_slices(cam, [1.0, 3.0])
+    assert real.near_mm[0] <= para.distance_mm[0] <= real.far_mm[0]            # a = 1: inside
+    assert not real.near_mm[1] <= para.distance_mm[1] <= real.far_mm[1]        # a = 3: outside
+    assert np.all(real.near_mm <= real.distance_mm) and np.all(real.distance_mm <= real.far_mm)
+    rows = run_cli("geometry", "--camera", path, "--a", "1,3", "--real-rays").stdout.splitlines()
+    start = next(k for k, line in enumerate(rows) if line.startswith("distances from the sensor [mm]: paraxial"))
+    assert not rows[start + 2].endswith("*") and rows[start + 3].endswith(" *")
+    assert any(line.startswith("  * : the paraxial d_a lies outside") for line in rows)

@@ -18,7 +18,8 @@ crossing in object space is the pair's meeting point:
 
 * d_a: pixel centres, U = r, lens centre s = y = −a·r·p_m (Eqs. 13–14, 20);
 * d_a− / d_a+: pixel borders and micro lens borders, U = (2r + t)/2 and y = −(2ar + s)/2·p_m with the
-  bounding pairs (s, t) of :mod:`._slices` (Eqs. 24–25, 30), the lens centre at −a·r·p_m;
+  bounding pairs (s, t) of :mod:`._slices` (Eqs. 24–25, 30), the lens centre at −a·r·p_m; where the
+  aberrations swap them, the nearer crossing is d_a− (as ``slice_geometry`` orders its limits);
 * ``spread_mm``: the range of the axis crossings of the central pairs of every summed view pair
   i = ±v, v = 1 … ⌊r⌋ and r (spherical aberration of the summed bundle; 0 for a perfect lens).
 
@@ -195,8 +196,10 @@ def real_ray_slices(camera: Camera, a, view_extent=None) -> RealRaySlices:
     d = _axis_distance(frame, y0, slope)
     paraxial = slice_geometry(camera, a_arr, view_extent)
     front = frame.z_sensor - frame.vertex[0]              # the first vertex, from the sensor
-    near = np.where(paraxial.near_mm > front, d[1], np.nan)
-    far = np.where(paraxial.far_mm > front, d[2], np.nan)
+    both = np.isfinite(d[1]) & np.isfinite(d[2]) & np.isfinite(d[0])   # order the limits as slice_geometry does
+    lo, hi = np.fmin(np.fmin(d[1], d[2]), d[0]), np.fmax(np.fmax(d[1], d[2]), d[0])
+    near = np.where(paraxial.near_mm > front, np.where(both, lo, d[1]), np.nan)
+    far = np.where(paraxial.far_mm > front, np.where(both, hi, d[2]), np.nan)
     dist = np.where(paraxial.distance_mm > front, d[0], np.nan)
     if len(d) > 3:
         spread = d[3:].max(axis=0) - d[3:].min(axis=0)    # NaN if any pair fails
