@@ -11,6 +11,7 @@ import os
 from dataclasses import dataclass, field, replace
 
 from ..errors import LfprocError
+from ._lens import LensPrescription
 from ._microscope import Microscope
 from ._optics import image_distance_for_focus
 from ._validation import validate_camera
@@ -50,6 +51,10 @@ class Camera:
     micro_image_px : int or None
         Odd micro image size m̂ after resampling; ``None`` picks the largest odd integer not above
         ``mla_pitch_mm / lenslet_pixel_pitch_mm`` (``pixel_pitch_mm`` unless a microscope has a relay). Always an ``int`` once constructed.
+    main_lens_prescription : LensPrescription or None
+        The main lens as its surfaces (``main_lens.prescription`` or ``[[main_lens.surfaces]]``); then
+        f_U, H1U–H2U and d_A are its paraxial cardinal points (:mod:`._lens`), and real rays can be traced
+        through it (``lfproc.geometry.real_ray_slices``). ``None``: the main lens is its cardinal points only.
     microscope : Microscope or None
         The objective, tube lens and relay of a light-field microscope (the ``[microscope]`` table),
         in place of a main lens; ``None`` for a photographic camera.
@@ -76,6 +81,7 @@ class Camera:
     white_level: float | None = None
     exit_pupil_distance_mm: float = math.inf
     micro_image_px: int | None = None
+    main_lens_prescription: LensPrescription | None = None
     microscope: Microscope | None = None
     name: str = ""
     source: str = field(default="", compare=False, repr=False)
@@ -183,10 +189,26 @@ class Camera:
         """
         self.require_main_lens("a focus distance")
         stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
-        return replace(self, image_distance_mm=image_distance_for_focus(
+        b_u = image_distance_for_focus(
             self.main_focal_length_mm, focus_distance_mm,
             self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.main_principal_plane_gap_mm,
-            self.source or "camera"), provenance=tuple(p for p in self.provenance if p[0] not in stale))
+            self.source or "camera")
+        d_a = (self.exit_pupil_distance_mm if self.main_lens_prescription is None
+               else self.main_lens_prescription.exit_pupil_distance_mm(b_u))
+        return replace(self, image_distance_mm=b_u, exit_pupil_distance_mm=d_a,
+                       provenance=tuple(p for p in self.provenance if p[0] not in stale))
+
+    def with_main_lens(self, prescription: LensPrescription, image_distance_mm: float | None = None) -> "Camera":
+        """A copy whose main lens is ``prescription``: f_U, H1U–H2U and d_A become its cardinal points.
+
+        ``image_distance_mm`` is b_U from the lens's rear principal plane (default: the camera's own).
+        """
+        self.require_main_lens("a main lens prescription")
+        b_u = self.image_distance_mm if image_distance_mm is None else float(image_distance_mm)
+        return replace(self, main_focal_length_mm=prescription.focal_length_mm,
+                       main_principal_plane_gap_mm=prescription.principal_plane_gap_mm, image_distance_mm=b_u,
+                       exit_pupil_distance_mm=prescription.exit_pupil_distance_mm(b_u),
+                       main_lens_prescription=prescription)
 
     # ----------------------------------------------------------------- files (see ._toml)
     @classmethod

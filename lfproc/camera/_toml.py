@@ -6,7 +6,8 @@
     [sensor]     pixel_pitch_mm, cfa, black_level, white_level
     [mla]        pitch_mm, focal_length_mm, principal_plane_gap_mm, grid
     [main_lens]  focal_length_mm, principal_plane_gap_mm,
-                 image_distance_mm | focus_distance_mm, f_number, exit_pupil_distance_mm
+                 image_distance_mm | focus_distance_mm, f_number, exit_pupil_distance_mm,
+                 prescription (a .zmx file) | [[main_lens.surfaces]], wavelength_nm   (a real lens, _lens.py)
     [microscope] objective_magnification, numerical_aperture, immersion_index, tube_lens_focal_length_mm,
                  relay_magnification, wavelength_nm, aplanatic        (instead of [main_lens])
     [decode]     micro_image_px
@@ -20,6 +21,7 @@ import os
 
 from ..errors import LfprocError
 from ..tomlfile import parse_toml, read_toml
+from ._lens import DEFAULT_LENS_WAVELENGTH_NM, PRESCRIPTION_TOLERANCE, surfaces_from_table, surfaces_to_toml
 from ._microscope import MICROSCOPE_KEYS, Microscope
 from ._optics import image_distance_for_focus
 from ._validation import require_positive
@@ -30,7 +32,7 @@ KNOWN_KEYS = {
     "sensor": {"pixel_pitch_mm", "cfa", "black_level", "white_level"},
     "mla": {"pitch_mm", "focal_length_mm", "principal_plane_gap_mm", "grid"},
     "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number",
-                  "exit_pupil_distance_mm"},
+                  "exit_pupil_distance_mm", "prescription", "wavelength_nm", "surfaces"},
     "microscope": set(MICROSCOPE_KEYS),
     "decode": {"micro_image_px"},
 }
@@ -95,11 +97,55 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
     )
 
 
+def _prescription(reader: "_TableReader", main: dict):
+    """The main lens's :class:`LensPrescription` (a ``.zmx`` file or the inline surfaces), or ``None``."""
+    source = reader.source
+    has_file, has_table = "prescription" in main, "surfaces" in main
+    if has_file and has_table:
+        raise LfprocError(f"{source}: [main_lens] gives both prescription and [[main_lens.surfaces]]; keep one")
+    wavelength = reader.number(main, "main_lens", "wavelength_nm", default=DEFAULT_LENS_WAVELENGTH_NM)
+    if not wavelength > 0:
+        raise LfprocError(f"{source}: main_lens.wavelength_nm must be positive, got {wavelength}")
+    if not (has_file or has_table):
+        if "wavelength_nm" in main:
+            raise LfprocError(f"{source}: main_lens.wavelength_nm needs a prescription (the indices of its glasses); "
+                              f"add prescription or [[main_lens.surfaces]], or remove it")
+        return None
+    if has_table:
+        return surfaces_from_table(main["surfaces"], source, wavelength)
+    name = main["prescription"]
+    if not isinstance(name, str) or not name:
+        raise LfprocError(f"{source}: main_lens.prescription must be a file name (a .zmx lens file), got {name!r}")
+    folder = os.path.dirname(os.path.abspath(source)) if os.path.exists(source) else os.getcwd()
+    from ._zmx import read_zmx
+    return read_zmx(os.path.normpath(os.path.join(folder, os.path.expanduser(name))), wavelength)
+
+
+def _agree(reader: "_TableReader", main: dict, key: str, lens_value: float, what: str) -> None:
+    """Refuse a hand-written ``main_lens.key`` that differs from the prescription's value by more than 0.1 %."""
+    if key not in main:
+        return
+    hand = reader.number(main, "main_lens", key, allow_inf=True)
+    if math.isinf(hand) or math.isinf(lens_value):
+        same = hand == lens_value
+    else:
+        same = abs(hand - lens_value) <= PRESCRIPTION_TOLERANCE * max(abs(lens_value), 1e-3)
+    if not same:
+        raise LfprocError(f"{reader.source}: main_lens.{key} = {hand} disagrees with the prescription's {what} "
+                          f"{lens_value:.6g} mm (more than 0.1 %); remove it or fix the lens")
+
+
 def _main_lens(reader: "_TableReader", main: dict, mla_path_mm: float) -> dict:
     """The ``Camera`` fields of a ``[main_lens]`` table; ``mla_path_mm`` = f_s + H1sH2s."""
     source = reader.source
-    f_u = reader.number(main, "main_lens", "focal_length_mm")
-    main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
+    lens = _prescription(reader, main)
+    if lens is None:
+        f_u = reader.number(main, "main_lens", "focal_length_mm")
+        main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
+    else:
+        f_u, main_gap = lens.focal_length_mm, lens.principal_plane_gap_mm
+        _agree(reader, main, "focal_length_mm", f_u, "paraxial focal length")
+        _agree(reader, main, "principal_plane_gap_mm", main_gap, "principal plane gap H1U-H2U")
     has_b, has_focus = "image_distance_mm" in main, "focus_distance_mm" in main
     if has_b and has_focus:
         raise LfprocError(f"{source}: [main_lens] gives both image_distance_mm and focus_distance_mm; keep one")
@@ -114,10 +160,16 @@ def _main_lens(reader: "_TableReader", main: dict, mla_path_mm: float) -> dict:
     f_number = main.get("f_number")
     if f_number is not None:
         f_number = reader.number(main, "main_lens", "f_number")
+    if lens is None:
+        d_a = reader.number(main, "main_lens", "exit_pupil_distance_mm", default=math.inf, allow_inf=True)
+    else:
+        d_a = lens.exit_pupil_distance_mm(b_u)
+        if not d_a > 0:
+            raise LfprocError(f"{source}: the prescription's exit pupil lies {-d_a:.3f} mm behind the micro lens "
+                              f"array; no plenoptic camera can use that lens there (check b_U and the stop)")
+        _agree(reader, main, "exit_pupil_distance_mm", d_a, "exit pupil distance from the MLA")
     return dict(main_focal_length_mm=f_u, image_distance_mm=b_u, main_principal_plane_gap_mm=main_gap,
-                f_number=f_number,
-                exit_pupil_distance_mm=reader.number(main, "main_lens", "exit_pupil_distance_mm", default=math.inf,
-                                                     allow_inf=True))
+                f_number=f_number, exit_pupil_distance_mm=d_a, main_lens_prescription=lens)
 
 
 def _microscope(reader: "_TableReader", table: dict) -> Microscope:
@@ -186,6 +238,10 @@ def camera_to_toml(camera, include_provenance: bool = True) -> str:
             lines.append(f"f_number = {camera.f_number!r}")
         if not camera.telecentric:
             lines.append(f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}")
+        lens = getattr(camera, "main_lens_prescription", None)
+        if lens is not None:      # inline, so the file stands alone (indices at the lens's wavelength)
+            lines.append(f"wavelength_nm = {float(lens.wavelength_nm)!r}")
+            lines += surfaces_to_toml(lens)
     lines += ["[decode]", f"micro_image_px = {camera.m_hat}"]
     if include_provenance and camera.provenance:
         lines.append("[provenance]")

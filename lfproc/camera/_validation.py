@@ -59,6 +59,8 @@ def validate_camera(camera) -> int:
     if camera.white_level is not None and camera.white_level <= camera.black_level:
         raise LfprocError(f"{where}: white_level {camera.white_level} must exceed black_level {camera.black_level}")
     _validate_provenance(camera.provenance, where)
+    if getattr(camera, "main_lens_prescription", None) is not None:
+        _validate_prescription(camera, where)
     ratio = camera.mla_pitch_mm / camera.lenslet_pixel_pitch_mm
     if not math.isfinite(ratio):  # e.g. 1e300 mm over 1e-10 mm
         raise LfprocError(f"{where}: mla.pitch_mm / sensor.pixel_pitch_mm = {camera.mla_pitch_mm} / "
@@ -85,6 +87,26 @@ def _validate_microscope(camera, where: str) -> None:
             or not math.isinf(camera.exit_pupil_distance_mm)):
         raise LfprocError(f"{where}: a microscope camera has no main lens; give [microscope] or [main_lens], not both")
     camera.microscope.validate(where)
+
+
+def _validate_prescription(camera, where: str) -> None:
+    """f_U, H1U–H2U and d_A of a camera with a prescription are the lens's own (within 0.1 %)."""
+    from ._lens import PRESCRIPTION_TOLERANCE, LensPrescription
+    lens = camera.main_lens_prescription
+    if not isinstance(lens, LensPrescription):
+        raise LfprocError(f"{where}: main_lens_prescription must be a LensPrescription, got {lens!r}")
+    if camera.microscope is not None:
+        raise LfprocError(f"{where}: a microscope camera has no main lens prescription")
+    for key, value, lens_value in (
+            ("main_focal_length_mm", camera.main_focal_length_mm, lens.focal_length_mm),
+            ("main_principal_plane_gap_mm", camera.main_principal_plane_gap_mm, lens.principal_plane_gap_mm),
+            ("exit_pupil_distance_mm", camera.exit_pupil_distance_mm,
+             lens.exit_pupil_distance_mm(camera.image_distance_mm))):
+        same = (value == lens_value if math.isinf(value) or math.isinf(lens_value)
+                else abs(value - lens_value) <= PRESCRIPTION_TOLERANCE * max(abs(lens_value), 1e-3))
+        if not same:
+            raise LfprocError(f"{where}: {TOML_KEYS[key]} = {value} disagrees with the prescription's {lens_value:.6g} "
+                              f"(more than 0.1 %); use Camera.with_main_lens or fix the value")
 
 
 def _validate_provenance(provenance, where: str) -> None:

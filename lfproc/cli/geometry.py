@@ -29,6 +29,10 @@ def register(sub) -> None:
     p.add_argument("--gap", type=int, default=1, metavar="G",
                    help="with --disparity: views G apart (signed as PlenoptiSign's G; default 1)")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.add_argument("--real-rays", action="store_true",
+                   help="also trace the model's rays exactly through the main lens's surfaces (a camera with "
+                        "main_lens.prescription or [[main_lens.surfaces]]): real distances, DOF and views beside "
+                        "the paraxial ones, with the deviation in %% (docs/real-lens.md)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
     p.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM",
                    help="wavelength for the Airy limit (default 550)")
@@ -55,7 +59,13 @@ def run(args) -> int:
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
     aperture = synthetic_aperture(camera, args.aperture)
     if camera.is_microscope:
+        if getattr(args, "real_rays", False):
+            raise LfprocError(f"{args.camera}: --real-rays traces a main lens prescription; a microscope camera has "
+                              f"none")
         return _run_microscope(args, camera, a_values, disparities, aperture)
+    if getattr(args, "real_rays", False) and camera.main_lens_prescription is None:
+        raise LfprocError(f"{args.camera}: --real-rays needs the main lens's surfaces; add main_lens.prescription "
+                          f"(a .zmx file) or [[main_lens.surfaces]] to the camera file")
     slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.view_geometry(camera)
     check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
@@ -65,12 +75,21 @@ def run(args) -> int:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
     plotted = f"plot of each slice's distance and DOF -> {args.plot}\n" if args.plot else ""
+    real = getattr(args, "real_rays", False)
     if args.json:
-        print(dumps_strict(with_aperture_tags(json_report(camera, slices, views, gaps, check, tri), aperture)))
+        report = with_aperture_tags(json_report(camera, slices, views, gaps, check, tri), aperture)
+        if real:
+            from .real_rays import add_real_rays
+            report = add_real_rays(report, camera, aperture["extent"])
+        print(dumps_strict(report))
         sys.stderr.write(plotted)   # stdout holds exactly one JSON object
         return 0
+    real_table = ""
+    if real:
+        from .real_rays import format_real_rays
+        real_table = format_real_rays(camera, slices, views, aperture["extent"])
     sys.stdout.write(aperture_line(aperture) + format_table(camera, slices, views, gaps, check, args.camera, tri)
-                     + plotted)
+                     + real_table + plotted)
     return 0
 
 

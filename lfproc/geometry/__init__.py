@@ -9,7 +9,9 @@ uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), 
 (baseline, tilt and distance of a disparity), ``_exit_pupil`` (micro image drift),
 ``_aperture`` (the summed views as an aperture: DOF extent, equivalent f-number, synthetic apertures),
 ``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂),
-``_transfer`` (the main optics as a paraxial ray transfer: thick main lens or objective + tube lens),
+``_transfer`` (the main optics as a paraxial ray transfer: thick main lens, a lens prescription's surfaces,
+or objective + tube lens), ``_real_rays`` (the model's rays traced exactly through a prescription's
+surfaces: real slice distances and virtual cameras, docs/real-lens.md),
 ``_microscope`` (a light-field microscope's slices in µm, view angles, aplanatic per-view shifts).
 """
 
@@ -20,9 +22,10 @@ from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, 
                           views_inside_na, z_per_a_um, pupil_positions_mm)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._ray_model import RayModel
+from ._real_rays import RealRaySlices, RealRayViews, real_ray_slices, real_ray_views
 from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
 from ._slices import SliceGeometry, infinity_parameter, refocus_parameter, slice_distance_mm, slice_geometry
-from ._transfer import RayTransfer, main_optics_transfer
+from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
 from ._triangulation import Triangulation, triangulate
 from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, view_positions_mm, view_slopes,
                      view_tilts_deg, views_inside_aperture)
@@ -33,7 +36,8 @@ __all__ = [
     "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
     "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
     "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
-    "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
+    "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer", "prescription_transfer",
+    "RealRaySlices", "RealRayViews", "real_ray_slices", "real_ray_views",
     "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
     "plan_z_range",    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
     "pupil_positions_mm",

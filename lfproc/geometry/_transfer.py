@@ -16,6 +16,10 @@ Two instances:
   plane H1U: S = T(b_U)·L(f_U), so s = −f_U·(b_U + w)/(b_U + w − f_U), the thin-lens equation. The
   slice code evaluates it in Newton's form x = f_U²/(ε + w) (:func:`._slices._pair_distance`), which
   is the same number without cancellation at infinity; the tests check the two agree.
+* a main lens given by its surfaces (a prescription, :class:`~lfproc.camera.LensPrescription`), the
+  same reference plane H1U: S = T(b_U + z(H2U) − z_last)·M·T(z_first − z(H1U)), with M the surfaces'
+  own y-nu matrix. Its cardinal points are where the camera's f_U and H1U–H2U come from, so S equals
+  the thick lens's T(b_U)·L(f_U) (a property the tests check to 1e-9).
 * a light-field microscope (Levoy et al. 2006): object plane in immersion n, objective f_obj = f_tube/M,
   aperture stop in its back focal plane = the tube lens's front focal plane, MLA in the tube lens's
   back focal plane: S = T(f_tube)·L(f_tube)·T(f_obj + f_tube)·L(f_obj)·T(f_obj) = [[−M, 0], [0, −1/M]],
@@ -80,13 +84,25 @@ def lens(focal_length_mm: float) -> RayTransfer:
     return RayTransfer(1.0, 0.0, -1.0 / float(focal_length_mm), 1.0)
 
 
+def prescription_transfer(prescription, image_distance_mm: float) -> RayTransfer:
+    """S of a lens prescription from its front principal plane H1U to the MLA, b_U behind H2U."""
+    a, b, c, d = prescription.matrix()
+    surfaces = RayTransfer(a, b, c, d)
+    to_mla = prescription.rear_principal_plane_mm + image_distance_mm - prescription.length_mm
+    return gap(to_mla) @ surfaces @ gap(-prescription.front_principal_plane_mm)
+
+
 def main_optics_transfer(camera) -> RayTransfer:
-    """S for ``camera``: the main lens from H1U to the MLA, or a microscope from the native object plane.
+    """S for ``camera``: the main lens from H1U to the MLA (its surfaces where it has a prescription), or a
+    microscope from the native object plane.
 
     The microscope's transfer is built from its lenses (objective, stop, tube lens), not written as
     [[−M, 0], [0, −1/M]], so that the afocal, imaging result is a property the tests check.
     """
     scope = getattr(camera, "microscope", None)
+    prescription = getattr(camera, "main_lens_prescription", None)
+    if scope is None and prescription is not None:
+        return prescription_transfer(prescription, camera.image_distance_mm)
     if scope is None:
         return gap(camera.image_distance_mm) @ lens(camera.main_focal_length_mm)
     f_obj, f_tube = scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm

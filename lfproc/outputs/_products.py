@@ -45,6 +45,9 @@ def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int 
     if getattr(camera, "microscope", None) is not None:
         extra["refocus_shifts"] = "aplanatic" if geometry.uses_aplanatic(camera) else "paraxial"
     records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
+    if getattr(camera, "main_lens_prescription", None) is not None:   # a real lens: its rays beside the model's
+        real = geometry.real_ray_slices(camera, np.asarray(a_values, dtype=np.float64).ravel(), extent).records()
+        records = [dict(rec, real_rays=r) for rec, r in zip(records, real)]
     return [dict(source=source, **rec, **extra) for rec in records]
 
 
@@ -102,12 +105,14 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
 
     jobs = []
     tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
+    real = _real_view_tags(camera, centre)
     for row in viewpoint_geometry(camera, centre):
         for vg in row:
             ky, kx = vg.view
             if keep is None or keep[ky, kx]:
                 path = os.path.join(outdir, view_name(stem, ky, kx) + FORMATS[fmt])
-                jobs.append((path, _exposed(views[ky, kx], tone), dict(source=source, **vg.metadata(), **tone_meta)))
+                jobs.append((path, _exposed(views[ky, kx], tone),
+                             dict(source=source, **vg.metadata(), **real(ky, kx), **tone_meta)))
 
     def write(job):
         path, image, meta = job
@@ -117,6 +122,17 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
 
     with ThreadPoolExecutor(max_workers=2) as pool:
         return list(pool.map(write, jobs))
+
+
+def _real_view_tags(camera, centre):
+    """``(ky, kx) -> {"real_rays": {"position_mm": [y, x], "tilt_deg": [y, x]}}`` for a camera with a lens
+    prescription (each axis traced in its meridional plane, :func:`lfproc.geometry.real_ray_views`); else ``{}``."""
+    if getattr(camera, "main_lens_prescription", None) is None:
+        return lambda ky, kx: {}
+    offsets = geometry.view_offsets(camera)
+    cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
+    ry, rx = (geometry.real_ray_views(camera, offsets + c).records() for c in (cy, cx))
+    return lambda ky, kx: {"real_rays": {key: [ry[ky][key], rx[kx][key]] for key in ("position_mm", "tilt_deg")}}
 
 
 def masked_views(views: np.ndarray, keep: np.ndarray | None) -> np.ndarray:
