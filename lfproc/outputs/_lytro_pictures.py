@@ -59,8 +59,8 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         if tiff:
             jobs.append((name + ".tif", _image_writer(_linear_from_jpeg(data, path), metadata)))
     if picture.parallax is not None:
+        from ..io import decode_picture_views as decode_views
         from ..io import srgb_decode
-        from ..io._lytro_h264 import decode_views
 
         views = list(picture.parallax.views)
         for k, rgb in enumerate(decode_views(picture)):
@@ -134,7 +134,7 @@ def _jpeg_writer(data: bytes, metadata: dict):
 
 def _preview_writer(distance):
     def write(target):
-        from ..depth._preview import write_preview
+        from ..depth import write_preview
 
         write_preview(target, distance)
     return write
