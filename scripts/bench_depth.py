@@ -21,6 +21,7 @@ Usage: ``python scripts/bench_depth.py [--repeats N] [--quick]``.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import statistics
@@ -215,11 +216,25 @@ def speed_rows(repeats: int):
     return rows, steps, one_linear, one_cubic, straightforward, len(a_values)
 
 
+def speed_json(info, speed, steps, one_linear, one_cubic, straightforward) -> dict:
+    """The speed section as plain data (docs/benchmarks-depth.json)."""
+    keys = ("case", "sweep_slices", "view_step", "median_s", "min_s", "ratio_to_one_slice", "target")
+    return {"date": info["date"], "cpus_usable": info["cpus_usable"], "load_average_start": info["load_average_start"],
+            "light_field": "15 x 15 x 434 x 625 x 3 float32 (0.73 GB), illum-like camera, two surfaces a = 0.25, 1.75",
+            "target_s": TARGET_SECONDS, "one_slice_linear_s": one_linear, "one_slice_cubic_s": one_cubic,
+            "speed": [dict(zip(keys, [row[0], int(row[1]), int(row[2]), *row[3:]])) for row in speed],
+            "steps_s": {label: dict(timings) for label, timings in steps},
+            "straightforward_sweep_s": straightforward}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--quick", action="store_true", help="two accuracy scenes only")
     parser.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "docs", "benchmarks-depth.md"))
+    parser.add_argument("--json", default=os.path.join(os.path.dirname(__file__), "..", "docs", "benchmarks-depth.json"),
+                        help="the speed results as JSON (the source of the depth-map times quoted in README.md and "
+                             "docs/, checked by tests/test_doc_numbers.py)")
     args = parser.parse_args()
     start = time.perf_counter()
     info = machine_info()
@@ -257,6 +272,9 @@ def main():
               f"{straightforward / speed[2][3]:.1f} × the depth map's whole time."), ""]
     with open(args.out, "w", encoding="utf-8") as fh:
         fh.write("\n".join(lines))
+    with open(args.json, "w", encoding="utf-8") as fh:
+        json.dump(speed_json(info, speed, steps, one_linear, one_cubic, straightforward), fh, indent=1)
+        fh.write("\n")
     print("\n".join(lines))
 
 

@@ -31,7 +31,7 @@ def run(args) -> int:
     from ..atomic import write_text_atomic
     from ..errors import LfprocError
     from ..io import is_lytro_file, lytro_camera
-    from ..io._checks import existing_file
+    from ..io import existing_file
     from ..io import camera_metadata
     from .capture_loop import require_output_file
 
@@ -62,7 +62,7 @@ def _lambda_note(meta) -> str:
     """A comment with the focus distance the lambda reading gives (docs/lytro.md), when the metadata allows it."""
     from ..errors import LfprocError
     from ..geometry import slice_distance_mm
-    from ..io._lytro_lambda import lambda_map
+    from ..io import lambda_map
 
     try:
         focus = slice_distance_mm(lambda_map(meta).camera, 0.0)

@@ -43,8 +43,7 @@ def register(sub) -> None:
 
 def check_depth_options(args, camera):
     """The depth range and confidence threshold, checked against ``camera`` before any capture is read."""
-    from ..depth._confidence import MIN_CONFIDENCE
-    from ..depth._search import search_range_a
+    from ..depth import MIN_CONFIDENCE, search_range_a
     from ..errors import LfprocError
 
     depth_range = parse_depth_range(args.depth_range) if args.depth_range is not None else None

@@ -38,9 +38,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..errors import LfprocError
-    from ..io._checks import existing_file
-    from ..io._lytro_container import has_container_extension, is_container
-    from ..outputs._lytro_pictures import export_picture
+    from ..io import existing_file, has_container_extension, is_container
+    from ..outputs import export_picture
     from ..pipeline import unique_stems
     from .capture_loop import require_output_folder
 

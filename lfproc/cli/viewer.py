@@ -106,8 +106,7 @@ def _pictures(args) -> bool:
         raise LfprocError(f"{pictures[0]}: a processed Lytro picture among captures; view pictures and captures in "
                           f"separate runs")
     from ..pipeline import unique_stems
-    from ..viewer._picture import build_picture_pages
-    from ..viewer import make_server, serve
+    from ..viewer import build_picture_pages, make_server, serve
 
     require_output_folder(args.outdir)
     if args.serve:

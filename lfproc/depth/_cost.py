@@ -213,7 +213,7 @@ def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str
     """
     if all_views or sweep.slopes is not None:
         return _half_aperture_volumes_all_views(sweep, a_values, interpolation, bin_lenses)
-    from ..refocus._block import refocus_view_block, view_weight_inside
+    from ..refocus import refocus_view_block, view_weight_inside
 
     a = np.asarray(a_values, dtype=np.float64)
     shift = a * sweep.view_step / bin_lenses

@@ -2,7 +2,7 @@
 
 Colour follows the inverse distance (proportional to the refocus parameter and to disparity, so equal
 steps of colour are equal steps of parallax) on the colour scale the viewer uses too
-(:func:`lfproc.outputs.colour_scale`: viridis, far dark purple, near yellow); unknown lenses are grey.
+(:func:`lfproc.colours.colour_scale`: viridis, far dark purple, near yellow); unknown lenses are grey.
 The legend is a colour bar with its ticks labelled in metres from the sensor.
 """
 
@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from ..outputs import UNKNOWN_COLOUR as UNKNOWN_RGB
-from ..outputs import colour_scale
+from ..colours import UNKNOWN_COLOUR as UNKNOWN_RGB
+from ..colours import colour_scale
 
 #: the preview's depth map is enlarged (nearest) to about this many pixels on its long side
 TARGET_SIZE_PX = 480
@@ -121,7 +121,7 @@ def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None
 
 def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> None:
     """Write :func:`preview_image` as an 8-bit PNG, atomically, tagged as a depth map's preview (``lfproc info``)."""
-    from ..outputs import write_png_preview
+    from ..io import write_png_preview
 
     legend = "distance (m)" if z_um is None else "z (um)"
     write_png_preview(path, preview_image(distance_mm, z_um), {"preview": "depth map", "legend": legend})

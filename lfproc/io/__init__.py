@@ -13,23 +13,31 @@ Reading
     frame): `open_picture` (a `LytroPicture`), `depth_lambda`, `confidence_map`, `picture_metadata`,
     `camera_metadata` (any Lytro file), `is_picture_file` and `refuse_pictures` (cheap, headers only);
     `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`).
+    `decode_picture_views` decodes a picture's H.264 perspective views; `is_container` and
+    `has_container_extension` tell a Lytro container by its bytes and its name; `existing_file` checks a
+    path names a readable file (one-line error).
 
 Writing
     `write_image` writes float32 linear images as float TIFF (the default for outputs), 16-bit
     linear PNG, float EXR or 8-bit sRGB JPEG (for viewing only), and uint16 sensor data exactly,
     with lfproc's metadata dict embedded (see ``_write.py`` for what each format keeps). The JSON
     sidecar (`write_sidecar`, contract: ``NAME.EXT`` -> ``NAME.json``) holds the same dict for every
-    format. `write_gif` writes animated previews. All writers are atomic.
+    format. `write_gif` writes animated previews of linear frames; `write_png_preview` and
+    `write_gif_frames` write 8-bit pictures for people with lfproc's tags embedded (``_preview.py``). All
+    writers are atomic.
 
 OpenImageIO, rawpy and Pillow are imported inside the functions that use them, so importing this
 package is cheap (numpy only).
 """
 
 from ._capture import Capture
+from ._checks import existing_file
 from ._describe import describe_file
 from ._gif import write_gif
 from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
 from ._lytro_camera import LytroCamera, lytro_camera
+from ._lytro_container import has_container_extension, is_container
+from ._lytro_h264 import decode_views as decode_picture_views
 from ._lytro_lambda import LambdaMap, lambda_map
 from ._lytro_metadata import LytroMetadata
 from ._lytro_picture import LytroPicture
@@ -40,6 +48,7 @@ from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._oiio import read_image
+from ._preview import write_gif_frames, write_png_preview
 from ._read import RAW_EXTENSIONS, read_capture
 from ._sidecar import sidecar_path, write_sidecar
 from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_image
@@ -52,4 +61,6 @@ __all__ = [
     "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",
     "sidecar_path",
     "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
+    "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
+    "write_png_preview",
 ]

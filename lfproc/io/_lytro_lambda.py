@@ -54,7 +54,7 @@ class LambdaMap:
 
     def a(self, lam):
         """The refocus parameter of lambda (vectorised): a = −λ·N·δ / (1 − κ·λ·N·p_m)."""
-        from ..geometry._exit_pupil import pupil_curvature
+        from ..geometry import pupil_curvature
 
         cam = self.camera
         delta = cam.sample_pitch_mm / cam.mla_focal_length_mm

@@ -8,17 +8,20 @@ enlarged to at least 512 px on the long side (:func:`upscale`) and labelled in m
 
 Modules: ``_names`` (file names), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
 and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
-``_colours`` (the depth colour scale), ``_view_set`` (what ``lfproc views`` writes), ``_stack`` (a focal
-stack as one ImageJ or OME-TIFF file with its physical spacing). Pillow and
+``_view_set`` (what ``lfproc views`` writes), ``_stack`` (a focal
+stack as one ImageJ or OME-TIFF file with its physical spacing), ``_lytro_pictures`` (``lfproc export``: a processed
+Lytro picture's stack, depth and views). The depth colour scale lives in :mod:`lfproc.colours` and the 8-bit
+picture writers (:func:`write_png_preview`, :func:`write_gif_frames`) in :mod:`lfproc.io`; both are re-exported here. Pillow and
 OpenImageIO load only when something is written.
 """
 
-from ._colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
+from ..colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
+from ..io import write_gif_frames, write_png_preview
 from ._display import MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
+from ._lytro_pictures import export_picture
 from ._names import FORMATS, slice_name, slice_names, view_name
-from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_gif_frames,
-                        write_mosaic_preview, write_png_preview, write_slice_gif, write_slice_previews, write_view_gif,
-                        write_view_previews)
+from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
+                        write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
 from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
                         write_view_mosaic, write_views)
 from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, write_focal_stack
@@ -31,4 +34,4 @@ __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata"
            "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
            "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
            "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
-           "mosaic_of_shown", "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack"]
+           "mosaic_of_shown", "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture"]

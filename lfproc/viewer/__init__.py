@@ -13,8 +13,10 @@ sharpest one per lens), ``_images`` (8-bit images), ``_page`` (the HTML), ``_bui
 
 from ._build import PageOptions, build_page, calibration_summary, camera_summary, page_entry, write_index
 from ._estimate import FocusDepth, estimate_depth
+from ._picture import build_picture_page, build_picture_pages
 from ._plan import scene_slices, sharpest_slice
 from ._serve import HOST, make_server, serve
 
 __all__ = ["PageOptions", "build_page", "calibration_summary", "camera_summary", "page_entry", "write_index",
-           "FocusDepth", "estimate_depth", "scene_slices", "sharpest_slice", "HOST", "make_server", "serve"]
+           "FocusDepth", "estimate_depth", "scene_slices", "sharpest_slice", "HOST", "make_server", "serve",
+           "build_picture_page", "build_picture_pages"]

@@ -177,7 +177,7 @@ def _view_records(camera, stem: str, extension: str, view_mask=None, view_centre
 
 def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
     """The depth map's image, method and colour legend (ticks in metres at their place on the scale)."""
-    from ..outputs import DEPTH_COLOURS
+    from ..colours import DEPTH_COLOURS
 
     ticks = []
     for t in np.linspace(0.0, 1.0, 5):

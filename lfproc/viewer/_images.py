@@ -15,8 +15,9 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 
 from ..atomic import atomic_path
+from ..colours import colour_scale
 from ..errors import LfprocError
-from ..outputs import MIN_LONG_SIDE_PX, colour_scale
+from ..outputs import MIN_LONG_SIDE_PX
 
 JPEG_QUALITY = 90
 
