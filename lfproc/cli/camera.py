@@ -37,7 +37,7 @@ def run(args) -> int:
 
     require_output_file(args.output, "-o CAMERA.toml", "camera.toml")   # before any input is read
     path = existing_file(args.file)
-    from ..io._napari_metadata import is_napari_metadata
+    from ..io import is_napari_metadata
 
     if not is_lytro_file(path) and is_napari_metadata(path):
         return _napari(path, args)
@@ -76,7 +76,7 @@ def _napari(path: str, args) -> int:
     """A microscope camera file from napari-LF's metadata.txt (mapping: docs/microscope.md)."""
     from ..atomic import write_text_atomic
     from ..errors import LfprocError
-    from ..io._napari_metadata import napari_camera
+    from ..io import napari_camera
 
     if args.focus_distance is not None:
         raise LfprocError(f"{path}: --focus-distance is for a camera's main lens; a microscope has none (its slices "

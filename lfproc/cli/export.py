@@ -50,7 +50,7 @@ def run(args) -> int:
                           f"{args.focus_distance:g}")
     if args.camera is not None:
         from ..camera import Camera
-        from ..io._lytro_lambda import camera_lambda_map
+        from ..io import camera_lambda_map
 
         camera = Camera.from_toml(existing_file(args.camera))
         camera_lambda_map(camera, args.camera)    # a camera that cannot map lambda fails before any work

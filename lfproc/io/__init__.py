@@ -12,7 +12,10 @@ Reading
     from a calibration folder. Processed pictures (focus stacks, depth maps, perspective views; no raw
     frame): `open_picture` (a `LytroPicture`), `depth_lambda`, `confidence_map`, `picture_metadata`,
     `camera_metadata` (any Lytro file), `is_picture_file` and `refuse_pictures` (cheap, headers only);
-    `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`).
+    `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`;
+    `camera_lambda_map` from a camera file, `refocused_map` for a picture's refocused focus);
+    `stack_images` decodes a picture's focus stack and `encode_jpeg` re-encodes a frame.
+    `is_napari_metadata` and `napari_camera` read napari-LF's ``metadata.txt`` as a microscope camera.
     `decode_picture_views` decodes a picture's H.264 perspective views; `is_container` and
     `has_container_extension` tell a Lytro container by its bytes and its name; `existing_file` checks a
     path names a readable file (one-line error).
@@ -38,15 +41,16 @@ from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
 from ._lytro_camera import LytroCamera, lytro_camera
 from ._lytro_container import has_container_extension, is_container
 from ._lytro_h264 import decode_views as decode_picture_views
-from ._lytro_lambda import LambdaMap, lambda_map
+from ._lytro_lambda import LambdaMap, camera_lambda_map, lambda_map, refocused_map
 from ._lytro_metadata import LytroMetadata
 from ._lytro_picture import LytroPicture
 from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_lambda_map, picture_metadata,
                                   refuse_pictures)
-from ._lytro_picture_pixels import confidence_map, depth_lambda
+from ._lytro_picture_pixels import confidence_map, depth_lambda, encode_jpeg, stack_images
 from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
+from ._napari_metadata import is_napari_metadata, napari_camera
 from ._oiio import read_image
 from ._preview import write_gif_frames, write_png_preview
 from ._read import RAW_EXTENSIONS, read_capture
@@ -62,5 +66,6 @@ __all__ = [
     "sidecar_path",
     "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
     "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
-    "write_png_preview",
+    "write_png_preview", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
+    "is_napari_metadata", "napari_camera",
 ]

@@ -52,8 +52,8 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
         camera. Everything is read and decoded before the first file is written.
     """
     from ..io import confidence_map, depth_lambda, open_picture, picture_lambda_map
-    from ..io._lytro_lambda import camera_lambda_map, refocused_map
-    from ..io._lytro_picture_pixels import stack_images
+    from ..io import camera_lambda_map, refocused_map
+    from ..io import stack_images
     from ._lytro_views import lambda_preview_writer, view_jobs
 
     picture = open_picture(path)
@@ -89,21 +89,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
             linear = _linear_from_jpeg(data, path) if rgb is None else _linear(rgb)
             jobs.append((name + ".tif", _image_writer(linear, metadata)))
     if picture.parallax is not None:
-<<<<<<< HEAD
         jobs += view_jobs(picture, common, outdir, stem, jpeg=views_jpeg, wobble=wobble)
-=======
-        from ..io import decode_picture_views as decode_views
-        from ..io import srgb_decode
-
-        views = list(picture.parallax.views)
-        for k, rgb in enumerate(decode_views(picture)):
-            view = views[k] if k < len(views) else None
-            metadata = dict(common, kind="perspective view (edofParallax, all in focus)", index=k, **{"lambda": None},
-                            coord=None if view is None else [view[2], view[3]],
-                            encoding="H.264 decoded, linear float32")
-            jobs.append((os.path.join(outdir, f"{stem}_parallax_{k:02d}.tif"),
-                         _image_writer(srgb_decode(rgb.astype(np.float32) / 255.0), metadata)))
->>>>>>> arch
     if picture.depth is not None:
         lam = depth_lambda(picture)
         jobs += _depth_jobs(picture, lam, confidence_map(picture), mapping, common, outdir, stem)

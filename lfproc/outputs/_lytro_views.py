@@ -25,9 +25,9 @@ PREVIEW_LONG_SIDE_PX = 480
 
 def view_jobs(picture, common: dict, outdir: str, stem: str, *, jpeg: bool = False, wobble: bool = False) -> list:
     """``(target, writer)`` pairs for every perspective view (decoded now, written later)."""
-    from ..io._lytro_h264 import decode_views
+    from ..io import decode_picture_views as decode_views
     from ._lytro_pictures import _image_writer, _jpeg_writer, _linear
-    from ..io._lytro_picture_pixels import encode_jpeg
+    from ..io import encode_jpeg
 
     views = list(picture.parallax.views)
     frames = decode_views(picture)

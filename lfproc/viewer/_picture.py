@@ -34,7 +34,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     """
     from ..io import depth_lambda, open_picture, picture_lambda_map
 
-    from ..io._lytro_picture_pixels import stack_images
+    from ..io import stack_images
 
     picture = open_picture(path)
     if not picture.stack:
@@ -84,8 +84,8 @@ def _views_page(picture, outdir: str, *, stem: str, index_href: str | None) -> s
     """The page of a picture that holds only perspective views (an edofParallax block): a click shows the view
     whose aperture coordinate is nearest the clicked point's position in the picture (left edge: the leftmost
     view), the slider steps through them."""
-    from ..io._lytro_h264 import decode_views
-    from ..io._lytro_picture_pixels import encode_jpeg
+    from ..io import decode_picture_views as decode_views
+    from ..io import encode_jpeg
 
     frames = decode_views(picture)
     views = list(picture.parallax.views)
