@@ -11,7 +11,7 @@ import numpy as np
 
 from ..grid import LensGrid
 from ._cells import CLASSES, class_weight, lens_class, masked
-from ._demosaic import channel_count, demosaic_u16, quantize, quantized_zero, to_channels
+from ._demosaic import channel_count, demosaic_u16, quantize, quantize_levels, quantized_zero, to_channels
 from ._plan import Band, ReadPlan
 from ._resample import cv_flag, remap_into
 from ._rim_demosaic import RATIO_FLOOR, RATIO_LIMIT, phase_channels
@@ -20,8 +20,8 @@ from ._rim_demosaic import RATIO_FLOOR, RATIO_LIMIT, phase_channels
 CONVEX_INTERPOLATIONS = ("nearest", "linear")
 
 
-def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | None = None,
-              sink=None) -> np.ndarray | None:
+def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | None = None, sink=None,
+              levels: tuple | None = None) -> np.ndarray | None:
     """The raw (not devignetted) views of ``band``'s lens rows: ``(m̂, m̂, len(rows), cols, C)`` float32.
 
     Only the sensor strip of the band is converted (demosaiced): no full-size temporaries. Only the
@@ -29,7 +29,9 @@ def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | No
     caller across bands) lends the result's and the stack's memory: the result is then valid until the
     next call with the same ``scratch``. With ``sink``, each run is handed to ``sink(ky, kx0, kx1, views)``
     (``views``: ``(1, kx1 − kx0, len(rows), cols, C)``, valid during the call) as soon as it is read,
-    while it is still in the processor's cache, and None is returned.
+    while it is still in the processor's cache, and None is returned. ``levels``: the 16-bit quantization
+    of the whole ``sensor`` (:func:`sensor_levels`), for a Bayer mosaic read by classes without rim-aware
+    decoding (else each strip is quantized by its own range: the output then depends on the bands).
     """
     grid, m_hat, rows = plan.grid, plan.m_hat, band.rows
     n, cols = len(rows), grid.cols
@@ -65,7 +67,7 @@ def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | No
     if plan.rim is not None:
         stack, scale, low, zero = _rim_stack(plan, band, sensor[y0:y1], shares, scratch)
     else:
-        stack, scale, low, zero = _class_stack(plan, band, sensor[y0:y1], shares, scratch)
+        stack, scale, low, zero = _class_stack(plan, band, sensor[y0:y1], shares, scratch, levels)
     height, gap, reach = band.height, plan.gap, plan.reach
     step = class_step(height, gap)
     r, q = np.meshgrid(np.arange(rows.start, rows.stop), np.arange(cols), indexing="ij")
@@ -108,8 +110,16 @@ def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
     return out.reshape(m_hat, m_hat * rows, cols, channels)[ky, kx0 * rows:kx1 * rows]
 
 
-def _class_stack(plan: ReadPlan, band: Band, raw: np.ndarray, shares: tuple | None,
-                 scratch: dict | None) -> tuple[np.ndarray, float | None, float, int]:
+def sensor_levels(plan: ReadPlan, sensor: np.ndarray) -> tuple | None:
+    """The ``(low, scale)`` every strip of ``sensor`` is quantized with (:func:`._demosaic.quantize_levels`)
+    where ``plan`` reads it through 16-bit demosaicing of its classes, else None."""
+    if plan.cells is None or plan.rim is not None or np.ndim(sensor) != 2 or plan.cfa == "none":
+        return None
+    return quantize_levels(sensor)
+
+
+def _class_stack(plan: ReadPlan, band: Band, raw: np.ndarray, shares: tuple | None, scratch: dict | None,
+                 levels: tuple | None = None) -> tuple[np.ndarray, float | None, float, int]:
     """The sensor strip once per lens class, masked to that class's cells and converted to channels,
     stacked vertically (class c at rows ``gap + c·step``, :func:`class_step`) with rows of 0 around each.
 
@@ -130,7 +140,7 @@ def _class_stack(plan: ReadPlan, band: Band, raw: np.ndarray, shares: tuple | No
     quantized = raw.ndim == 2 and cfa != "none"
     assert shares is None or not quantized, "cell shares weigh float images only"
     if quantized:
-        as_u16, low, scale = quantize(raw)
+        as_u16, low, scale = quantize(raw, levels)
         zero = quantized_zero(low, scale)
     else:
         low, scale, zero = 0.0, None, 0

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import LfprocError
 from ..grid import LensGrid
-from ._band import read_band
+from ._band import read_band, sensor_levels
 from ._cells import cell_classes, cell_shares
 from ._demosaic import channel_count, check_cfa, check_method
 from ._hexagonal import check_hex_size, hex_rows_to_rect, rect_grid_of, rect_row_count
@@ -83,8 +83,10 @@ class Decoder:
         out = np.zeros((self.m_hat, self.m_hat, self.output_grid.rows, self.output_grid.cols, self.channels),
                        dtype=np.float32)
         scratch = {}   # the bands share their scratch memory (see _band.borrowed)
+        levels = sensor_levels(plan, sensor)
         for band in plan.bands:
-            read_band(plan, band, sensor, scratch, functools.partial(self._devignette, out, band.rows, band.out_rows))
+            read_band(plan, band, sensor, scratch, functools.partial(self._devignette, out, band.rows, band.out_rows),
+                      levels)
         return out
 
     @functools.cached_property

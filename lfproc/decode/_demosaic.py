@@ -25,10 +25,20 @@ def check_method(method: str) -> None:
         raise LfprocError(f"unknown demosaic method {method!r}; use one of {', '.join(DEMOSAIC_METHODS)}")
 
 
-def quantize(mosaic: np.ndarray) -> tuple[np.ndarray, float, float]:
+def quantize_levels(mosaic: np.ndarray) -> tuple[float, float]:
+    """``(low, scale)`` of :func:`quantize` for ``mosaic``: its minimum (at most 0) and 65535 / its range."""
+    data = np.asarray(mosaic)
+    low = min(float(data.min()), 0.0) if data.size else 0.0
+    top = float(data.max()) - low if data.size else 0.0
+    return low, (65535.0 / top if top > 0 else 1.0)
+
+
+def quantize(mosaic: np.ndarray, levels: tuple | None = None) -> tuple[np.ndarray, float, float]:
     """A linear mosaic as OpenCV's demosaicing needs it: ``(uint16 data, low, scale)`` with
     ``linear = data / scale + low`` (the data shifted by the minimum, so negative values survive, and
-    scaled to 16 bits).
+    scaled to 16 bits). ``levels``, ``(low, scale)`` of the whole image (:func:`quantize_levels`) when
+    ``mosaic`` is a part of it: every part is then quantized alike (the edge-aware demosaicing's choice
+    of direction turns on single 16-bit units, so a part's own levels would change its output).
 
     Raises
     ------
@@ -39,9 +49,7 @@ def quantize(mosaic: np.ndarray) -> tuple[np.ndarray, float, float]:
     if not np.all(np.isfinite(data)):
         raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
                           "(e.g. numpy.nan_to_num) before decoding")
-    low = min(float(data.min()), 0.0) if data.size else 0.0
-    top = float(data.max()) - low if data.size else 0.0
-    scale = 65535.0 / top if top > 0 else 1.0
+    low, scale = quantize_levels(data) if levels is None else levels
     return np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16), low, scale
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import LfprocError
-from ._band import read_band
+from ._band import read_band, sensor_levels
 from ._plan import ReadPlan
 from ._view_mask import central_range
 
@@ -29,8 +29,9 @@ def inverse_white(white: np.ndarray, plan: ReadPlan, dark_fraction: float,
     """
     grid, m_hat, cells, shares = plan.grid, plan.m_hat, plan.cells, plan.shares
     inverse = np.empty((m_hat, m_hat, grid.rows, grid.cols, plan.channels), dtype=np.float32)
+    levels = sensor_levels(plan, white)
     for band in plan.bands:
-        inverse[:, :, band.rows.start:band.rows.stop] = read_band(plan, band, white)
+        inverse[:, :, band.rows.start:band.rows.stop] = read_band(plan, band, white, levels=levels)
     flat = inverse.reshape(-1)
     subset = flat[::max(1, flat.size // LEVEL_SAMPLES)]
     bright = float(np.percentile(subset, 99)) if subset.size else 0.0

@@ -12,10 +12,13 @@ The output does not depend on how the lenses are split into bands (:data:`BAND_B
 * a band's strip holds every pixel its samples read (their reach, demosaicing's and the interpolation's),
   and with rim-aware decoding every lit pixel of its lenses' cells (a lens's hue sums all of them);
 * a strip too tall for one ``cv2.remap`` over its four class strips is planned as smaller bands;
-* the remap maps are the sample positions rounded to :data:`MAP_STEP` px *on the sensor*, in float64,
-  and only then moved into the strip (``− y0``, plus the class strip's row, both even integers): OpenCV
-  reads float maps at that step anyway, and a float32 position rounded after the move would land on a
-  step that depends on the move (views 6e-4 apart on the bundled sample between one band and two rows a band).
+* the remap maps hold float32 positions, whose precision is relative: a row y read from a strip that
+  starts at ``y0``, in the class strip at ``base``, is the float32 nearest to ``y − y0 + base``, which
+  rounds differently for every band split (views up to 6e-4 apart on the bundled sample between one band
+  and two lens rows a band). So each sample's row is rounded to :data:`MAP_STEP` px *on the sensor*, in
+  float64, and only then moved (by even integers): below :data:`MAP_ROWS` every such value is a float32
+  exactly, whatever the move, and bands are planned so that no map row reaches :data:`MAP_ROWS`. The
+  columns are never moved: they are the float32 of the float64 position.
 """
 
 from __future__ import annotations
@@ -34,8 +37,11 @@ from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX
 
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
 BAND_BYTES = 32 * 2**20
-#: OpenCV's sub-pixel step of remap positions (``INTER_BITS`` = 5): maps are rounded to it on the sensor
-MAP_STEP = 1.0 / 32
+#: rows of the image one remap reads (a band's strip, or its stack of four class strips) stay below this
+MAP_ROWS = 2 ** 11
+#: the step (px) sample rows are rounded to on the sensor: the float32 spacing just below MAP_ROWS, so
+#: that a float32 holds every multiple of it there (the precision float32 maps had at 2048–4096 rows)
+MAP_STEP = 2.0 ** -13
 
 
 def band_rows(m_hat: int, cols: int, channels: int) -> int:
@@ -102,13 +108,14 @@ class ReadPlan:
 
     def run_maps(self, positions: tuple, band: Band, ky: int, kx0: int, kx1: int) -> tuple:
         """The float32 remap maps of views ``(ky, kx0:kx1)`` of ``band`` in its strip, rows over (kx, r):
-        positions rounded to :data:`MAP_STEP` on the sensor, then moved up by the strip's ``y0``."""
+        rows rounded to :data:`MAP_STEP` on the sensor, then moved up by the strip's ``y0`` (module docstring)."""
         cx, cy, off_x, off_y = positions
         cols = self.grid.cols
-        step = 1.0 / MAP_STEP
-        x = np.rint((cx + np.broadcast_to(off_x[ky, kx0:kx1], (kx1 - kx0,) + off_x.shape[2:])) * step) * MAP_STEP
-        y = np.rint((cy + np.broadcast_to(off_y[ky, kx0:kx1], (kx1 - kx0,) + off_y.shape[2:])) * step) * MAP_STEP
-        return x.astype(np.float32).reshape(-1, cols), (y - band.y0).astype(np.float32).reshape(-1, cols)
+        x = cx + off_x[ky, kx0:kx1]
+        y = np.rint((cy + off_y[ky, kx0:kx1]) * (1.0 / MAP_STEP)) * MAP_STEP - band.y0
+        shape = (kx1 - kx0,) + np.broadcast_shapes(np.shape(x)[1:], np.shape(y)[1:])
+        return (np.broadcast_to(x, shape).astype(np.float32).reshape(-1, cols),
+                np.broadcast_to(y, shape).astype(np.float32).reshape(-1, cols))
 
 
 def cell_reach_px(grid: LensGrid) -> float:
@@ -150,8 +157,9 @@ def plan_reading(grid: LensGrid, m_hat: int, sensor_shape: tuple, cfa: str, demo
     def bands_of(out_rows: range) -> list:
         rows = hex_rows_read(out_rows, grid.rows) if hexagonal else out_rows
         y0, y1 = _strip(grid, m_hat, rows, margin, height, shift, rim is not None)
-        # one remap reads a band's four class strips stacked: its rows must stay below OpenCV's limit
-        if cells is not None and CLASSES * (y1 - y0 + 2 * gap + 1) >= CV_MAX_SIZE and len(out_rows) > 1:
+        # one remap reads the strip (or its four class strips stacked): rows below MAP_ROWS (and OpenCV's limit)
+        read = y1 - y0 + 2 * gap + 1 if cells is None else CLASSES * (y1 - y0 + 2 * gap + 1)
+        if read >= min(MAP_ROWS, CV_MAX_SIZE) and len(out_rows) > 1:
             half = out_rows.start + len(out_rows) // 2
             return bands_of(range(out_rows.start, half)) + bands_of(range(half, out_rows.stop))
         return [Band(rows, out_rows, y0, y1)]
