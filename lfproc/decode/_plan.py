@@ -38,10 +38,11 @@ from ._resample import CV_MAX_SIZE, INTERPOLATION_REACH_PX
 #: bytes of one band's float32 scratch views: small enough to stay cheap next to the output
 BAND_BYTES = 32 * 2**20
 #: rows of the image one remap reads (a band's strip, or its stack of four class strips) stay below this
-MAP_ROWS = 2 ** 11
+MAP_ROWS = 2 ** 12
 #: the step (px) sample rows are rounded to on the sensor: the float32 spacing just below MAP_ROWS, so
-#: that a float32 holds every multiple of it there (the precision float32 maps had at 2048–4096 rows)
-MAP_STEP = 2.0 ** -13
+#: that a float32 holds every multiple of it there (and rows err by at most 2⁻¹³ px, as float32 maps did
+#: in a stack of 2048–4096 rows)
+MAP_STEP = 2.0 ** -12
 
 
 def band_rows(m_hat: int, cols: int, channels: int) -> int:
@@ -110,12 +111,15 @@ class ReadPlan:
         """The float32 remap maps of views ``(ky, kx0:kx1)`` of ``band`` in its strip, rows over (kx, r):
         rows rounded to :data:`MAP_STEP` on the sensor, then moved up by the strip's ``y0`` (module docstring)."""
         cx, cy, off_x, off_y = positions
-        cols = self.grid.cols
-        x = cx + off_x[ky, kx0:kx1]
-        y = np.rint((cy + off_y[ky, kx0:kx1]) * (1.0 / MAP_STEP)) * MAP_STEP - band.y0
-        shape = (kx1 - kx0,) + np.broadcast_shapes(np.shape(x)[1:], np.shape(y)[1:])
-        return (np.broadcast_to(x, shape).astype(np.float32).reshape(-1, cols),
-                np.broadcast_to(y, shape).astype(np.float32).reshape(-1, cols))
+        shape = (kx1 - kx0, len(band.rows), self.grid.cols)
+        x = np.empty(shape, np.float32)
+        np.add(cx, off_x[ky, kx0:kx1], out=x, casting="same_kind")    # the float32 of the float64 sum
+        y = np.add(cy, off_y[ky, kx0:kx1], out=np.empty(shape))
+        y *= 1.0 / MAP_STEP
+        np.rint(y, out=y)
+        y *= MAP_STEP
+        y -= band.y0
+        return x.reshape(-1, shape[2]), y.astype(np.float32).reshape(-1, shape[2])
 
 
 def cell_reach_px(grid: LensGrid) -> float:
