@@ -161,8 +161,6 @@ def test_banded_decode_equals_one_full_size_pass(kind, cfa, monkeypatch):
     white_views = resample_views(to_channels(white, cfa, "fast"), kept, 7, maps=maps)
     reference = reference / white_views                      # every white sample is bright here
     reference, _ = hex_to_rect(reference.astype(np.float32), kept)
-    # float32 division and hexagonal resampling round alike but not always in the same order; Bayer strips
-    # read without cells are quantised to 16 bits of their own range for OpenCV's demosaicing (1/65535 of
-    # about 1.5 here, times the white ratio)
-    np.testing.assert_allclose(decoder(sensor), reference, rtol=2e-6 if cfa == "none" else 2e-5,
-                               atol=1e-6 if cfa == "none" else 1e-4)
+    # float32 division and hexagonal resampling round alike but not always in the same order (Bayer strips
+    # are quantised to 16 bits of the whole sensor's range for OpenCV's demosaicing, as the reference is)
+    np.testing.assert_allclose(decoder(sensor), reference, rtol=2e-6, atol=1e-6)

@@ -30,8 +30,8 @@ def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | No
     next call with the same ``scratch``. With ``sink``, each run is handed to ``sink(ky, kx0, kx1, views)``
     (``views``: ``(1, kx1 − kx0, len(rows), cols, C)``, valid during the call) as soon as it is read,
     while it is still in the processor's cache, and None is returned. ``levels``: the 16-bit quantization
-    of the whole ``sensor`` (:func:`sensor_levels`), for a Bayer mosaic read by classes without rim-aware
-    decoding (else each strip is quantized by its own range: the output then depends on the bands).
+    of the whole ``sensor`` (:func:`sensor_levels`), for a Bayer mosaic demosaiced by OpenCV (else each
+    strip is quantized by its own range: the output then depends on the bands).
     """
     grid, m_hat, rows = plan.grid, plan.m_hat, band.rows
     n, cols = len(rows), grid.cols
@@ -57,7 +57,7 @@ def read_band(plan: ReadPlan, band: Band, sensor: np.ndarray, scratch: dict | No
     positions = plan.positions(band)
     y0, y1 = band.y0, band.y1
     if plan.cells is None:
-        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], plan.cfa, plan.demosaic_method))
+        strip = np.ascontiguousarray(to_channels(sensor[y0:y1], plan.cfa, plan.demosaic_method, levels))
         for ky, kx0, kx1 in plan.runs:   # map rows run over (kx, r): a run of views is a block of map rows
             block = target(ky, kx0, kx1)
             remap_into(block, strip, *plan.run_maps(positions, band, ky, kx0, kx1), flag)
@@ -112,8 +112,8 @@ def flat_out(out: np.ndarray, ky: int, kx0: int, kx1: int) -> np.ndarray:
 
 def sensor_levels(plan: ReadPlan, sensor: np.ndarray) -> tuple | None:
     """The ``(low, scale)`` every strip of ``sensor`` is quantized with (:func:`._demosaic.quantize_levels`)
-    where ``plan`` reads it through 16-bit demosaicing of its classes, else None."""
-    if plan.cells is None or plan.rim is not None or np.ndim(sensor) != 2 or plan.cfa == "none":
+    where ``plan`` reads it through OpenCV's 16-bit demosaicing, else None."""
+    if plan.rim is not None or np.ndim(sensor) != 2 or plan.cfa == "none":
         return None
     return quantize_levels(sensor)
 

@@ -75,27 +75,29 @@ def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, m
     return rgb
 
 
-def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
+def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast", levels: tuple | None = None) -> np.ndarray:
     """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
 
     ``"fast"`` is bilinear interpolation (linear, so a ratio of two demosaiced images stays an exact
     weighted average); ``"careful"`` is OpenCV's edge-aware (EA) variant. The data are shifted and
     scaled into 16 bits for OpenCV (its demosaicing works on integers; :func:`quantize`) and back, so
     linear values keep 1/65535 of their range as precision; negative values (noise below the black
-    level) are kept: bilinear weights sum to 1, so adding the offset back afterwards is exact.
+    level) are kept: bilinear weights sum to 1, so adding the offset back afterwards is exact. ``levels``:
+    the quantization of the whole image when ``mosaic`` is a part of it (:func:`quantize`).
     """
     if cfa not in _CV_BAYER:
         raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
     check_method(method)
-    return demosaic_quantized(*quantize(mosaic), cfa, method)
+    return demosaic_quantized(*quantize(mosaic, levels), cfa, method)
 
 
-def to_channels(image: np.ndarray, cfa: str, method: str) -> np.ndarray:
-    """A sensor image as ``(H, W, C)`` float32: demosaiced if it is a Bayer mosaic."""
+def to_channels(image: np.ndarray, cfa: str, method: str, levels: tuple | None = None) -> np.ndarray:
+    """A sensor image as ``(H, W, C)`` float32: demosaiced if it is a Bayer mosaic (``levels``: see
+    :func:`demosaic`)."""
     data = np.asarray(image)
     if data.ndim == 2:
         if cfa != "none":
-            return demosaic(data, cfa, method)
+            return demosaic(data, cfa, method, levels)
         return data.astype(np.float32, copy=False)[:, :, None]
     if data.ndim == 3:
         return data.astype(np.float32, copy=False)

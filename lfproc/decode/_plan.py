@@ -11,7 +11,8 @@ The output does not depend on how the lenses are split into bands (:data:`BAND_B
 
 * a band's strip holds every pixel its samples read (their reach, demosaicing's and the interpolation's),
   and with rim-aware decoding every lit pixel of its lenses' cells (a lens's hue sums all of them);
-* a strip too tall for one ``cv2.remap`` over its four class strips is planned as smaller bands;
+* a band whose strip (or stack of four class strips) one ``cv2.remap`` would read over :data:`MAP_ROWS`
+  rows is planned as smaller bands;
 * the remap maps hold float32 positions, whose precision is relative: a row y read from a strip that
   starts at ``y0``, in the class strip at ``base``, is the float32 nearest to ``y − y0 + base``, which
   rounds differently for every band split (views up to 6e-4 apart on the bundled sample between one band
