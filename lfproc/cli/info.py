@@ -17,7 +17,8 @@ def register(sub) -> None:
     p.add_argument("--samples", action="store_true",
                    help="print where the bundled samples are (inside the installed package) and what each is")
     p.add_argument("--cache", action="store_true",
-                   help="print where the decoder cache is, how many entries it holds and their size (docs/cache.md)")
+                   help="print where the decoder cache is (LFPROC_CACHE_DIR), how many entries it holds and their "
+                        "size (LFPROC_CACHE_MAX_GB bounds it; LFPROC_NO_CACHE=1 disables it)")
     p.add_argument("--clear-cache", action="store_true", help="remove every entry of the decoder cache")
     p.add_argument("--json", action="store_true", help="print one JSON object (strict JSON: infinity is null)")
     p.set_defaults(func=run)
