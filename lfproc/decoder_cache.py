@@ -23,8 +23,8 @@ image (and a dark frame, when one is subtracted), the camera, the grid and the d
   most ``LFPROC_CACHE_MAX_GB`` (default 4) GB.
 * **Where**: ``$LFPROC_CACHE_DIR/decoders`` (default ``$XDG_CACHE_HOME/lfproc/decoders``, i.e.
   ``~/.cache/lfproc/decoders``); ``LFPROC_NO_CACHE=1`` disables it (every command derives again);
-  ``python -m lfproc.decoder_cache`` says where it is and what it holds, ``--clear`` empties it (or
-  remove the folder: nothing else lives there).
+  ``lfproc info --cache`` says where it is and what it holds (:func:`summary`), ``lfproc info
+  --clear-cache`` empties it (or remove the folder: nothing else lives there).
 
 A cache that cannot be written (read-only or full disk) is skipped with one warning: decoding never
 fails because of it.
@@ -79,6 +79,17 @@ def entries(folder: str | None = None) -> list[str]:
     """Paths of the cache's entries."""
     folder = folder or cache_dir()
     return sorted(glob.glob(os.path.join(glob.escape(folder), "*.lfdec"))) if folder else []
+
+
+def summary(folder: str | None = None) -> dict | None:
+    """``{"folder", "entries", "bytes", "max_bytes"}`` of the cache (disk space its entries take), or None
+    when caching is disabled."""
+    folder = folder or cache_dir()
+    if folder is None:
+        return None
+    found = entries(folder)
+    return {"folder": folder, "entries": len(found), "bytes": sum(disk_bytes(p) for p in found),
+            "max_bytes": max_bytes()}
 
 
 def clear(folder: str | None = None) -> int:
@@ -341,28 +352,3 @@ def cached_decoder(key: str, build):
         return decoder
     finally:
         lock.__exit__(None, None, None)
-
-
-def main(argv=None) -> int:
-    """``python -m lfproc.decoder_cache [--clear]``: the cache's folder, entries and size; or empty it."""
-    import argparse
-
-    parser = argparse.ArgumentParser(prog="python -m lfproc.decoder_cache", description=main.__doc__)
-    parser.add_argument("--clear", action="store_true", help="remove every entry")
-    args = parser.parse_args(argv)
-    folder = cache_dir()
-    if folder is None:
-        print("decoder cache disabled (LFPROC_NO_CACHE)")
-        return 0
-    if args.clear:
-        print(f"{folder}: removed {clear(folder)} entries")
-        return 0
-    found = entries(folder)
-    size = sum(disk_bytes(p) for p in found)
-    print(f"{folder}: {len(found)} entries, {size / 1e9:.2f} GB of at most {max_bytes() / 1e9:.2f} GB "
-          f"(LFPROC_CACHE_MAX_GB)")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

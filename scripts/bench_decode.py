@@ -153,7 +153,7 @@ CHILD = textwrap.dedent("""
     capture = np.load(folder + "/capture.npy")
     t0 = time.perf_counter()
     if mode == "floor":
-        from lfproc.decode._hexagonal import rect_row_count
+        from lfproc.decode import rect_row_count
         views = np.empty((15, 15, rect_row_count(grid.rows), grid.cols - 1, 3), np.float32)
         views.fill(1.0)
         t1 = t0

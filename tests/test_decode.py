@@ -143,19 +143,24 @@ def test_demosaic_keeps_noise_below_black_unbiased():
 @pytest.mark.parametrize("cfa", ["none", "GRBG"])
 def test_banded_decode_equals_one_full_size_pass(kind, cfa, monkeypatch):
     """Bands of lens rows (demosaicing only the strip each reads) give exactly the full-size result."""
-    from lfproc.decode import _decoder, resample_views, to_channels
+    from lfproc.decode import _plan, resample_views, sample_positions, to_channels
 
     rng = np.random.default_rng(7)
     sensor = rng.random((150, 170)).astype(np.float32)
     white = (0.5 + rng.random((150, 170))).astype(np.float32)
     grid = LensGrid(kind, 9.4, 1.5, (8.0, 9.0), 14 if kind == "rectangular" else 16, 16)
-    monkeypatch.setattr(_decoder, "BAND_BYTES", 1)          # two lens rows per band
+    monkeypatch.setattr(_plan, "BAND_BYTES", 1)          # two lens rows per band
     decoder = make_decoder(white, grid, 7, cfa, centroid_tolerance=None)
     kept = decoder.grid
-    reference = resample_views(to_channels(sensor, cfa, "fast"), kept, 7)
-    white_views = resample_views(to_channels(white, cfa, "fast"), kept, 7)
+    # the decoder reads sample rows rounded to MAP_STEP px on the sensor (the same for any band split)
+    x, y = sample_positions(kept, 7)
+    maps = [(x[ky].reshape(-1, kept.cols).astype(np.float32),
+             (np.rint(y[ky] / _plan.MAP_STEP) * _plan.MAP_STEP).reshape(-1, kept.cols).astype(np.float32))
+            for ky in range(7)]
+    reference = resample_views(to_channels(sensor, cfa, "fast"), kept, 7, maps=maps)
+    white_views = resample_views(to_channels(white, cfa, "fast"), kept, 7, maps=maps)
     reference = reference / white_views                      # every white sample is bright here
     reference, _ = hex_to_rect(reference.astype(np.float32), kept)
-    # float32 map arithmetic differs in the last bits; Bayer strips are quantised to 16 bits of their own
-    # range for OpenCV's demosaicing (1/65535 of about 1.5 here, times the white ratio)
-    np.testing.assert_allclose(decoder(sensor), reference, rtol=2e-5, atol=1e-5 if cfa == "none" else 1e-4)
+    # float32 division and hexagonal resampling round alike but not always in the same order (Bayer strips
+    # are quantised to 16 bits of the whole sensor's range for OpenCV's demosaicing, as the reference is)
+    np.testing.assert_allclose(decoder(sensor), reference, rtol=2e-6, atol=1e-6)

@@ -266,3 +266,20 @@ def test_unwritable_cache_folder_warns_and_decodes(folder, monkeypatch):
     with pytest.warns(UserWarning, match="not writable"):
         lf = decode_with_calib(folder)
     assert lf.views.any()
+
+
+def test_lfproc_info_reports_and_clears_the_cache(folder):
+    from conftest import run_cli
+
+    decode_with_calib(folder)
+    (entry,) = cache_entries()
+    shown = run_cli("info", "--cache", "--json")
+    assert shown.returncode == 0, shown.stderr
+    found = json.loads(shown.stdout)
+    assert found["enabled"] and found["entries"] == 1 and found["bytes"] == dc.disk_bytes(entry)
+    assert found["folder"] == dc.cache_dir()
+    text = run_cli("info", "--cache").stdout
+    assert text.startswith(f"{dc.cache_dir()}: 1 entries")
+    cleared = run_cli("info", "--clear-cache")
+    assert cleared.returncode == 0 and "removed 1 entries" in cleared.stdout
+    assert cache_entries() == []

@@ -16,6 +16,10 @@ def register(sub) -> None:
                         "TIFF, PNG, EXR, …, or an image lfproc wrote (its embedded tags are shown)")
     p.add_argument("--samples", action="store_true",
                    help="print where the bundled samples are (inside the installed package) and what each is")
+    p.add_argument("--cache", action="store_true",
+                   help="print where the decoder cache is (LFPROC_CACHE_DIR), how many entries it holds and their "
+                        "size (LFPROC_CACHE_MAX_GB bounds it; LFPROC_NO_CACHE=1 disables it)")
+    p.add_argument("--clear-cache", action="store_true", help="remove every entry of the decoder cache")
     p.add_argument("--json", action="store_true", help="print one JSON object (strict JSON: infinity is null)")
     p.set_defaults(func=run)
 
@@ -26,9 +30,12 @@ def run(args) -> int:
 
     if args.samples:
         return _print_samples(args.json)
+    if args.cache or args.clear_cache:
+        return _print_cache(args.clear_cache, args.json)
     if args.file is None:
         from ..errors import LfprocError
-        raise LfprocError("lfproc info needs a FILE (or --samples to list the bundled samples)")
+        raise LfprocError("lfproc info needs a FILE (or --samples to list the bundled samples, --cache to show the "
+                          "decoder cache)")
     info = describe_file(args.file)
     if args.json:
         sys.stdout.write(dumps_strict(info, indent=1) + "\n")
@@ -99,3 +106,23 @@ def _fmt(value) -> str:
     if isinstance(value, dict):   # a record nested deeper (a sidecar's provenance): key value pairs
         return "(" + ", ".join(f"{k} {_fmt(v)}" for k, v in value.items()) + ")"
     return str(value)
+
+
+def _print_cache(clear: bool, as_json: bool) -> int:
+    """``lfproc info --cache`` / ``--clear-cache``: the decoder cache's folder, entries and size; or empty it."""
+    from .. import decoder_cache
+    from .common import dumps_strict
+
+    found = decoder_cache.summary()
+    if found is not None and clear:
+        found["removed"] = decoder_cache.clear(found["folder"])
+    if as_json:
+        sys.stdout.write(dumps_strict({"enabled": found is not None, **(found or {})}, indent=1) + "\n")
+    elif found is None:
+        print("decoder cache disabled (LFPROC_NO_CACHE)")
+    elif clear:
+        print(f"{found['folder']}: removed {found['removed']} entries")
+    else:
+        print(f"{found['folder']}: {found['entries']} entries, {found['bytes'] / 1e9:.2f} GB of at most "
+              f"{found['max_bytes'] / 1e9:.2f} GB (LFPROC_CACHE_MAX_GB)")
+    return 0

@@ -9,7 +9,10 @@ over bands of lens rows:
   (``grid.lens_xy``) plus ``(kx − c)·s·u + (ky − c)·s·v`` sensor pixels, with s = pitch_px / m̂ the
   effective pixel and (u, v) the lattice axes. The maps are laid out as ``(ky, kx, r)`` rows by ``q``
   columns, so ``remap`` writes the contract's ``(m̂, m̂, Ny, Nx, C)`` array directly.
-* **Devignetting** (``_decoder``). The white image is demosaiced and resampled the same way, and the
+* **Read plan** (``_plan``, band reading ``_band``). A :class:`Decoder` reads lens rows in bands
+  planned once (its ``read_plan``: grid, m̂, methods, sample shifts, cells, shares, rim-aware white,
+  delivered runs, bands and their sensor strips); the output is bit-identical for any band size.
+* **Devignetting** (``_inverse_white``). The white image is demosaiced and resampled the same way, and the
   decoded value is ``remap(capture) / remap(white)``: the scene radiance in units of the white image,
   white balance included for colour sensors. Samples where the white image is darker than
   ``dark_fraction`` of its bright level in any channel carry no signal and are set to 0 in every
@@ -61,12 +64,13 @@ The white image's views depend only on the white image, the grid and the setting
 """
 
 from ._decoder import Decoder, decode, decode_capture, make_decoder
+from ._plan import Band, ReadPlan
 from ._demosaic import DEMOSAIC_METHODS, demosaic, to_channels
-from ._hexagonal import hex_to_rect
+from ._hexagonal import hex_to_rect, rect_row_count
 from ._positions import remap_maps, sample_positions
 from ._resample import INTERPOLATIONS, resample_views
 from ._view_mask import centroid_errors, view_sampling
 
-__all__ = ["DEMOSAIC_METHODS", "INTERPOLATIONS", "Decoder", "centroid_errors", "decode", "decode_capture",
-           "demosaic", "hex_to_rect", "make_decoder", "remap_maps", "resample_views", "sample_positions",
-           "to_channels", "view_sampling"]
+__all__ = ["DEMOSAIC_METHODS", "INTERPOLATIONS", "Band", "Decoder", "ReadPlan", "centroid_errors", "decode",
+           "decode_capture", "demosaic", "hex_to_rect", "make_decoder", "rect_row_count", "remap_maps",
+           "resample_views", "sample_positions", "to_channels", "view_sampling"]

@@ -25,10 +25,20 @@ def check_method(method: str) -> None:
         raise LfprocError(f"unknown demosaic method {method!r}; use one of {', '.join(DEMOSAIC_METHODS)}")
 
 
-def quantize(mosaic: np.ndarray) -> tuple[np.ndarray, float, float]:
+def quantize_levels(mosaic: np.ndarray) -> tuple[float, float]:
+    """``(low, scale)`` of :func:`quantize` for ``mosaic``: its minimum (at most 0) and 65535 / its range."""
+    data = np.asarray(mosaic)
+    low = min(float(data.min()), 0.0) if data.size else 0.0
+    top = float(data.max()) - low if data.size else 0.0
+    return low, (65535.0 / top if top > 0 else 1.0)
+
+
+def quantize(mosaic: np.ndarray, levels: tuple | None = None) -> tuple[np.ndarray, float, float]:
     """A linear mosaic as OpenCV's demosaicing needs it: ``(uint16 data, low, scale)`` with
     ``linear = data / scale + low`` (the data shifted by the minimum, so negative values survive, and
-    scaled to 16 bits).
+    scaled to 16 bits). ``levels``, ``(low, scale)`` of the whole image (:func:`quantize_levels`) when
+    ``mosaic`` is a part of it: every part is then quantized alike (the edge-aware demosaicing's choice
+    of direction turns on single 16-bit units, so a part's own levels would change its output).
 
     Raises
     ------
@@ -39,9 +49,7 @@ def quantize(mosaic: np.ndarray) -> tuple[np.ndarray, float, float]:
     if not np.all(np.isfinite(data)):
         raise LfprocError("the Bayer mosaic contains NaN or infinite pixels; replace them "
                           "(e.g. numpy.nan_to_num) before decoding")
-    low = min(float(data.min()), 0.0) if data.size else 0.0
-    top = float(data.max()) - low if data.size else 0.0
-    scale = 65535.0 / top if top > 0 else 1.0
+    low, scale = quantize_levels(data) if levels is None else levels
     return np.clip((data - low) * scale + 0.5, 0, 65535).astype(np.uint16), low, scale
 
 
@@ -67,27 +75,29 @@ def demosaic_quantized(as_u16: np.ndarray, low: float, scale: float, cfa: str, m
     return rgb
 
 
-def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast") -> np.ndarray:
+def demosaic(mosaic: np.ndarray, cfa: str, method: str = "fast", levels: tuple | None = None) -> np.ndarray:
     """Demosaic a linear Bayer mosaic ``(H, W)`` to ``(H, W, 3)`` RGB float32 with OpenCV.
 
     ``"fast"`` is bilinear interpolation (linear, so a ratio of two demosaiced images stays an exact
     weighted average); ``"careful"`` is OpenCV's edge-aware (EA) variant. The data are shifted and
     scaled into 16 bits for OpenCV (its demosaicing works on integers; :func:`quantize`) and back, so
     linear values keep 1/65535 of their range as precision; negative values (noise below the black
-    level) are kept: bilinear weights sum to 1, so adding the offset back afterwards is exact.
+    level) are kept: bilinear weights sum to 1, so adding the offset back afterwards is exact. ``levels``:
+    the quantization of the whole image when ``mosaic`` is a part of it (:func:`quantize`).
     """
     if cfa not in _CV_BAYER:
         raise LfprocError(f"unknown Bayer pattern {cfa!r}; use one of {', '.join(_CV_BAYER)}")
     check_method(method)
-    return demosaic_quantized(*quantize(mosaic), cfa, method)
+    return demosaic_quantized(*quantize(mosaic, levels), cfa, method)
 
 
-def to_channels(image: np.ndarray, cfa: str, method: str) -> np.ndarray:
-    """A sensor image as ``(H, W, C)`` float32: demosaiced if it is a Bayer mosaic."""
+def to_channels(image: np.ndarray, cfa: str, method: str, levels: tuple | None = None) -> np.ndarray:
+    """A sensor image as ``(H, W, C)`` float32: demosaiced if it is a Bayer mosaic (``levels``: see
+    :func:`demosaic`)."""
     data = np.asarray(image)
     if data.ndim == 2:
         if cfa != "none":
-            return demosaic(data, cfa, method)
+            return demosaic(data, cfa, method, levels)
         return data.astype(np.float32, copy=False)[:, :, None]
     if data.ndim == 3:
         return data.astype(np.float32, copy=False)

@@ -80,12 +80,17 @@ def _pixel(raw, share, phase_gain, phase_channel, i, j):
 @njit(cache=True, parallel=True)
 def _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other):
     """sums[chunk, r − r_lo, q − q_lo, ch, 0 / 1] += share·capture / share·ŵ of each lit pixel of a chunk
-    of rows (its lens and the lens across the border by their shares); the caller adds the chunks."""
+    of rows (its lens and the lens across the border by their shares); the caller adds the chunks.
+
+    Sensor row y belongs to chunk ``(y // _CHUNK_ROWS) mod chunks`` whatever the strip: a lens's pixels
+    are summed in the same order in any strip that holds them, so its sums do not depend on the band."""
     height, width = raw.shape
     chunks = sums.shape[0]
     cols = sums.shape[2]
     for k in prange(chunks):
-        for i in range(k * height // chunks, (k + 1) * height // chunks):
+        for i in range(height):
+            if ((y0 + i) // _CHUNK_ROWS) % chunks != k:
+                continue
             y = float(y0 + i)
             for j in range(width):
                 w = wb[i, j]
@@ -121,9 +126,8 @@ def _write(stack, row, j, lens_sums, rho, w, own_ch, floor, limit):
 
 
 @njit(cache=True, parallel=True)
-def _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, sums, gap, floor, limit):
+def _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, sums, gap, step, floor, limit):
     height, width = raw.shape
-    step = height + 2 * gap
     for i in prange(height):
         for c in range(4):
             stack[gap + c * step + i] = 0.0
@@ -145,15 +149,19 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return view
 
 
-#: rows of a strip summed apart (in parallel) before their lens sums are added
+#: chunks of rows summed apart (in parallel) before their lens sums are added
 _CHUNKS = 8
+#: sensor rows of one chunk's run (the chunks take turns down the sensor)
+_CHUNK_ROWS = 8
 
 
 def rim_stack(raw, wb, cells, border, share, phase_gain, phase_channel, y0, lattice, gap, floor, limit, stack,
-              own=None, other=None):
-    """Fill ``stack`` (``(4·(h + 2·gap), W, 3)`` float32) with each lens class's ``ŵ·rgb`` of the strip;
-    ``own`` and ``other``, ``(h, W)`` int32 scratch (new ones when not given)."""
+              own=None, other=None, step=None):
+    """Fill ``stack`` (``(4·step, W, 3)`` float32, ``step`` = h + 2·gap unless given) with each lens class's
+    ``ŵ·rgb`` of the strip (class c at rows ``gap + c·step``, 0 around); ``own`` and ``other``, ``(h, W)``
+    int32 scratch (new ones when not given)."""
     height, width = raw.shape
+    step = height + 2 * gap if step is None else step
     # numba compiles one version per argument type, and a read-only array (the decoder's, mapped from its
     # cache) is another type than a writable one: hand it read-only views always, so that one compiled
     # version (kept on disk) serves every run, the first one after deriving a decoder included
@@ -164,11 +172,11 @@ def rim_stack(raw, wb, cells, border, share, phase_gain, phase_channel, y0, latt
     other = np.empty((height, width), np.int32) if other is None else other  # the lens across its border
     _lens_sums(raw, wb, cells, border, share, y0, lattice, phase_gain, phase_channel, r_lo, q_lo, sums, own, other)
     total = sums.sum(axis=0).reshape(-1, 3, 2)
-    step = height + 2 * gap
     for c in range(4):
         stack[c * step:c * step + gap] = 0.0
         stack[c * step + gap + height:(c + 1) * step] = 0.0
-    _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, total, gap, floor, limit)
+    _fill(stack, raw, wb, cells, border, share, phase_gain, phase_channel, own, other, total, gap, step, floor,
+          limit)
 
 
 @njit(cache=True, parallel=True)
