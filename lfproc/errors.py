@@ -10,3 +10,13 @@ class LfprocError(Exception):
 
     def __init__(self, message: str):
         super().__init__(" ".join(str(message).split()))
+
+
+class LfprocWarning(UserWarning):
+    """Something the user should know that does not stop the work: an untrustworthy grid fit, slices whose
+    border band is less refocused, a decode without devignetting.
+
+    Library calls never print; they warn with this category (``warnings.warn(..., LfprocWarning)``), so a
+    notebook can filter them (``warnings.simplefilter("ignore", lfproc.LfprocWarning)``). The commands
+    print each as one line on stderr.
+    """

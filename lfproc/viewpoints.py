@@ -66,7 +66,7 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
         keep = keep & lf.view_mask
     if not keep.any():
         raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider --aperture")
-    return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre)
+    return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre, lf.inputs)
 
 
 @dataclass(frozen=True)
