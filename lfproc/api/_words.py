@@ -4,6 +4,7 @@ the commands (``--white WHITE``), which share the checks that raise them."""
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import re
 
 from ..errors import LfprocError
@@ -38,12 +39,30 @@ def _argument(match) -> str:
     return f"{name}={value}"
 
 
+#: True while a command runs the API: its errors keep the flags the command's user typed
+_COMMAND = contextvars.ContextVar("lfproc_command_words", default=False)
+
+
+@contextlib.contextmanager
+def command_words():
+    """Inside, the API's errors keep the commands' flags (the commands run on the API: their users typed
+    ``--white``, not ``white=``)."""
+    token = _COMMAND.set(True)
+    try:
+        yield
+    finally:
+        _COMMAND.reset(token)
+
+
 @contextlib.contextmanager
 def speaking_python():
-    """Re-raise an :class:`LfprocError` from inside with its message in Python words."""
+    """Re-raise an :class:`LfprocError` from inside with its message in Python words (not inside
+    :func:`command_words`)."""
     try:
         yield
     except LfprocError as exc:
+        if _COMMAND.get():
+            raise
         words = python_words(str(exc))
         if words == str(exc):
             raise
