@@ -38,6 +38,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         decoded before the first file is written.
     """
     from ..io import confidence_map, depth_lambda, open_picture, picture_lambda_map
+    from ..provenance import provenance
 
     picture = open_picture(path)
     source = os.path.abspath(path)
@@ -47,6 +48,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False) -> 
         common["camera_note"] = f"no distances: {note}"
     else:
         common["camera"] = _camera_record(mapping)
+    common["provenance"] = provenance({"capture": path})
     jobs = []        # (writer, path) run after everything is decoded
     records = mapping.slices([s.lambda_ for s in picture.stack]) if mapping and picture.stack else \
         [{"lambda": s.lambda_} for s in picture.stack]
