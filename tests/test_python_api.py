@@ -316,3 +316,42 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert sidecar["provenance"]["inputs"]["camera"]["sha256"] == sha256(lfm / "lfm.toml")
     fs.save(tmp_path / "api")
     assert_same_files(tmp_path / "api", tmp_path / "cli")
+
+
+def test_each_input_is_hashed_once_per_process(tmp_path, monkeypatch):
+    import lfproc.provenance as prov
+
+    files = []
+    for name in ("a.bin", "b.bin"):
+        (tmp_path / name).write_bytes(name.encode() * 1000)
+        files.append(tmp_path / name)
+    calls = []
+    real = prov.hashlib.sha256
+    monkeypatch.setattr(prov.hashlib, "sha256", lambda *a: calls.append(1) or real(*a))
+    first = prov.provenance({"capture": files[0], "white": files[1]})
+    again = prov.provenance({"white": files[1], "capture": str(files[0])})
+    assert first == again and len(calls) == 2
+    assert list(first["inputs"]) == ["capture", "white"]
+    assert first["inputs"]["white"]["sha256"] == sha256(files[1])
+    (tmp_path / "a.bin").write_bytes(b"changed, and longer than before")   # a new size: hashed again
+    assert prov.provenance({"capture": files[0]})["inputs"]["capture"]["sha256"] == sha256(files[0])
+    assert len(calls) == 3
+
+
+def test_decode_stores_its_inputs_and_outputs_of_the_light_field_name_them(tmp_path):
+    inputs = [SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--white", SAMPLE / "white.png"]
+    proc = run_cli("decode", *inputs, "-o", tmp_path / "lf.lfp.npz")
+    assert proc.returncode == 0, proc.stderr
+    proc = run_cli("views", tmp_path / "lf.lfp.npz", "--mosaic", "-o", tmp_path / "views")
+    assert proc.returncode == 0, proc.stderr
+    for name in ("lf_view_05_05.json", "lf_views_mosaic.json"):
+        recorded = read_json(tmp_path / "views" / name)["provenance"]["inputs"]
+        assert list(recorded) == ["light_field", "capture", "camera", "white"], name
+        assert recorded["light_field"]["sha256"] == sha256(tmp_path / "lf.lfp.npz")
+        assert recorded["capture"] == {"path": str(SAMPLE / "capture.png"), "sha256": sha256(SAMPLE / "capture.png")}
+
+
+def test_commands_keep_their_flags_in_errors(tmp_path):
+    proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--a", "1",
+                   "-o", tmp_path / "out")
+    assert proc.returncode == 2 and "--white WHITE" in proc.stderr and "white=" not in proc.stderr, proc.stderr

@@ -14,7 +14,7 @@ make both), ``.records()`` are those sidecars, ``.save`` writes those files. Lib
 printed (warnings go through :mod:`warnings` as :class:`lfproc.LfprocWarning`), nothing is written unless a
 path is given (the decoder cache is opt-in: ``cache=True``), and errors name Python arguments.
 
-Modules: ``_defaults`` (the commands' defaults), ``_words`` (errors in Python words), ``_checks`` (refocus parameters that make sense), ``_read`` (captures,
+Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_read`` (captures,
 white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth``
 (depth maps). Importing this package is light (numpy only).
 """
@@ -25,7 +25,7 @@ from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
 from ._read import calibrate_white, read_light_field
 from ._views import ViewStack, view_stack
-from ._words import command_words, python_words
+from ..errors import command_words, python_words
 
 __all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
            "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",

@@ -8,7 +8,7 @@ import os
 from dataclasses import dataclass
 
 from ..errors import LfprocError
-from ._words import speaking_python
+from ..errors import speaking_python
 
 
 @dataclass(frozen=True, eq=False, repr=False)

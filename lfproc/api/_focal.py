@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
-from ._words import speaking_python
+from ..errors import speaking_python
 
 _SLICE_FIELDS = ("distance_mm", "near_mm", "far_mm", "dof_mm", "z_um", "z_near_um", "z_far_um", "dof_um")
 

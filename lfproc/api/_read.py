@@ -16,7 +16,7 @@ from ..camera import Camera
 from ..errors import LfprocError, LfprocWarning
 from ..grid import LensGrid
 from ..lightfield import LightField, is_lightfield_file
-from ._words import speaking_python
+from ..errors import speaking_python
 
 _PATH = (str, os.PathLike)
 

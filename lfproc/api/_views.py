@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ._words import speaking_python
+from ..errors import speaking_python
 
 
 @dataclass(frozen=True, eq=False, repr=False)
