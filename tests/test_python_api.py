@@ -326,8 +326,14 @@ def test_each_input_is_hashed_once_per_process(tmp_path, monkeypatch):
         (tmp_path / name).write_bytes(name.encode() * 1000)
         files.append(tmp_path / name)
     calls = []
-    real = prov.hashlib.sha256
-    monkeypatch.setattr(prov.hashlib, "sha256", lambda *a: calls.append(1) or real(*a))
+
+    class CountingHashlib:
+        @staticmethod
+        def sha256(*args):
+            calls.append(1)
+            return hashlib.sha256(*args)
+
+    monkeypatch.setattr(prov, "hashlib", CountingHashlib)
     first = prov.provenance({"capture": files[0], "white": files[1]})
     again = prov.provenance({"white": files[1], "capture": str(files[0])})
     assert first == again and len(calls) == 2
