@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 
-from ..errors import LfprocError
+from ..errors import LfprocError, LfprocWarning
 from .capture_loop import require_output_folder
 
 SAMPLE_FILES = ("capture.png", "white.png", "camera.toml", "ground_truth.json")
@@ -76,7 +77,9 @@ def run(args) -> int:
     near, far = distances[0] * 0.97, distances[-1] * 1.03
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = [float(a) for a in geometry.plan_slices(camera, near, far, view_extent=extent)]
-    stack = focal_stack(lf, a=a_values)     # as `lfproc refocus` writes them
+    with warnings.catch_warnings():      # the summary below says which planes each slice holds sharply
+        warnings.simplefilter("ignore", LfprocWarning)
+        stack = focal_stack(lf, a=a_values)     # as `lfproc refocus` writes them
     source = stack.source
     refocus_dir = out / "refocus"
     paths = stack.save(str(refocus_dir), "sample")
