@@ -42,7 +42,10 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     ----------
     lf : LightField or ndarray
         A :class:`~lfproc.lightfield.LightField`, or an array shaped ``(m̂, m̂, Ny, Nx, C)`` with m̂ odd
-        (float32, float64, unsigned or signed integers; see the module docstring for precision).
+        (float32, float64, unsigned or signed integers; see the module docstring for precision). An array
+        carries neither the view mask nor a microscope's per-view shifts: its mean runs over every view
+        (views that are 0 everywhere are warned about, :class:`~lfproc.errors.LfprocWarning`) with Eq. 9's
+        shifts; pass the LightField to refocus as it does.
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
