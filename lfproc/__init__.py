@@ -9,13 +9,13 @@ whichever was imported first.
 from importlib import import_module
 
 from .camera import Camera
-from .errors import LfprocError
+from .errors import LfprocError, LfprocWarning
 from .grid import LensGrid
 from .lightfield import LightField
 from .sample_data import sample_path
 from .viewpoints import viewpoints, with_aperture  # light (numpy only); bound here so the submodule cannot shadow it
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 # public name -> (module, attribute), imported on first access
 _LAZY = {
@@ -26,9 +26,15 @@ _LAZY = {
     "decode": ("lfproc.decode", None),
     "io": ("lfproc.io", None),
     "depth": ("lfproc.depth", "depth"),
+    # the Python API (contract): light to import, heavy only when called
+    "read_light_field": ("lfproc.api", "read_light_field"),
+    "calibrate_white": ("lfproc.api", "calibrate_white"),
+    "focal_stack": ("lfproc.api", "focal_stack"),
+    "view_stack": ("lfproc.api", "view_stack"),
+    "depth_map": ("lfproc.api", "depth_map"),
 }
 
-__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "viewpoints", "with_aperture", "sample_path", *_LAZY]
+__all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "LfprocWarning", "viewpoints", "with_aperture", "sample_path", *_LAZY]
 
 
 def __getattr__(name):

@@ -9,7 +9,9 @@ archive with the members ``views`` (the array above), ``camera_toml`` (the camer
 empty if none) and ``grid_json`` (the lens grid as written by ``lfproc calibrate``; empty if none),
 optionally ``view_mask`` ((m̂, m̂) bool, the views that carry light; absent when all do) and
 ``view_centre`` (2 float64 (c_y, c_x): where the central view was read, in samples off the lens centres;
-absent when at them), plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it: ``np.load(path)["views"]``.
+absent when at them), optionally ``inputs_json`` (the files it was decoded from, role → ``{"path", "sha256"}``,
+:mod:`lfproc.provenance`), plus ``format`` = ``"lfproc-lightfield-1"``. Any numpy can read it:
+``np.load(path)["views"]``.
 """
 
 from __future__ import annotations
@@ -48,6 +50,10 @@ class LightField:
     centre (:mod:`lfproc.decode._disc_centre`); where that is off the lens centre (an objective pupil off
     the axis, a tilted illumination) view k stands for the ray at (k − c + view_centre)·p_m/m̂ under its
     lens, and the views' angles and the sine condition's shifts follow it. ``None``: at the lens centres.
+
+    ``inputs``, optional: the files it was made from, role (``"capture"``, ``"camera"``, ``"white"``,
+    ``"dark"``, ``"grid"``, ``"light_field"``) → path as given (or an already hashed ``{"path", "sha256"}``
+    record); outputs record them as their provenance (:mod:`lfproc.provenance`). ``None``: unknown (arrays).
     """
 
     views: np.ndarray
@@ -55,6 +61,26 @@ class LightField:
     grid: LensGrid | None = None
     view_mask: np.ndarray | None = None
     view_centre: tuple | None = None
+    inputs: dict | None = None
+
+    def __repr__(self) -> str:
+        m, _, ny, nx, c = self.views.shape
+        lit = m * m if self.view_mask is None else int(np.count_nonzero(self.view_mask))
+        camera = "none" if self.camera is None else repr(self.camera.name or self.camera.source or "unnamed")
+        source = self.source
+        return (f"<LightField {m}x{m} views ({lit} carry light) of {ny}x{nx} lenses, {c} channel(s), "
+                f"camera {camera}{f', from {source!r}' if source else ''}>")
+
+    @property
+    def source(self) -> str | None:
+        """The file this light field was read from (a saved light field, else the capture), as given; None
+        for arrays."""
+        inputs = self.inputs or {}
+        for role in ("light_field", "capture"):
+            value = inputs.get(role)
+            if value is not None:
+                return str(value["path"]) if isinstance(value, dict) else os.fspath(value)
+        return None
 
     def __post_init__(self):
         v = self.views
@@ -86,7 +112,7 @@ class LightField:
 
     @classmethod
     def from_views(cls, views, camera: Camera | None = None, grid: LensGrid | None = None,
-                   view_mask=None, view_centre=None) -> "LightField":
+                   view_mask=None, view_centre=None, inputs=None) -> "LightField":
         """Wrap an array shaped ``(m̂, m̂, Ny, Nx, C)``; it is converted to float32 (no copy if it already is)."""
         arr = np.asarray(views)
         if arr.dtype != np.float32:
@@ -101,7 +127,7 @@ class LightField:
             if unmarked.shape == arr.shape[:2] and unmarked.any() and _any_nonzero(arr, unmarked):
                 arr = arr.copy() if arr is views else arr
                 arr[unmarked] = 0.0
-        return cls(arr, camera, grid, view_mask, view_centre)
+        return cls(arr, camera, grid, view_mask, view_centre, None if inputs is None else dict(inputs))
 
     @property
     def m_hat(self) -> int:
@@ -145,6 +171,9 @@ class LightField:
                 extra = {} if self.view_mask is None else {"view_mask": self.view_mask}
                 if self.view_centre is not None:
                     extra["view_centre"] = np.array(self.view_centre, dtype=np.float64)
+                if self.inputs:
+                    from .provenance import input_records
+                    extra["inputs_json"] = np.array(json.dumps(input_records(self.inputs)))
                 np.savez(fh, views=self.views, camera_toml=np.array(camera_toml),
                          grid_json=np.array(grid_json), format=np.array(FILE_FORMAT), **extra)
 
@@ -177,7 +206,8 @@ class LightField:
             type; pickled objects are never loaded).
         """
         path = os.fspath(path)
-        members = _read_members(path, ("views", "camera_toml", "grid_json"), optional=("view_mask", "view_centre"))
+        members = _read_members(path, ("views", "camera_toml", "grid_json"),
+                                optional=("view_mask", "view_centre", "inputs_json"))
         views, camera_toml, grid_json = members["views"], str(members["camera_toml"]), str(members["grid_json"])
         camera = Camera.from_toml_string(camera_toml, source=path) if camera_toml else None
         grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
@@ -185,8 +215,23 @@ class LightField:
             raise LfprocError(f"{path}: its views are {views.dtype} data, not numbers; write it again with "
                               f"'lfproc decode'")
         centre = members.get("view_centre")
+        inputs = {"light_field": path, **_stored_inputs(members.get("inputs_json"), path)}
         return cls.from_views(views, camera, grid, members.get("view_mask"), None if centre is None else
-                              tuple(np.asarray(centre, dtype=np.float64).reshape(-1)))
+                              tuple(np.asarray(centre, dtype=np.float64).reshape(-1)), inputs)
+
+
+def _stored_inputs(member, path: str) -> dict:
+    """The inputs a light field file says it was decoded from (role → ``{"path", "sha256"}``); a damaged record
+    is refused, an older file without one has none."""
+    if member is None:
+        return {}
+    try:
+        stored = json.loads(str(member))
+        records = {str(role): {"path": str(r["path"]), "sha256": str(r["sha256"])} for role, r in stored.items()
+                   if role != "light_field"}
+    except (ValueError, TypeError, KeyError, AttributeError):
+        raise LfprocError(f"{path}: its inputs_json record is damaged; write it again with 'lfproc decode'") from None
+    return records
 
 
 def _any_nonzero(views: np.ndarray, which: np.ndarray) -> bool:

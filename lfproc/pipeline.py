@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .camera import Camera
-from .errors import LfprocError
+from .errors import LfprocError, LfprocWarning
 from .grid import LensGrid
 from .lightfield import LightField
 
@@ -57,6 +57,8 @@ class DecodeSetup:
     dark: object | None = None             # lfproc.io.Capture of the dark frame
     reference: object | None = None        # lfproc.inputs.ImageFacts every capture must match
     white_path: str | None = None
+    cache: bool = True                     # keep derived decoders in the decoder cache (lfproc.decoder_cache)
+    inputs: dict = field(default_factory=dict)   # role -> path of the files that shape every light field
 
     @property
     def has_white(self) -> bool:
@@ -71,6 +73,9 @@ class DecodeSetup:
         """
         key = "white" if self.has_white else (tuple(shape[:2]), cfa)
         if key not in self._decoders:
+            if not self.cache:
+                self._decoders[key] = self._make_decoder(shape, cfa)
+                return self._decoders[key]
             from .decoder_cache import cached_decoder
 
             self._decoders[key] = cached_decoder(self._cache_key(shape, cfa), lambda: self._make_decoder(shape, cfa))
@@ -163,7 +168,7 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
                               exit_pupil_warning(white.source, pupil, camera))):
-        warnings.warn(line.replace(": warning: ", ": ", 1), stacklevel=2)
+        warnings.warn(line.replace(": warning: ", ": ", 1), LfprocWarning, stacklevel=2)
     if not record:
         return estimate.grid
     from .inputs import GridRecord, ImageFacts, file_hash, made_from
@@ -177,13 +182,17 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
                      interpolation: str = "linear", demosaic_method: str = "fast",
                      grid: LensGrid | None = None, white_dir: str | None = None,
-                     captures: tuple | list = (), dark: str | None = None) -> DecodeSetup:
+                     captures: tuple | list = (), dark: str | None = None, cache: bool = True) -> DecodeSetup:
     """Resolve ``--calib``/``--white``/``--white-dir``/``--dark`` into a :class:`DecodeSetup` (module docstring).
 
     ``grid``, when given, is the grid these files were already calibrated to (by another process):
     it is used as is, and the white image is only read for devignetting. ``captures`` are the inputs
     to decode: ``white_dir`` picks the white image for the first of them, and a Lytro white image is
     checked against it (same camera and zoom) before anything is calibrated.
+
+    ``cache``: keep the decoder derived from the white image in the decoder cache (on disk, docs/cache.md)
+    and reuse it from there. ``setup.inputs`` names the files that shape every light field decoded with it
+    (camera file, grid file, white image, dark frame: their provenance).
 
     Cheap checks come first (docs/inputs.md): the grid file is read and checked against the camera, the
     headers of the white image, the dark frame and the captures are read and checked against each other
@@ -215,8 +224,8 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     _check_capture_headers(captures, camera, reference, record, calib)
     white_metadata = _lytro_metadata_of(white_path) if white_path else None
     if white_metadata is not None and white_metadata.modulation_frame is False:
-        print(f"lfproc: warning: {white_path}: its metadata marks it as a capture, not a white image "
-              f"(modulationFrame false); pass a white image from the camera's calibration folder", file=sys.stderr)
+        warnings.warn(f"{white_path}: its metadata marks it as a capture, not a white image (modulationFrame "
+                      f"false); pass a white image from the camera's calibration folder", LfprocWarning, stacklevel=2)
     if first is not None and white_metadata is not None:
         from .io import check_white_matches
         check_white_matches(first, white_metadata)
@@ -232,14 +241,26 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
         record = calibrate_white(white_capture, camera, record=True, dark=dark_capture)
     elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
-                      f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
+                      f"devignetting — pass --white WHITE to correct vignetting", LfprocWarning, stacklevel=2)
+    from .provenance import file_inputs
+
+    inputs = file_inputs(camera=camera_file(camera), grid=calib, white=white_path, dark=dark_path)
     setup = DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
                         demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
-                        white_path=white_path)
+                        white_path=white_path, cache=cache, inputs=inputs)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
     # travel to batch workers); the file is read again only if the decoder must be derived again
     return dataclasses.replace(setup, white=None) if white_path is not None else setup
+
+
+def camera_file(camera) -> str | None:
+    """The camera file ``camera`` was read from (its provenance), or None (built in Python, from a Lytro
+    capture's metadata, or carried by a saved light field)."""
+    source = getattr(camera, "source", None)
+    if not source or not os.path.isfile(source) or not str(source).lower().endswith(".toml"):
+        return None
+    return source
 
 
 def _record_of(grid, white_path):
@@ -368,7 +389,6 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
     Before decoding, the capture is checked against the white image (size, channels, CFA) and the dark frame
     is subtracted; after, a capture that is really a white image is refused (`lfproc.inputs`).
     """
-    from .inputs import check_capture_is_not_white, subtract_dark
     from .io import check_white_matches, is_lytro_file, read_capture, read_lytro
 
     if setup.white_metadata is not None and os.path.isfile(path) and is_lytro_file(path):
@@ -376,16 +396,26 @@ def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
         check_white_matches(capture_metadata, setup.white_metadata)
     else:
         capture = read_capture(path, setup.camera)
+    return decode_capture(capture, setup, path)
+
+
+def decode_capture(capture, setup: DecodeSetup, path=None) -> LightField:
+    """Decode one `lfproc.io.Capture` (read from ``path``, or an array when None) with ``setup``: checked
+    against the white image, dark frame subtracted, decoded, and refused if it is really a white image."""
+    from .inputs import check_capture_is_not_white, subtract_dark
+
+    name = path if path is not None else capture.source
     setup.check_capture(capture)
     capture = subtract_dark(capture, setup.dark)
     decoder = setup.decoder_for(capture.data.shape, capture.cfa)
     try:
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
-        raise LfprocError(f"{path}: {exc}") from None
-    check_capture_is_not_white(path, views, decoder.views_delivered)
+        raise LfprocError(f"{name}: {exc}") from None
+    check_capture_is_not_white(name, views, decoder.views_delivered)
+    inputs = dict(setup.inputs) if path is None else {"capture": path, **setup.inputs}
     return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered,
-                                 decoder.view_centre)
+                                 decoder.view_centre, inputs)
 
 
 def output_stem(path: str) -> str:

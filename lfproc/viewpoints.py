@@ -59,14 +59,18 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
     """
     if f_number is None:
         return lf
-    if lf.camera is None:
-        raise LfprocError("a synthetic aperture needs the light field's camera; decode with --camera")
-    keep = geometry.aperture_views(lf.camera, f_number)
-    if lf.view_mask is not None:
-        keep = keep & lf.view_mask
-    if not keep.any():
-        raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider --aperture")
-    return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre)
+    from .errors import speaking_python
+
+    with speaking_python():   # the commands' checks, worded for the caller (``aperture=`` or ``--aperture``)
+        if lf.camera is None:
+            raise LfprocError("a synthetic aperture needs the light field's camera; decode with --camera")
+        keep = geometry.aperture_views(lf.camera, f_number)
+        if lf.view_mask is not None:
+            keep = keep & lf.view_mask
+        if not keep.any():
+            raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider "
+                              f"--aperture")
+    return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre, lf.inputs)
 
 
 @dataclass(frozen=True)

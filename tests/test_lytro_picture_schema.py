@@ -104,7 +104,7 @@ def test_illum_schema_export_in_mm(tmp_path, capsys, illum):
                                                        rel=1e-9)
         assert sidecar["near_mm"] < sidecar["distance_mm"] < sidecar["far_mm"]
         assert sidecar["dof_mm"] == pytest.approx(sidecar["far_mm"] - sidecar["near_mm"]) and "a" in sidecar
-        assert sidecar["provenance"]["inputs"]["picture"]["path"] == str(path)
+        assert sidecar["provenance"]["inputs"]["capture"]["path"] == str(path)
     lam = tifffile.imread(tmp_path / "out" / "IMG_0480_depth_lambda.tif")
     depth = tifffile.imread(tmp_path / "out" / "IMG_0480_depth.tif")
     assert lam.shape == (8, 12)

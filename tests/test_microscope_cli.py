@@ -18,7 +18,7 @@ from scopefile import microscope_toml
 from whitegen import covering_grid, white_image
 
 CAMERA = microscope_toml(name="tiny-lfm", pitch=0.0475, f_s=0.95, grid=None, wavelength=510)
-SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um", "refocus_shifts"}
+SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um", "refocus_shifts", "provenance"}
 SUMMED = {"views_summed"}   # where decoding delivers fewer than all views, their count (the DOF is theirs)
 
 
@@ -91,6 +91,10 @@ def test_refocus_decode_and_batch_tag_slices_in_micrometres(lfm):
     assert proc.returncode == 0, proc.stderr
     batch_tags = [json.loads(p.read_text()) for p in (lfm / "batch").glob("capture_a*.json")]
     assert batch_tags and all(set(t) - SUMMED == SLICE_KEYS for t in batch_tags)
+    # the batch's provenance names the same files as the command's, by absolute path (batch jobs are absolute)
+    assert {k: v["sha256"] for k, v in batch_tags[0]["provenance"]["inputs"].items()} == \
+        {k: v["sha256"] for k, v in tags[0]["provenance"]["inputs"].items()}
+    assert list(tags[0]["provenance"]["inputs"]) == ["capture", "camera", "white", "grid"]
 
 
 def test_views_carry_object_space_angles(lfm):

@@ -2,6 +2,8 @@
 
 import re
 
+import pytest
+
 from conftest import ROOT
 
 README = (ROOT / "README.md").read_text()
@@ -24,11 +26,24 @@ def _blocks(language):
     return re.findall(rf"```{language}\n(.*?)```", README, re.S)
 
 
-def test_python_example_runs(monkeypatch, capsys):
+def test_python_example_runs(monkeypatch, capsys, tmp_path):
+    """The README's example runs, and what it prints and saves is what ``lfproc refocus`` writes (the tags of
+    the views that carry light: 722-1236 mm around a = 0.682, not the full micro image's 754-1174 mm)."""
+    import json
+
     (code,) = _blocks("python")
+    code = code.replace("/tmp/lfproc-readme", str(tmp_path / "out"))
     monkeypatch.chdir(ROOT)
-    exec(compile(code, "README.md", "exec"), {})
-    assert "distance_mm" in capsys.readouterr().out
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert "'distance_mm': 650.0" in capsys.readouterr().out
+    fs = namespace["fs"]
+    sidecars = sorted((tmp_path / "out").glob("capture_a*.json"))
+    assert len(sidecars) == 2
+    assert [json.loads(p.read_text())["distance_mm"] for p in sidecars] == pytest.approx([1200.0, 650.0])
+    records = fs.records()
+    assert json.loads(sidecars[1].read_text()) == json.loads(json.dumps(records[0]))
+    assert fs.views_summed == 89
 
 
 def test_camera_file_example_is_the_paper_camera():

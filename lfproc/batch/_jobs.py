@@ -8,6 +8,7 @@ import json
 import os
 from dataclasses import dataclass, fields
 
+from ..api import DEFAULT_INTERPOLATION
 from ..errors import LfprocError
 
 #: image extensions a folder input is searched for (case-insensitive)
@@ -15,7 +16,7 @@ CAPTURE_EXTENSIONS = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".
                       ".tif", ".tiff", ".png", ".exr", ".lfr", ".lfp", ".raw", ".npz")
 #: Job fields that are not parameters of the outputs (where they go, and the camera file's text,
 #: which the fingerprint hashes separately)
-_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml", "dark")
+_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml", "dark", "camera_path")
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,7 @@ class Job:
     refocus_a: tuple            # refocus parameters a (empty: no refocusing)
     views: bool                 # write the viewpoint images
     fmt: str = "tiff"
-    interpolation: str = "linear"
+    interpolation: str = DEFAULT_INTERPOLATION
     decode_interpolation: str = "linear"
     demosaic: str = "fast"
     upsample: int = 1           # refocused slices on an upsample-times finer grid
@@ -44,6 +45,7 @@ class Job:
     aperture: float | None = None  # synthetic aperture f-number for the slices (None: every view with light)
     dark: str | None = None     # dark frame (--dark) or None; stamped into the fingerprint when given
     stack: str | None = None    # with slices: also one z-stack file, "imagej" or "ome" (lfproc refocus --stack)
+    camera_path: str | None = None  # the camera file (--camera), recorded in the outputs' provenance
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""

@@ -35,6 +35,9 @@ def decode_setup(job: Job):
         camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
         setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
                                  demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key), dark=job.dark)
+        if job.camera_path is not None:   # the camera file, by its path (the job carries its text)
+            import dataclasses
+            setup = dataclasses.replace(setup, inputs={**setup.inputs, "camera": job.camera_path})
         while len(_SETUP_CACHE) >= _SETUP_CACHE_SIZE:
             _SETUP_CACHE.pop(next(iter(_SETUP_CACHE)))
         _SETUP_CACHE[key] = setup
@@ -64,41 +67,30 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     result. ``checkpoint()`` runs before each output file is begun and may raise it too. Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching
     them here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
     """
+    import warnings
+
+    from ..api import command_words, focal_stack, view_stack
     from ..atomic import all_or_nothing
+    from ..errors import LfprocWarning
     from ..lightfield import LightField, is_lightfield_file
-    from ..outputs import write_slices, write_view_set
     from ..pipeline import load_lightfield
 
     start = time.perf_counter()
     try:
-        with all_or_nothing(before_commit, checkpoint):
+        with all_or_nothing(before_commit, checkpoint), warnings.catch_warnings(), command_words():
+            warnings.simplefilter("ignore", LfprocWarning)   # the batch reports per capture, not per slice
             lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
                 load_lightfield(job.source, decode_setup(job))
             if lf.camera is None:
                 raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
             outputs = []
             if job.refocus_a:
-                from .. import geometry
-                from ..refocus import check_refocused_area, refocus
-                from ..viewpoints import with_aperture
-
-                summed = with_aperture(lf, job.aperture)
-                check_refocused_area(job.refocus_a, lf.camera.m_hat if summed.view_mask is None else summed.view_mask,
-                                     lf.lens_shape, job.source, lambda a: geometry.slice_distance_mm(lf.camera, a))
-                stack = refocus(summed, list(job.refocus_a), interpolation=job.interpolation, upsample=job.upsample)
-                outputs += write_slices(job.outdir, job.stem, job.source, lf.camera, job.refocus_a, stack, job.fmt,
-                                        view_mask=summed.view_mask, upsample=job.upsample)
-                if job.stack:
-                    from ..outputs import lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack
-
-                    outputs.append(write_focal_stack(stack_path(job.outdir, job.stem, job.stack), stack,
-                                                     slice_metadata(job.source, lf.camera, job.refocus_a,
-                                                                    summed.view_mask, job.upsample),
-                                                     kind=job.stack, lens_um=lateral_um_per_lens(lf.camera),
-                                                     upsample=job.upsample))
+                stack = focal_stack(lf, a=list(job.refocus_a), aperture=job.aperture,
+                                    interpolation=job.interpolation, upsample=job.upsample)
+                outputs += stack.save(job.outdir, job.stem, format=job.fmt, stack=job.stack)
             if job.views:
-                outputs += write_view_set(job.outdir, job.stem, job.source, lf, job.fmt, mosaic=job.mosaic,
-                                          gif=job.gif, inside_aperture=job.inside_aperture)
+                outputs += view_stack(lf, inside_aperture=job.inside_aperture).save(
+                    job.outdir, job.stem, format=job.fmt, mosaic=job.mosaic, gif=job.gif)
         return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start)
     except Cancelled:
         return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start)

@@ -49,7 +49,9 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     try:
-        with _plain_warnings(args.command):
+        from ..api import command_words
+
+        with _plain_warnings(args.command), command_words():
             status = args.func(args)
     except LfprocError as exc:
         print(f"lfproc {args.command}: error: {exc}", file=sys.stderr)

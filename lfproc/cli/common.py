@@ -160,44 +160,10 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
 
 
 def check_slice_meaning(camera, a_values, what: str = "--a") -> None:
-    """Refuse slices focused nearer than the main lens's front focal plane (the paraxial model's macro
-    regime, between the lens and f_U in front of it): no object there forms a real image. Slices
-    beyond infinity (distance ``inf``) stay allowed; their tags say so."""
-    import numpy as np
+    """:func:`lfproc.api.check_slice_meaning` worded for a command (``what``: its flag)."""
+    from ..api import check_slice_meaning as check
 
-    from .. import geometry
-
-    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
-    d = np.atleast_1d(geometry.slice_distance_mm(camera, np.asarray(a_values, dtype=np.float64)))
-    bad = np.flatnonzero(np.isfinite(d) & (d <= front))
-    if len(bad):
-        a = float(np.atleast_1d(a_values)[bad[0]])
-        raise LfprocError(f"{what}: a={a:g} would focus {d[bad[0]]:.1f} mm from the sensor, nearer than the main "
-                          f"lens's front focal plane ({front:.1f} mm), where nothing forms a real image; give "
-                          f"a >= {lowest_meaningful_a(camera):+.3g}")
-
-
-def lowest_meaningful_a(camera) -> float:
-    """The lowest a whose slice is beyond the front focal plane or at infinity (the macro regime below it)."""
-    from .. import geometry
-
-    inside = camera.sensor_to_main_lens_mm
-    return float(geometry.refocus_parameter(camera, inside + 1e-9 * max(inside, 1.0)))
-
-
-def check_refocused_area(camera, a_values, lens_shape, view_mask, source: str) -> None:
-    """Refuse slices whose refocused area is under half the image (:func:`lfproc.refocus.check_refocused_area`),
-    with the usable range in a and in distance, far end first."""
-    from .. import geometry
-    from ..refocus import check_refocused_area as check
-
-    mask = camera.m_hat if view_mask is None else view_mask
-    if getattr(camera, "microscope", None) is not None:
-        check(a_values, mask, lens_shape, source,
-              lambda a: f"z = {float(geometry.slice_geometry(camera, a).z_um):.4g} um")
-        return
-    check(a_values, mask, lens_shape, source, lambda a: geometry.slice_distance_mm(camera, a),
-          lowest_meaningful_a(camera))
+    check(camera, a_values, what)
 
 
 def add_aperture_option(p) -> None:

@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 
-from ..errors import LfprocError
+from ..errors import LfprocError, LfprocWarning
 from .capture_loop import require_output_folder
 
 SAMPLE_FILES = ("capture.png", "white.png", "camera.toml", "ground_truth.json")
@@ -37,13 +38,9 @@ def register(sub) -> None:
 def run(args) -> int:
     from .. import geometry
     from ..camera import Camera
+    from ..api import calibrate_white, depth_map, focal_stack, read_light_field
     from ..atomic import write_json_atomic
-    from ..io import read_capture
-    from ..outputs import (shown_views, write_mosaic_preview, write_slice_gif, write_slices, write_view_gif,
-                           write_view_mosaic)
-    from ..pipeline import DecodeSetup, calibrate_white, load_lightfield
-    from ..refocus import refocus
-    from ..depth import depth, summary_line, write_depth_outputs
+    from ..outputs import shown_views, write_mosaic_preview, write_slice_gif, write_view_gif, write_view_mosaic
     from ..viewer import build_page, calibration_summary
 
     sample = Path(args.sample) if args.sample else default_sample_dir()
@@ -64,16 +61,14 @@ def run(args) -> int:
     step(f"camera {camera.name}: {camera.pitch_px:.3f} px per lens -> {camera.m_hat}x{camera.m_hat} views, "
          f"baseline {geometry.baseline_mm(camera):.3f} mm")
 
-    white = read_capture(sample / "white.png", camera)
-    grid = calibrate_white(white, camera)
+    grid = calibrate_white(sample / "white.png", camera)
     out.mkdir(parents=True, exist_ok=True)
     grid_path = out / "grid.json"
     write_json_atomic(grid_path, dict(grid.to_json_dict(), white_image=str((sample / "white.png").resolve())))
     step(f"calibrated {grid.rows}x{grid.cols} {grid.kind} lenses: pitch {grid.pitch_px:.4f} px, rotation "
          f"{grid.rotation_deg:.4f} deg, residual {grid.residual_rms_px:.4f} px -> {grid_path}")
 
-    setup = DecodeSetup(camera, grid, white)
-    lf = load_lightfield(str(sample / "capture.png"), setup)
+    lf = read_light_field(str(sample / "capture.png"), camera, white=str(sample / "white.png"), grid=grid, cache=True)
     lf_path = out / "sample.lfp.npz"
     lf.save(lf_path)
     m, _, ny, nx, ch = lf.views.shape
@@ -82,11 +77,13 @@ def run(args) -> int:
     near, far = distances[0] * 0.97, distances[-1] * 1.03
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = [float(a) for a in geometry.plan_slices(camera, near, far, view_extent=extent)]
-    stack = refocus(lf, a_values, interpolation="cubic-spline")     # as `lfproc refocus` writes them
-    source = str((sample / "capture.png").resolve())
+    with warnings.catch_warnings():      # the summary below says which planes each slice holds sharply
+        warnings.simplefilter("ignore", LfprocWarning)
+        stack = focal_stack(lf, a=a_values)     # as `lfproc refocus` writes them
+    source = stack.source
     refocus_dir = out / "refocus"
-    paths = write_slices(str(refocus_dir), "sample", source, camera, a_values, stack, "tiff", view_mask=lf.view_mask)
-    gif = write_slice_gif(str(out), "sample", stack[::-1], camera, a_values[::-1],   # near to far, labelled
+    paths = stack.save(str(refocus_dir), "sample")
+    gif = write_slice_gif(str(out), "sample", stack.images[::-1], camera, a_values[::-1],   # near to far, labelled
                           view_mask=lf.view_mask)
     step(f"refocused {len(a_values)} slices covering {near:.0f}..{far:.0f} mm -> {refocus_dir}/ (+ sidecars), {gif}")
     geo = geometry.slice_geometry(camera, a_values, extent)
@@ -97,17 +94,18 @@ def run(args) -> int:
 
     inside = geometry.views_inside_aperture(camera)
     keep = shown_views(lf, inside_aperture=True).keep   # the views with light inside the main lens stop
-    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, lf.views, "tiff", keep)
+    mosaic_path = write_view_mosaic(str(out), "sample", source, camera, lf.views, "tiff", keep,
+                                    provenance=stack.provenance)
     preview = write_mosaic_preview(str(out), "sample", lf.views, keep, camera=camera)
     view_gif = write_view_gif(str(out), "sample", lf.views, keep, camera)
     step(f"views: {int(inside.sum())} of {m * m} inside the aperture, {int(keep.sum())} decoded with light; mosaic "
          f"{mosaic_path} (preview {preview}), animation {view_gif}")
-    depth_map = depth(lf)   # the whole default search (from infinity nearer): the planes sit near near..far's ends
-    written = write_depth_outputs(str(out / "depth"), "sample", lf, depth_map, source=source)
-    step(f"depth: {summary_line(depth_map)} -> {written['depth']} (preview {written['preview']})")
+    depth = depth_map(lf)   # the whole default search (from infinity nearer): the planes sit near near..far's ends
+    written = depth.save(str(out / "depth"), "sample")
+    step(f"depth: {depth.summary()} -> {written['depth']} (preview {written['preview']})")
     page = build_page(lf, str(out / "viewer"), source=source, stem="sample", a_values=a_values,
                       calibration=calibration_summary(grid, str((sample / "white.png").resolve())),
-                      depth_map=depth_map)
+                      depth_map=depth.depth_map)
     step(f"viewer: {Path(page).resolve()}")
     step("  open it in a browser: click to refocus and read distances, drag to move the viewpoint")
     step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations, 1 depth map, 1 viewer "

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 
 from .capture_loop import (
     add_decode_options,
@@ -85,7 +84,7 @@ def z_sweep(args, camera) -> dict:
 
 
 def run(args) -> int:
-    from ..depth import summary_line, write_depth_outputs
+    from ..api import depth_map
     from ..pipeline import unique_stems
     from ..viewpoints import with_aperture
 
@@ -99,12 +98,9 @@ def run(args) -> int:
     def work(path, progress):
         lf = with_aperture(inputs.load(path), args.aperture)
         sweep = check_depth_options(args, lf.camera)[2]
-        written = write_depth_outputs(args.outdir, stems[path], lf, source=os.path.abspath(path), camera=lf.camera,
-                                      depth_range_mm=depth_range, point_cloud=not args.no_ply,
-                                      min_confidence=min_confidence, **sweep)
-        depth_map = written.pop("depth_map")
+        result = depth_map(lf, depth_range_mm=depth_range, min_confidence=min_confidence, **sweep)
+        result.save(args.outdir, stems[path], point_cloud=not args.no_ply)
         progress.update(1)
-        print(f"{path}: {summary_line(depth_map)} -> {args.outdir}/{stems[path]}_depth*.*, "
-              f"{stems[path]}_allfocus.tif")
+        print(f"{path}: {result.summary()} -> {args.outdir}/{stems[path]}_depth*.*, {stems[path]}_allfocus.tif")
 
     return for_each_capture("depth", args.raw, work)

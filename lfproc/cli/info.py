@@ -69,9 +69,12 @@ def format_info(info: dict) -> str:
         if key == "tags" and isinstance(value, dict):
             lines.append("tags (embedded by lfproc):")
             for k, v in value.items():
-                if _is_records(v):      # a z-stack's slices: one line each
+                if _is_records(v):      # a z-stack's slices: one line each (their shared provenance once, after)
                     lines.append(f"  {k} ({len(v)}):")
-                    lines += ["    " + ", ".join(f"{name} {_fmt(x)}" for name, x in row.items()) for row in v]
+                    lines += ["    " + ", ".join(f"{name} {_fmt(x)}" for name, x in row.items() if name != "provenance")
+                              for row in v]
+                    if isinstance(v[0].get("provenance"), dict):
+                        lines.append(f"  {'provenance':20s} {_fmt(v[0]['provenance'])}")
                 elif isinstance(v, dict):   # a nested record (an exported Lytro picture's camera): its own lines
                     lines.append(f"  {k}:")
                     lines += [f"    {name:18s} {_fmt(x)}" for name, x in v.items()]
@@ -99,6 +102,10 @@ def _is_records(value) -> bool:
 
 
 def _fmt(value) -> str:
+    if isinstance(value, dict):   # a file by its hash (provenance), or a nested record on one line
+        if set(value) == {"path", "sha256"}:
+            return f"{value['path']} (sha256 {str(value['sha256'])[:12]}…)"
+        return ", ".join(f"{k} {_fmt(v)}" for k, v in value.items())
     if isinstance(value, float):
         return "inf" if math.isinf(value) else f"{value:.6g}"
     if isinstance(value, (list, tuple)):

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import os
 
+from ..api import DEFAULT_INTERPOLATION
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
 from .common import FORMAT_HELP, INTERPOLATION_HELP, add_aperture_option, add_preview_option, add_slice_options, \
-    aperture_extent, check_refocused_area, check_slice_options, describe_slices, slice_parameters
+    aperture_extent, check_slice_options, describe_slices, preview_format, slice_parameters
 
 
 def register(sub) -> None:
@@ -31,7 +32,7 @@ def register(sub) -> None:
 def add_render_options(p) -> None:
     """``--format``, ``--interpolation``, ``--upsample`` and ``--stack`` of refocused slices (refocus and batch)."""
     p.add_argument("--format", default="tiff", choices=("tiff", "png16", "jpeg", "exr"), help=FORMAT_HELP)
-    p.add_argument("--interpolation", default="cubic-spline",
+    p.add_argument("--interpolation", default=DEFAULT_INTERPOLATION,
                    choices=("nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"),
                    help=INTERPOLATION_HELP)
     p.add_argument("--upsample", type=int, default=1, metavar="S",
@@ -49,10 +50,8 @@ def check_render_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..outputs import (lateral_um_per_lens, slice_metadata, stack_path, write_focal_stack, write_slice_previews,
-                           write_slices)
+    from ..api import focal_stack
     from ..pipeline import unique_stems
-    from ..refocus import refocus
     from ..viewpoints import with_aperture
 
     check_render_options(args)
@@ -84,21 +83,12 @@ def run(args) -> int:
     def work(path, progress):
         lf = with_aperture(inputs.load(path), args.aperture)
         key, values = slices_for(lf.camera, lf.view_mask)
-        check_view_coverage(lf.camera, values, lf.lens_shape, path, lf.view_mask)
-        stack = refocus(lf, values, interpolation=args.interpolation, upsample=args.upsample)
+        stack = focal_stack(lf, a=values, interpolation=args.interpolation, upsample=args.upsample)
         describe_once(key, lf.camera, values, lf.view_mask)
-        written = write_slices(args.outdir, stems[path], os.path.abspath(path), lf.camera, values, stack,
-                               args.format, view_mask=lf.view_mask, upsample=args.upsample)
-        if args.preview:
-            write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview_format,
-                                 view_mask=lf.view_mask)
-        if args.stack:
-            write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,
-                              slice_metadata(os.path.abspath(path), lf.camera, values, lf.view_mask, args.upsample),
-                              kind=args.stack,
-                              lens_um=lateral_um_per_lens(lf.camera), upsample=args.upsample)
+        written = stack.save(args.outdir, stems[path], format=args.format, preview=preview_format(args),
+                             stack=args.stack)
         progress.update(len(values))
-        print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
+        print(f"{path}: {len(values)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
 
@@ -113,17 +103,7 @@ def summed_extent(camera, aperture, view_mask=None):
 
 
 def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=None) -> None:
-    """Refuse slices whose refocused area is under half the image (a garbage a); warn where most pixels
-    miss some views."""
-    import warnings
+    """:func:`lfproc.api.check_view_coverage` (refuse a garbage a, warn where most pixels miss some views)."""
+    from ..api import check_view_coverage as check
 
-    from ..refocus import full_view_fraction
-
-    check_refocused_area(camera, a_values, lens_shape, view_mask, source)
-    m = camera.m_hat
-    share = full_view_fraction(a_values, m, lens_shape)
-    thin = [a for a, f in zip(a_values, share) if f < 0.5]
-    if thin:
-        worst = max(thin, key=abs)
-        warnings.warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
-                      f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused")
+    check(camera, a_values, lens_shape, source, view_mask)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 from .capture_loop import add_decode_options, add_output_folder_option, for_each_capture, input_camera, \
     prepare_inputs, require_output_folder
 from .common import FORMAT_HELP, add_preview_option, preview_format
@@ -44,7 +42,8 @@ def check_view_options(args, camera) -> None:
 
 def run(args) -> int:
     from .. import geometry
-    from ..outputs import shown_views, write_view_set
+    from ..api import view_stack
+    from ..outputs import shown_views
     from ..pipeline import unique_stems
 
     require_output_folder(args.outdir)
@@ -57,9 +56,8 @@ def run(args) -> int:
     def work(path, progress):
         lf = inputs.load(path)
         check_view_options(args, lf.camera)
-        written = write_view_set(args.outdir, stems[path], os.path.abspath(path), lf, args.format,
-                                 mosaic=args.mosaic, gif=args.gif, inside_aperture=args.inside_aperture,
-                                 preview=preview_format(args))
+        written = view_stack(lf, inside_aperture=args.inside_aperture).save(
+            args.outdir, stems[path], format=args.format, mosaic=args.mosaic, gif=args.gif, preview=preview_format(args))
         progress.update(per_capture)
         shown = shown_views(lf, args.inside_aperture)
         print(f"{path}: {shown.summary()}; {len(written)} file(s) -> {args.outdir}/{stems[path]}_*")

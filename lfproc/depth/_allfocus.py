@@ -29,13 +29,16 @@ def allfocus_slices(a_estimate: np.ndarray, center_index: int) -> np.ndarray:
 
 
 def allfocus(views: np.ndarray, a_estimate: np.ndarray, center_index: int,
-             interpolation: str = "cubic", view_shifts=None) -> np.ndarray:
+             interpolation: str = "cubic", view_shifts=None, view_mask=None) -> np.ndarray:
     """``(Ny, Nx, C)`` float32: each lens from the slices bracketing its ``a`` (module docstring);
-    ``view_shifts``: the per-view shift table the estimates were swept with (``None``: Eq. 9)."""
+    ``view_shifts``: the per-view shift table the estimates were swept with (``None``: Eq. 9); ``view_mask``:
+    the views that carry light, the only ones averaged (as the light field's slices average them)."""
+    from ..lightfield import LightField
     from ..refocus import refocus
 
     a_slices = allfocus_slices(a_estimate, center_index)
-    stack = refocus(views, a_slices, interpolation=interpolation, view_shifts=view_shifts)
+    lf = LightField.from_views(views, view_mask=None if view_mask is None or np.all(view_mask) else view_mask)
+    stack = refocus(lf, a_slices, interpolation=interpolation, view_shifts=view_shifts)
     if len(a_slices) == 1:
         return np.maximum(stack[0], 0.0)
     a = np.clip(np.nan_to_num(a_estimate, nan=float(np.median(a_slices))), a_slices[0], a_slices[-1])

@@ -355,7 +355,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["metric distance"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    sharp = allfocus(views, minimum.a, c, interpolation, slopes)
+    sharp = allfocus(views, minimum.a, c, interpolation, slopes, view_mask=weight)
     timings["all-in-focus"] = time.perf_counter() - t0
 
     f32 = lambda x: None if x is None else np.asarray(x, dtype=np.float32)

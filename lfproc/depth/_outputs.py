@@ -22,7 +22,8 @@ DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence
 
 
 def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
-                        depth_range_mm=None, point_cloud: bool = True, **depth_options) -> dict:
+                        depth_range_mm=None, point_cloud: bool = True, provenance: dict | None = None,
+                        **depth_options) -> dict:
     """Compute (unless ``depth_map`` is given) and write the depth outputs of one light field.
 
     Parameters
@@ -41,6 +42,8 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
         Passed to :func:`lfproc.depth`.
     point_cloud : bool
         Also write ``STEM_depth_points.ply``.
+    provenance : dict, optional
+        The inputs that shaped the outputs (:func:`lfproc.provenance.provenance`), in every sidecar.
     **depth_options
         Further keyword arguments of :func:`lfproc.depth`.
 
@@ -64,6 +67,8 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     common = dict(source=source, camera=camera.name if camera is not None else None, **depth_map.metadata())
     if depth_range_mm is not None:
         common["depth_range_mm"] = [float(v) for v in depth_range_mm]
+    if provenance is not None:
+        common["provenance"] = provenance
     known = ~np.isnan(depth_map.depth)
     paths = {}
     if depth_map.microscope:

@@ -55,6 +55,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
     from ..io import camera_lambda_map, refocused_map
     from ..io import stack_images
     from ._lytro_views import lambda_preview_writer, view_jobs
+    from ..provenance import provenance
 
     picture = open_picture(path)
     source = os.path.abspath(path)
@@ -68,13 +69,13 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
                               f"describe it ({note}); add --camera CAM.toml (e.g. from 'lfproc camera' on a Lytro "
                               f"file of the same camera)")
         mapping = refocused_map(mapping, focus_distance_mm)
-    common = {"source": source, "camera_model": meta.model if meta else None,
-              "provenance": _provenance(path, camera_path if camera is not None else None)}
+    common = {"source": source, "camera_model": meta.model if meta else None}
     if mapping is None:
         common["camera_note"] = (f"no distances: {note}; give the camera with --camera CAM.toml "
                                  f"(and --focus-distance MM)")
     else:
         common["camera"] = _camera_record(mapping, camera_from, focus_distance_mm)
+    common["provenance"] = provenance({"capture": path, "camera": camera_path if camera is not None else None})
     jobs = []        # (writer, path) run after everything is decoded
     records = mapping.slices([s.lambda_ for s in picture.stack]) if mapping and picture.stack else \
         [{"lambda": s.lambda_} for s in picture.stack]
@@ -107,20 +108,6 @@ def _linear(rgb: np.ndarray) -> np.ndarray:
     from ..io import srgb_decode
 
     return srgb_decode(np.asarray(rgb, np.float32) / 255.0)
-
-
-def _provenance(path: str, camera_path: str | None) -> dict:
-    """The contract's provenance record: lfproc's version and each input's path and SHA-256."""
-    import hashlib
-
-    from .. import __version__
-
-    inputs = {}
-    for key, name in (("picture", path), ("camera", camera_path)):
-        if name is not None:
-            with open(name, "rb") as fh:
-                inputs[key] = {"path": str(name), "sha256": hashlib.sha256(fh.read()).hexdigest()}
-    return {"lfproc_version": __version__, "inputs": inputs}
 
 
 def _camera_record(mapping, camera_from: str, focus_distance_mm) -> dict:

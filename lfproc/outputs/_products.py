@@ -30,7 +30,8 @@ def summed_views_metadata(camera, view_mask=None) -> tuple[float | None, dict]:
                     "views_summed": int(np.count_nonzero(view_mask))}
 
 
-def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int = 1) -> list[dict]:
+def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int = 1,
+                   provenance: dict | None = None) -> list[dict]:
     """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm; a
     microscope's: source, a, z_um, z_near_um, z_far_um, dof_um and ``refocus_shifts`` ("aplanatic" where
     :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial").
@@ -38,6 +39,7 @@ def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int 
     The DOF is that of the views ``view_mask`` marks (the light field's, e.g. after
     :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``. Slices refocused
     on a finer grid (``upsample`` s > 1: (N − 1)·s + 1 pixels per axis, pixel p at lens p/s) carry ``upsample``.
+    ``provenance`` (:func:`lfproc.provenance.provenance`), when given, is the last key of every record.
     """
     extent, extra = summed_views_metadata(camera, view_mask)
     if int(upsample) != 1:
@@ -48,7 +50,8 @@ def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int 
     if getattr(camera, "main_lens_prescription", None) is not None:   # a real lens: its rays beside the model's
         real = geometry.real_ray_slices(camera, np.asarray(a_values, dtype=np.float64).ravel(), extent).records()
         records = [dict(rec, real_rays=r) for rec, r in zip(records, real)]
-    return [dict(source=source, **rec, **extra) for rec in records]
+    tail = {} if provenance is None else {"provenance": provenance}
+    return [dict(source=source, **rec, **extra, **tail) for rec in records]
 
 
 def display_exposure(images, fmt: str):
@@ -72,7 +75,7 @@ def _exposed(image: np.ndarray, tone) -> np.ndarray:
 
 
 def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: np.ndarray,
-                 fmt: str = "tiff", view_mask=None, upsample: int = 1) -> list[str]:
+                 fmt: str = "tiff", view_mask=None, upsample: int = 1, provenance: dict | None = None) -> list[str]:
     """Write each refocused slice with its sidecar (DOF of the views ``view_mask`` marks; ``upsample``: the
     grid the slices were refocused on, :func:`slice_metadata`); returns the paths (JPEGs: :func:`display_exposure`)."""
     from ..io import write_image, write_sidecar
@@ -80,7 +83,8 @@ def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: 
     paths = []
     names = slice_names(stem, a_values)
     tone, tone_meta = display_exposure(images, fmt)
-    for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask, upsample), images):
+    for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask, upsample, provenance),
+                                 images):
         path = os.path.join(outdir, name + FORMATS[fmt])
         meta.update(tone_meta)
         write_image(path, _exposed(image, tone), meta, fmt)
@@ -90,10 +94,11 @@ def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: 
 
 
 def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, fmt: str = "tiff",
-                keep: np.ndarray | None = None, centre=None) -> list[str]:
+                keep: np.ndarray | None = None, centre=None, provenance: dict | None = None) -> list[str]:
     """Write each view (or those ``keep[ky, kx]`` marks) with the contract's sidecar; returns the paths.
 
     ``centre``: where the decoder read the central view (``LightField.view_centre``): the tags follow it.
+    ``provenance`` (:mod:`lfproc.provenance`), when given, is added to every view's metadata.
 
     Two files are written at a time (OpenImageIO releases the GIL while it encodes and writes), which
     keeps the disk busy between one file's open and the next: 225 Illum views reach about half the
@@ -106,13 +111,14 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
     jobs = []
     tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
     real = _real_view_tags(camera, centre)
+    tail = {} if provenance is None else {"provenance": provenance}
     for row in viewpoint_geometry(camera, centre):
         for vg in row:
             ky, kx = vg.view
             if keep is None or keep[ky, kx]:
                 path = os.path.join(outdir, view_name(stem, ky, kx) + FORMATS[fmt])
                 jobs.append((path, _exposed(views[ky, kx], tone),
-                             dict(source=source, **vg.metadata(), **real(ky, kx), **tone_meta)))
+                             dict(source=source, **vg.metadata(), **real(ky, kx), **tone_meta, **tail)))
 
     def write(job):
         path, image, meta = job
@@ -159,7 +165,7 @@ def mosaic_of_shown(views: np.ndarray, keep: np.ndarray | None, gap: int = 0) ->
 
 
 def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.ndarray, fmt: str = "tiff",
-                      keep: np.ndarray | None = None, centre=None) -> str:
+                      keep: np.ndarray | None = None, centre=None, provenance: dict | None = None) -> str:
     """The views ``keep`` marks (all without it) tiled into one image, with a sidecar of every view shown.
 
     ``keep`` (m̂ × m̂ booleans: the views that carry light, e.g. ``LightField.view_mask``, possibly
@@ -184,6 +190,8 @@ def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.nda
         meta["blacked_out"] = ("views without light (or outside the objective's NA) are 0 and not listed"
                                if camera.is_microscope else
                                "views without light (or outside the aperture) are 0 and not listed")
+    if provenance is not None:
+        meta["provenance"] = provenance
     path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")
     write_image(path, _exposed(tiled, tone), meta, fmt)
     write_sidecar(path, dict(meta, views=listed))

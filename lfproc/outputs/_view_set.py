@@ -57,16 +57,18 @@ def shown_views(lf, inside_aperture: bool = False) -> ViewSet:
 
 
 def write_view_set(outdir: str, stem: str, source: str, lf, fmt: str = "tiff", *, mosaic: bool = False,
-                   gif: bool = False, inside_aperture: bool = False, preview: str | None = None) -> list[str]:
+                   gif: bool = False, inside_aperture: bool = False, preview: str | None = None,
+                   provenance: dict | None = None) -> list[str]:
     """The lit views (see module docstring), optionally their mosaic with its preview PNG, labelled
-    per-view previews (``preview``: ``"png"`` or ``"jpeg"``) and a labelled animation; returns the paths."""
+    per-view previews (``preview``: ``"png"`` or ``"jpeg"``) and a labelled animation; returns the paths.
+    ``provenance`` (:mod:`lfproc.provenance`) goes into the views' and the mosaic's metadata."""
     shown = shown_views(lf, inside_aperture)
-    written = write_views(outdir, stem, source, lf.camera, lf.views, fmt, shown.keep, lf.view_centre)
+    written = write_views(outdir, stem, source, lf.camera, lf.views, fmt, shown.keep, lf.view_centre, provenance)
     if preview:
         written += write_view_previews(outdir, stem, lf.views, shown.keep, lf.camera, preview, centre=lf.view_centre)
     if mosaic:
         written.append(write_view_mosaic(outdir, stem, source, lf.camera, lf.views, fmt, shown.keep,
-                                         lf.view_centre))
+                                         lf.view_centre, provenance))
         written.append(write_mosaic_preview(outdir, stem, lf.views, shown.keep, camera=lf.camera))
     if gif:
         written.append(write_view_gif(outdir, stem, lf.views, shown.keep, lf.camera, centre=lf.view_centre))

@@ -42,7 +42,10 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     ----------
     lf : LightField or ndarray
         A :class:`~lfproc.lightfield.LightField`, or an array shaped ``(m̂, m̂, Ny, Nx, C)`` with m̂ odd
-        (float32, float64, unsigned or signed integers; see the module docstring for precision).
+        (float32, float64, unsigned or signed integers; see the module docstring for precision). An array
+        carries neither the view mask nor a microscope's per-view shifts: its mean runs over every view
+        (views that are 0 everywhere are warned about, :class:`~lfproc.errors.LfprocWarning`) with Eq. 9's
+        shifts; pass the LightField to refocus as it does.
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
@@ -90,8 +93,9 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
     m, _, ny, nx, channels = views.shape
     _check_output_size(len(slopes), ny, nx, channels, upsample)
     table = _shift_table(lf, view_shifts, m)
+    mask = _view_mask(lf, views)
     if table is not None:
-        out = refocus_per_view(views, slopes, table, interpolation, upsample, _view_mask(lf, m), _thread_count())
+        out = refocus_per_view(views, slopes, table, interpolation, upsample, mask, _thread_count())
         _check_finite(out, slopes, views)
         return out[0] if scalar else out
     plan_y = axis_plan(slopes, m, ny, upsample, interpolation)
@@ -112,9 +116,8 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
         raise LfprocError(f"light field has NaN or infinite pixels that reach the slice a={first_bad:g}; "
                           "replace them (e.g. numpy.nan_to_num) before refocusing")
     out = out.reshape(len(slopes), plan_y.count.shape[1], plan_x.count.shape[1], channels)
-    mask = getattr(lf, "view_mask", None)
     if mask is not None:
-        out *= _masked_mean_factor(np.asarray(mask, dtype=bool), plan_y, plan_x, ny, nx, upsample)[..., None]
+        out *= _masked_mean_factor(mask, plan_y, plan_x, ny, nx, upsample)[..., None]
     if plan_y.spline.any() or plan_x.spline.any():
         postfilter(out, plan_y.spline, plan_x.spline, upsample)
         _check_finite(out, slopes, views)
@@ -177,9 +180,43 @@ def _shift_table(lf, view_shifts, m: int):
     return sigma_y, sigma_x
 
 
-def _view_mask(lf, m: int):
-    mask = getattr(lf, "view_mask", None)
-    return None if mask is None else np.asarray(mask, dtype=bool).reshape(m, m)
+def _view_mask(lf, views: np.ndarray):
+    """The views the mean runs over: a LightField's ``view_mask`` (None: all). A bare array has no mask: the
+    contract's mean runs over all its views, and where some are 0 everywhere (as a decoder delivers the
+    views without light) an :class:`~lfproc.errors.LfprocWarning` says the slices are darker than the
+    LightField's and what to pass instead (:func:`lit_views`)."""
+    m = views.shape[0]
+    if hasattr(lf, "views"):
+        mask = getattr(lf, "view_mask", None)
+        return None if mask is None else np.asarray(mask, dtype=bool).reshape(m, m)
+    lit = lit_views(views)
+    if lit is not None:
+        import warnings
+
+        from ..errors import LfprocWarning
+
+        dark = int(lit.size - np.count_nonzero(lit))
+        warnings.warn(f"refocus: {dark} of {lit.size} views of this array are 0 everywhere and are averaged as "
+                      f"views of zero, so slices are {np.count_nonzero(lit) / lit.size:.2f}x as bright as those of "
+                      f"a light field whose view_mask leaves them out; pass the LightField (lf, not lf.views), "
+                      f"or LightField.from_views(views, camera, view_mask=...)", LfprocWarning, stacklevel=3)
+    return None
+
+
+def lit_views(views: np.ndarray) -> np.ndarray | None:
+    """``(m̂, m̂)`` booleans marking the views of an array that hold any nonzero value, or None when all do
+    (or none does). The decoder delivers views without light as exact zeros (``LightField.view_mask``).
+
+    Cheap: 16 evenly spread lens rows of every view tell which views may be dark, and only those are read
+    in full."""
+    sample = views[:, :, ::max(1, views.shape[2] // 16)]
+    candidates = ~np.any(sample != 0, axis=tuple(range(2, views.ndim)))
+    if not candidates.any() or candidates.all():
+        return None
+    lit = ~candidates
+    for ky, kx in zip(*np.nonzero(candidates)):
+        lit[ky, kx] = bool(np.any(views[ky, kx] != 0))
+    return None if lit.all() else lit
 
 
 def _check_finite(out: np.ndarray, slopes, views: np.ndarray) -> None:

@@ -60,6 +60,8 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     depth_map : lfproc.depth.DepthMap, optional
         A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth`) otherwise.
     """
+    from ..api import DEFAULT_INTERPOLATION
+    from ..provenance import provenance
     from ..refocus import refocus
 
     camera = lf.camera
@@ -67,14 +69,15 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
         np.asarray(a_values, dtype=np.float64)
-    stack = refocus(lf, a_values, interpolation="cubic-spline")     # the commands' default
+    stack = refocus(lf, a_values, interpolation=DEFAULT_INTERPOLATION)     # the commands' default
     tone = ToneMap.for_images(stack)
     extension = image_extension(lf.lens_shape)
     jobs = []
     apertures = []
     for f_number in page_apertures(camera):
         summed = with_aperture(lf, f_number)
-        aperture_stack = stack if f_number is None else refocus(summed, a_values, interpolation="cubic-spline")
+        aperture_stack = stack if f_number is None else refocus(summed, a_values,
+                                                                          interpolation=DEFAULT_INTERPOLATION)
         folder = "slices" if f_number is None else f"slices/f{f_number:g}"
         apertures.append(_aperture_record(camera, summed.view_mask, f_number, a_values, stem, folder, extension))
         for k, record in enumerate(apertures[-1]["slices"]):
@@ -105,6 +108,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         "unit": "um" if camera.is_microscope else "mm",
         "calibration": calibration or {},
         "index_href": index_href,
+        "provenance": provenance(lf.inputs),
     }
     write_json_atomic(os.path.join(outdir, "geometry.json"), data)
     maps = {"slice_index": encode_array(slice_index),

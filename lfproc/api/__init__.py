@@ -1,0 +1,35 @@
+"""The Python API (contract, ARCHITECTURE.md "Python API"): from files or arrays to tagged results.
+
+What a notebook user writes, and what the commands, batch, demo and viewer are built on::
+
+    grid = lfproc.calibrate_white("white.png", cam)                      # -> LensGrid
+    lf = lfproc.read_light_field("capture.png", cam, white="white.png")  # -> LightField
+    fs = lfproc.focal_stack(lf, a=[0.5, 1.0])                            # -> FocalStack (images + tags)
+    vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
+    dm = lfproc.depth_map(lf)                                            # -> DepthResult
+    fs.save("out/")                                                      # exactly what `lfproc refocus` writes
+
+Results are frozen; their tags are the numbers the commands write in their sidecars (the same functions
+make both), ``.records()`` are those sidecars, ``.save`` writes those files. Library manners: nothing is
+printed (warnings go through :mod:`warnings` as :class:`lfproc.LfprocWarning`), nothing is written unless a
+path is given (the decoder cache is opt-in: ``cache=True``), and errors name Python arguments.
+
+Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_read`` (captures,
+white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth``
+(depth maps). Importing this package is light (numpy only).
+"""
+
+from ._checks import check_refocused_area, check_slice_meaning, check_view_coverage, lowest_meaningful_a
+from ._defaults import DEFAULT_INTERPOLATION
+from ._depth import DepthResult, depth_map
+from ._focal import FocalStack, focal_stack
+from ._read import calibrate_white, read_light_field
+from ._views import ViewStack, view_stack
+from ..errors import command_words, python_words
+
+__all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
+           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
+           # the checks the commands share (worded with their flags there)
+           "check_refocused_area", "check_slice_meaning", "check_view_coverage", "lowest_meaningful_a",
+           # the commands run the API inside command_words() (their errors keep the flags)
+           "command_words", "python_words"]

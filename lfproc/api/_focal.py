@@ -1,0 +1,244 @@
+"""Focal stacks: refocused slices (Eq. 9) with the tags the commands write (Eqs. 21–31).
+
+:func:`focal_stack` renders the slices and tags them with :func:`lfproc.outputs.slice_metadata`, the function
+that writes ``lfproc refocus``'s sidecars, for the views the light field sums (its view mask, the synthetic
+aperture): the attributes, ``records()`` and the files of ``save()`` hold the same numbers.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LfprocError
+from ._defaults import DEFAULT_INTERPOLATION
+from ..errors import speaking_python
+
+_SLICE_FIELDS = ("distance_mm", "near_mm", "far_mm", "dof_mm", "z_um", "z_near_um", "z_far_um", "dof_um")
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class FocalStack:
+    """Refocused slices of one light field and their geometry.
+
+    Attributes
+    ----------
+    images : ndarray, float32, shape (K, Ny, Nx, C)
+        The slices (linear), in the order of ``a``.
+    a : ndarray, shape (K,)
+        Refocus parameters (Eq. 9).
+    distance_mm, near_mm, far_mm, dof_mm : ndarray (K,) or None
+        Distance from the sensor each slice focuses at (Eq. 21), its DOF limits and depth (Eqs. 23, 31);
+        ``inf`` where infinite. ``None`` for a microscope.
+    z_um, z_near_um, z_far_um, dof_um : ndarray (K,) or None
+        A microscope's: depth from the native object plane (positive towards the objective), its DOF
+        limits and depth in µm. ``None`` for a photographic camera.
+    views_summed : int
+        How many views each slice averages (those that carry light, inside ``aperture``).
+    aperture_f_number : float or None
+        The equivalent f-number of the views summed (``None`` for a microscope).
+    interpolation : str
+    upsample : int
+    camera : Camera
+    source : str or None
+        The capture (or saved light field) as its absolute path, as the sidecars record it.
+    provenance : dict
+        The files that shaped the slices (:mod:`lfproc.provenance`).
+    """
+
+    images: np.ndarray
+    a: np.ndarray
+    distance_mm: np.ndarray | None
+    near_mm: np.ndarray | None
+    far_mm: np.ndarray | None
+    dof_mm: np.ndarray | None
+    z_um: np.ndarray | None
+    z_near_um: np.ndarray | None
+    z_far_um: np.ndarray | None
+    dof_um: np.ndarray | None
+    views_summed: int
+    aperture_f_number: float | None
+    interpolation: str
+    upsample: int
+    camera: object
+    source: str | None
+    provenance: dict
+    view_mask: np.ndarray | None
+    _records: tuple
+
+    def records(self) -> list[dict]:
+        """One dict per slice: the keys and values of ``lfproc refocus``'s sidecar (``inf`` for JSON's null)."""
+        return copy.deepcopy(list(self._records))
+
+    def save(self, outdir, stem: str | None = None, *, format: str = "tiff", preview: str | None = None,
+             stack: str | None = None) -> list[str]:
+        """Write what ``lfproc refocus`` writes for these slices: each slice as ``STEM_a….EXT`` with its sidecar
+        (``format``: "tiff", "png16", "jpeg" or "exr"), optionally labelled previews (``preview``: "png",
+        "jpeg" or "gif") and the slices as one z-stack file (``stack``: "imagej" or "ome").
+
+        ``stem``: the file names' start; default: the capture's name without extension. Returns the image
+        paths written (the slices, then the previews and the stack file).
+        """
+        from ..outputs import lateral_um_per_lens, stack_path, write_focal_stack, write_slice_previews, write_slices
+
+        with speaking_python():
+            stem = _stem(stem, self.source)
+            outdir = os.fspath(outdir)
+            written = write_slices(outdir, stem, self.source, self.camera, list(self.a), self.images, format,
+                                   view_mask=self.view_mask, upsample=self.upsample, provenance=self.provenance)
+            if preview:
+                written += list(write_slice_previews(outdir, stem, self.images, self.camera, list(self.a), preview,
+                                                     view_mask=self.view_mask) or [])
+            if stack:
+                written.append(write_focal_stack(stack_path(outdir, stem, stack), self.images, self.records(),
+                                                 kind=stack, lens_um=lateral_um_per_lens(self.camera),
+                                                 upsample=self.upsample))
+            return written
+
+    def to_xarray(self):
+        """The slices as an ``xarray.DataArray`` (dims slice, y, x, channel; the tags as coordinates along
+        ``slice``, provenance in ``attrs``). Needs xarray (not a dependency of lfproc)."""
+        try:
+            import xarray
+        except ImportError:
+            raise LfprocError("to_xarray needs the xarray package; install it (pip install xarray)") from None
+        coords = {"a": ("slice", self.a)}
+        for name in _SLICE_FIELDS:
+            value = getattr(self, name)
+            if value is not None:
+                coords[name] = ("slice", value)
+        import json
+        attrs = {"views_summed": self.views_summed, "interpolation": self.interpolation, "upsample": self.upsample,
+                 "source": self.source or "", "provenance": json.dumps(self.provenance)}
+        if self.aperture_f_number is not None:
+            attrs["aperture_f_number"] = self.aperture_f_number
+        return xarray.DataArray(self.images, dims=("slice", "y", "x", "channel"), coords=coords, attrs=attrs)
+
+    def __len__(self) -> int:
+        return int(self.images.shape[0])
+
+    def __repr__(self) -> str:
+        k, ny, nx, c = self.images.shape
+        if self.z_um is not None:
+            where = f"z {_span(self.z_um)} um"
+        else:
+            where = f"{_span(self.distance_mm)} mm from the sensor"
+        return (f"<FocalStack of {k} slice(s) {ny}x{nx}x{c}, a {_span(self.a)}, {where}, "
+                f"{self.views_summed} views summed>")
+
+
+def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | None = None,
+                interpolation: str = DEFAULT_INTERPOLATION, upsample: int = 1) -> FocalStack:
+    """Refocused slices of a light field (Eq. 9), tagged as ``lfproc refocus`` tags them.
+
+    Parameters
+    ----------
+    lf : LightField
+        With its camera (:func:`lfproc.read_light_field`; an array has no geometry to tag with: wrap it with
+        ``LightField.from_views(views, camera, view_mask=...)``).
+    a : float or sequence of float, optional
+        Refocus parameters. Give exactly one of ``a``, ``distance_mm`` and ``z_um``.
+    distance_mm : float or sequence of float, optional
+        Distances from the sensor to focus at (a photographic camera; Eq. 21 inverted).
+    z_um : float or sequence of float, optional
+        Depths from the native object plane in µm, positive towards the objective (a microscope).
+    aperture : float, optional
+        A synthetic aperture f-number: average only the views inside it (:func:`lfproc.with_aperture`).
+    interpolation : {"nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"}
+        Default: the commands' (``"cubic-spline"``, :data:`lfproc.api.DEFAULT_INTERPOLATION`).
+    upsample : int
+        Render on an ``upsample`` times finer grid than the lenses.
+
+    Returns
+    -------
+    FocalStack
+
+    Raises
+    ------
+    LfprocError
+        No camera, not exactly one of ``a``/``distance_mm``/``z_um``, slices nearer than the main lens's
+        front focal plane, or slices whose refocused area is under half the image.
+
+    Warns
+    -----
+    LfprocWarning
+        Slices where fewer than half the pixels average every view.
+    """
+    from .. import geometry
+    from ..lightfield import LightField
+    from ..outputs import slice_metadata
+    from ..provenance import provenance
+    from ..refocus import refocus
+    from ..viewpoints import with_aperture
+    from ._checks import check_slice_meaning, check_view_coverage
+
+    with speaking_python():
+        if not isinstance(lf, LightField) or lf.camera is None:
+            raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
+                              "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
+        camera = lf.camera
+        a_values = _parameters(camera, a, distance_mm, z_um)
+        if not camera.is_microscope:
+            check_slice_meaning(camera, a_values, "a" if a is not None else "distance_mm")
+        if int(upsample) != upsample or upsample < 1:
+            raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
+        lf = with_aperture(lf, aperture)
+        source = None if lf.source is None else os.path.abspath(lf.source)
+        check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask)
+        images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
+        prov = provenance(lf.inputs)
+        records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)
+        columns = {name: (np.array([r[name] for r in records], dtype=np.float64) if name in records[0] else None)
+                   for name in _SLICE_FIELDS}
+        summed = records[0].get("views_summed", lf.m_hat ** 2)
+        f_number = records[0].get("aperture_f_number")
+        if f_number is None and not camera.is_microscope:
+            f_number = float(geometry.equivalent_f_number(camera))
+        return FocalStack(images, np.array([r["a"] for r in records], dtype=np.float64), **columns,
+                          views_summed=int(summed), aperture_f_number=f_number, interpolation=interpolation,
+                          upsample=int(upsample), camera=camera, source=source, provenance=prov,
+                          view_mask=lf.view_mask, _records=tuple(records))
+
+
+def _parameters(camera, a, distance_mm, z_um) -> list[float]:
+    """The slices' a from exactly one of ``a``, ``distance_mm`` (Eq. 21 inverted) and ``z_um``."""
+    from .. import geometry
+
+    given = [name for name, value in (("a", a), ("distance_mm", distance_mm), ("z_um", z_um)) if value is not None]
+    if len(given) != 1:
+        raise LfprocError(f"give exactly one of a=, distance_mm= or z_um=, got {', '.join(given) or 'none'}")
+    name = given[0]
+    values = np.atleast_1d(np.asarray({"a": a, "distance_mm": distance_mm, "z_um": z_um}[name], dtype=np.float64))
+    if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values) | (name == "distance_mm")):
+        raise LfprocError(f"{name}= must be one number or a non-empty sequence of finite numbers")
+    if name == "z_um":
+        if not camera.is_microscope:
+            raise LfprocError("z_um= (micrometres from the native object plane) needs a microscope camera; "
+                              "give distance_mm= or a=")
+        values = np.atleast_1d(geometry.refocus_parameter_z(camera, values))
+    elif name == "distance_mm":
+        if camera.is_microscope:
+            raise LfprocError("a microscope's depths are micrometres from the native object plane; give z_um= "
+                              "instead of distance_mm=")
+        values = np.atleast_1d(geometry.refocus_parameter(camera, values))
+    if len(set(values.tolist())) != len(values):
+        raise LfprocError(f"{name}= asks for the same slice twice; give each once")
+    return [float(v) for v in values]
+
+
+def _stem(stem, source) -> str:
+    if stem is not None:
+        return str(stem)
+    if source is None:
+        raise LfprocError("save needs stem= for a light field that was not read from a file")
+    from ..pipeline import output_stem
+    return output_stem(source)
+
+
+def _span(values) -> str:
+    values = np.atleast_1d(values)
+    lo, hi = float(np.min(values)), float(np.max(values))
+    return f"{lo:.4g}" if lo == hi else f"{lo:.4g} to {hi:.4g}"

@@ -1,0 +1,82 @@
+"""Provenance of an output (contract, ARCHITECTURE.md "Provenance"): which files shaped it, by content.
+
+Every sidecar and stack file lfproc writes carries ::
+
+    "provenance": {"lfproc_version": "0.1.0",
+                   "inputs": {"capture": {"path": "capture.png", "sha256": "…"}, "camera": {…}, …}}
+
+with the paths as the user gave them and the SHA-256 of each file's bytes; only the inputs that shaped the
+output appear (roles :data:`ROLES`). An output made from a saved light field (``.lfp.npz``) records that file
+under ``"light_field"`` plus the inputs it was decoded from (stored in the file).
+
+A `LightField` knows its inputs (``LightField.inputs``: role → path, or role → the record already made);
+hashes are computed when an output is written, once per file and process (keyed by the file's absolute
+path, size and modification time), so a batch of captures hashes its camera, white image and grid once.
+Pure standard library.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from collections.abc import Mapping
+
+from .errors import LfprocError
+
+#: the roles an input can have, in the order they are listed
+ROLES = ("light_field", "capture", "camera", "white", "dark", "grid")
+
+_CHUNK = 1 << 22
+_HASHES: dict = {}
+
+
+def sha256_of(path) -> str:
+    """The SHA-256 (hex) of a file's bytes, computed once per process for each unchanged file."""
+    full = os.path.abspath(os.fspath(path))
+    try:
+        stat = os.stat(full)
+    except OSError as exc:
+        raise LfprocError(f"{path}: cannot be read ({exc.strerror}); check the path") from None
+    key = (full, stat.st_size, stat.st_mtime_ns)
+    if key not in _HASHES:
+        digest = hashlib.sha256()
+        try:
+            with open(full, "rb") as fh:
+                while chunk := fh.read(_CHUNK):
+                    digest.update(chunk)
+        except OSError as exc:
+            raise LfprocError(f"{path}: cannot be read ({exc.strerror}); check the path") from None
+        _HASHES[key] = digest.hexdigest()
+    return _HASHES[key]
+
+
+def input_record(path) -> dict:
+    """``{"path": path as given, "sha256": hex}`` of one input file."""
+    return {"path": os.fspath(path), "sha256": sha256_of(path)}
+
+
+def input_records(inputs: Mapping | None) -> dict:
+    """Role → record of every input in ``inputs`` (role → path, or role → record), in :data:`ROLES` order;
+    inputs that are None (an array, a camera built in Python) are left out."""
+    out = {}
+    for role in sorted((inputs or {}), key=lambda r: ROLES.index(r) if r in ROLES else len(ROLES)):
+        value = inputs[role]
+        if value is None:
+            continue
+        if isinstance(value, Mapping):
+            out[role] = {"path": str(value["path"]), "sha256": str(value["sha256"])}
+        else:
+            out[role] = input_record(value)
+    return out
+
+
+def provenance(inputs: Mapping | None) -> dict:
+    """The contract's ``provenance`` record of an output shaped by ``inputs`` (role → path or record)."""
+    from ._version import __version__
+
+    return {"lfproc_version": __version__, "inputs": input_records(inputs)}
+
+
+def file_inputs(**paths) -> dict:
+    """Role → path for the inputs given as files (``str`` or ``os.PathLike``); arrays and objects are dropped."""
+    return {role: os.fspath(p) for role, p in paths.items() if isinstance(p, (str, os.PathLike))}

@@ -1,0 +1,363 @@
+"""The Python API of the contract (ARCHITECTURE.md "Python API", "Provenance"), on the bundled sample and a
+light-field microscope: its tags are the sidecars the commands write (1e-9), its images their TIFFs, its
+``save`` writes what the commands write, it prints nothing and writes nothing under $HOME, its provenance
+hashes are the files' SHA-256, and its errors name Python arguments.
+
+The commands run in subprocesses (``run_cli``), the API in this process with HOME pointing at an empty
+folder and the decoder cache variables unset (a cache write would land under HOME).
+"""
+
+import contextlib
+import hashlib
+import json
+import math
+import os
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tifffile
+
+import lfproc
+from conftest import SAMPLES, run_cli
+from scopefile import microscope_toml
+from whitegen import covering_grid, white_image
+
+SAMPLE = SAMPLES / "sample"
+A_VALUES = [0.5, 0.682, 1.2]
+
+
+@contextlib.contextmanager
+def quiet_library(home: Path):
+    """HOME at an empty folder, no decoder cache settings, and everything written to fds 1 and 2 caught;
+    yields a dict whose "printed" is what was written (set on exit)."""
+    saved = {k: os.environ.get(k) for k in ("HOME", "LFPROC_CACHE_DIR", "XDG_CACHE_HOME")}
+    os.environ["HOME"] = str(home)
+    os.environ.pop("LFPROC_CACHE_DIR", None)
+    os.environ.pop("XDG_CACHE_HOME", None)
+    sys.stdout.flush(), sys.stderr.flush()
+    caught = tempfile.TemporaryFile(mode="w+b")
+    kept = os.dup(1), os.dup(2)
+    result = {}
+    try:
+        os.dup2(caught.fileno(), 1)
+        os.dup2(caught.fileno(), 2)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            yield result
+    finally:
+        sys.stdout.flush(), sys.stderr.flush()
+        os.dup2(kept[0], 1)
+        os.dup2(kept[1], 2)
+        os.close(kept[0]), os.close(kept[1])
+        caught.seek(0)
+        result["printed"] = caught.read().decode(errors="replace")
+        result["warnings"] = [w for w in said]
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+
+
+def sha256(path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def read_json(path) -> dict:
+    return json.loads(Path(path).read_text())
+
+
+def assert_same_record(api: dict, sidecar: dict, rel=1e-9):
+    """A record of the API equals a sidecar: the same keys, numbers to ``rel`` (JSON null = inf), the rest equal."""
+    assert list(api) == list(sidecar)
+    for key, value in sidecar.items():
+        mine = api[key]
+        if isinstance(value, (int, float)) and not isinstance(value, bool) or (value is None and isinstance(mine, float)):
+            expected = math.inf if value is None else value
+            assert mine == pytest.approx(expected, rel=rel, abs=0), key
+        else:
+            assert json.loads(json.dumps(mine, allow_nan=True).replace("Infinity", "null")) == value, key
+
+
+def assert_same_files(folder_a: Path, folder_b: Path):
+    """Two output folders hold the same files, equal sidecars and equal image data."""
+    names = sorted(p.name for p in folder_a.iterdir())
+    assert names == sorted(p.name for p in folder_b.iterdir())
+    for name in names:
+        if name.endswith(".json"):
+            assert read_json(folder_a / name) == read_json(folder_b / name), name
+        elif name.endswith(".tif"):
+            np.testing.assert_array_equal(tifffile.imread(folder_a / name), tifffile.imread(folder_b / name))
+
+
+# ----------------------------------------------------------------------------------------------- the sample
+@pytest.fixture(scope="module")
+def sample_cli(tmp_path_factory):
+    """What the commands write for the sample: slices (with a stack file), views, depth."""
+    out = tmp_path_factory.mktemp("cli")
+    inputs = [SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--white", SAMPLE / "white.png"]
+    a_list = ",".join(str(a) for a in A_VALUES)
+    for args in (("refocus", *inputs, "--a", a_list, "--stack", "imagej", "-o", out / "refocus"),
+                 ("views", *inputs, "-o", out / "views"),
+                 ("depth", *inputs, "-o", out / "depth")):
+        proc = run_cli(*args)
+        assert proc.returncode == 0, proc.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def sample_api(tmp_path_factory):
+    """The contract's snippet on the sample, run quietly; the results and what was printed or written."""
+    home = tmp_path_factory.mktemp("home")
+    with quiet_library(home) as run:
+        cam = lfproc.Camera.from_toml(str(SAMPLE / "camera.toml"))
+        grid = lfproc.calibrate_white(str(SAMPLE / "white.png"), cam, dark=None)
+        lf = lfproc.read_light_field(str(SAMPLE / "capture.png"), cam, white=str(SAMPLE / "white.png"), grid=None,
+                                     dark=None)
+        fs = lfproc.focal_stack(lf, a=A_VALUES)
+        vs = lfproc.view_stack(lf)
+        dm = lfproc.depth_map(lf)
+    run.update(grid=grid, lf=lf, fs=fs, vs=vs, dm=dm, home=home)
+    return run
+
+
+def test_the_snippet_prints_nothing_and_writes_nothing_under_home(sample_api):
+    assert sample_api["printed"] == ""
+    assert list(sample_api["home"].iterdir()) == []
+    assert all(issubclass(w.category, lfproc.LfprocWarning) for w in sample_api["warnings"])
+    assert isinstance(sample_api["grid"], lfproc.LensGrid)
+
+
+def test_focal_stack_tags_are_the_sidecars(sample_api, sample_cli):
+    fs = sample_api["fs"]
+    sidecars = [read_json(sample_cli / "refocus" / f"capture_a{a:+.3f}.json") for a in A_VALUES]
+    for record, sidecar in zip(fs.records(), sidecars):
+        assert_same_record(record, sidecar)
+    for name in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm"):
+        np.testing.assert_allclose(getattr(fs, name), [s[name] for s in sidecars], rtol=1e-9)
+    assert fs.views_summed == sidecars[0]["views_summed"] == 89
+    assert fs.aperture_f_number == pytest.approx(sidecars[0]["aperture_f_number"], rel=1e-9)
+    # the issue's slice: the DOF of the views that carry light, not of the full micro image
+    assert fs.near_mm[1] == pytest.approx(722.49, abs=0.01) and fs.far_mm[1] == pytest.approx(1235.48, abs=0.01)
+    assert fs.z_um is None and fs.images.dtype == np.float32 and fs.images.shape == (3, 53, 75, 3)
+
+
+def test_focal_stack_images_are_the_tiffs(sample_api, sample_cli):
+    for image, a in zip(sample_api["fs"].images, A_VALUES):
+        tiff = tifffile.imread(sample_cli / "refocus" / f"capture_a{a:+.3f}.tif")
+        np.testing.assert_allclose(image, tiff.reshape(image.shape), rtol=2e-7, atol=1e-7)
+
+
+def test_save_writes_what_refocus_writes(sample_api, sample_cli, tmp_path):
+    written = sample_api["fs"].save(tmp_path, stem="capture", stack="imagej")
+    assert len(written) == 4 and all(Path(p).exists() for p in written)
+    assert_same_files(tmp_path, sample_cli / "refocus")
+    info = tifffile.TiffFile(tmp_path / "capture_stack.tif").imagej_metadata["Info"]
+    assert all("provenance" in s for s in json.loads(info)["slices"])
+
+
+def test_view_stack_is_what_views_writes(sample_api, sample_cli, tmp_path):
+    vs = sample_api["vs"]
+    lf = sample_api["lf"]
+    assert len(vs) == int(lf.view_mask.sum()) == 89
+    assert vs.view.shape == (89, 2) and vs.view.dtype.kind == "i"
+    for i in (0, 44, 88):
+        ky, kx = vs.view[i]
+        sidecar = read_json(sample_cli / "views" / f"capture_view_{ky:02d}_{kx:02d}.json")
+        assert_same_record(vs.records()[i], sidecar)
+        np.testing.assert_allclose(vs.position_mm[i], sidecar["position_mm"], rtol=1e-9)
+        np.testing.assert_allclose(vs.tilt_deg[i], sidecar["tilt_deg"], rtol=1e-9)
+        np.testing.assert_array_equal(vs.images[i], lf.views[ky, kx])
+    vs.save(tmp_path, stem="capture")
+    assert_same_files(tmp_path, sample_cli / "views")
+
+
+def test_depth_map_is_what_depth_writes(sample_api, sample_cli, tmp_path):
+    dm = sample_api["dm"]
+    sidecar = read_json(sample_cli / "depth" / "capture_depth.json")
+    tags = dm.tags()
+    for key in tags:
+        assert key in sidecar
+    assert dm.method == sidecar["method"] and dm.unit == "mm" and dm.lens_grid == sidecar["lens_grid"]
+    dm.save(tmp_path, stem="capture")
+    assert_same_files(tmp_path, sample_cli / "depth")
+    np.testing.assert_array_equal(dm.distance_mm, tifffile.imread(sample_cli / "depth" / "capture_depth.tif"))
+
+
+def test_provenance_hashes_are_the_files_sha256(sample_api, sample_cli):
+    prov = sample_api["fs"].provenance
+    assert prov["lfproc_version"] == lfproc.__version__
+    assert list(prov["inputs"]) == ["capture", "camera", "white"]   # no dark frame, no grid file shaped it
+    for role, name in (("capture", "capture.png"), ("camera", "camera.toml"), ("white", "white.png")):
+        assert prov["inputs"][role] == {"path": str(SAMPLE / name), "sha256": sha256(SAMPLE / name)}
+    for path in (sample_cli / "refocus" / "capture_a+0.500.json", sample_cli / "views" / "capture_view_05_05.json",
+                 sample_cli / "depth" / "capture_depth.json", sample_cli / "depth" / "capture_allfocus.json"):
+        assert read_json(path)["provenance"] == prov, path
+
+
+def test_a_grid_file_and_a_saved_light_field_are_recorded(sample_api, sample_cli, tmp_path):
+    proc = run_cli("calibrate", SAMPLE / "white.png", "--camera", SAMPLE / "camera.toml", "-o", tmp_path / "grid.json")
+    assert proc.returncode == 0, proc.stderr
+    lf = lfproc.read_light_field(SAMPLE / "capture.png", SAMPLE / "camera.toml", grid=tmp_path / "grid.json")
+    inputs = lfproc.focal_stack(lf, a=0.682).provenance["inputs"]
+    assert list(inputs) == ["capture", "camera", "white", "grid"]   # the grid's recorded white image devignettes
+    assert inputs["grid"]["sha256"] == sha256(tmp_path / "grid.json")
+    saved = tmp_path / "capture.lfp.npz"
+    sample_api["lf"].save(saved)
+    again = lfproc.read_light_field(saved)
+    fs = lfproc.focal_stack(again, a=A_VALUES)
+    inputs = fs.provenance["inputs"]
+    assert list(inputs) == ["light_field", "capture", "camera", "white"]
+    assert inputs["light_field"] == {"path": str(saved), "sha256": sha256(saved)}
+    assert inputs["white"] == sample_api["fs"].provenance["inputs"]["white"]
+    proc = run_cli("refocus", saved, "--a", ",".join(map(str, A_VALUES)), "-o", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr
+    for record, a in zip(fs.records(), A_VALUES):
+        assert_same_record(record, read_json(tmp_path / "out" / f"capture_a{a:+.3f}.json"))
+    np.testing.assert_array_equal(fs.images, sample_api["fs"].images)
+
+
+def test_distance_parameters_and_aperture(sample_api):
+    lf, fs = sample_api["lf"], sample_api["fs"]
+    by_distance = lfproc.focal_stack(lf, distance_mm=fs.distance_mm)
+    np.testing.assert_allclose(by_distance.a, fs.a, rtol=1e-9)
+    narrow = lfproc.focal_stack(lf, a=[0.682], aperture=8.0)
+    assert narrow.aperture_f_number >= 8.0 * 0.99 and narrow.views_summed < fs.views_summed
+    assert narrow.dof_mm[0] > fs.dof_mm[1]
+
+
+def test_arrays_refocus_like_the_light_field_or_are_told_why_not(sample_api):
+    from lfproc.refocus import refocus
+
+    lf = sample_api["lf"]
+    masked = lfproc.LightField.from_views(lf.views, lf.camera, view_mask=lf.view_mask)
+    np.testing.assert_array_equal(refocus(masked, 0.682), refocus(lf, 0.682))
+    with pytest.warns(lfproc.LfprocWarning, match=r"pass the LightField.*view_mask"):
+        dark = refocus(lf.views, 0.682)
+    ratio = float(dark.mean() / refocus(lf, 0.682).mean())
+    assert ratio == pytest.approx(89 / 121, rel=0.02)
+
+
+def test_reprs_are_small(sample_api):
+    for name in ("lf", "fs", "vs", "dm"):
+        text = repr(sample_api[name])
+        assert len(text) < 300 and "\n" not in text, (name, text)
+    assert "89 carry light" in repr(sample_api["lf"])
+
+
+def test_errors_name_python_arguments(sample_api, tmp_path):
+    lf = sample_api["lf"]
+    cases = [
+        (lambda: lfproc.read_light_field(SAMPLE / "capture.png", SAMPLE / "camera.toml"), "white="),
+        (lambda: lfproc.read_light_field(SAMPLE / "capture.png"), "camera="),
+        (lambda: lfproc.focal_stack(lf), "a="),
+        (lambda: lfproc.focal_stack(lf, a=[1.0], aperture=0.5), "aperture="),
+        (lambda: lfproc.focal_stack(lf, z_um=[1.0]), "distance_mm="),
+        (lambda: lfproc.focal_stack(lf.views, a=[1.0]), "LightField"),
+        (lambda: lfproc.read_light_field(tmp_path / "missing.png", SAMPLE / "camera.toml", white=SAMPLE / "white.png"),
+         "missing.png"),
+    ]
+    for call, named in cases:
+        with pytest.raises(lfproc.LfprocError) as info:
+            call()
+        message = str(info.value)
+        assert named in message and "--" not in message and "\n" not in message, message
+
+
+def test_to_xarray_when_xarray_is_there(sample_api):
+    xarray = pytest.importorskip("xarray")
+    da = sample_api["fs"].to_xarray()
+    assert isinstance(da, xarray.DataArray) and da.dims == ("slice", "y", "x", "channel")
+    np.testing.assert_allclose(da.coords["distance_mm"].values, sample_api["fs"].distance_mm)
+
+
+# ------------------------------------------------------------------------------------------ a microscope
+@pytest.fixture(scope="module")
+def lfm(tmp_path_factory):
+    """A tiny light-field microscope's white image and capture (as tests/test_microscope_cli.py renders them)."""
+    folder = tmp_path_factory.mktemp("lfm")
+    shape = (120, 128)
+    grid = covering_grid(shape, "rectangular", 0.0475 / 0.0065, 0.3, (0.4, -0.2))
+    white = np.asarray(white_image(shape, grid, 3.3), dtype=np.float64)
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
+    capture = white * (0.55 + 0.4 * np.sin(xx / 6.0) * np.cos(yy / 9.0))
+    for name, image in (("white.tif", white), ("capture.tif", capture)):
+        tifffile.imwrite(folder / name, np.round(image / image.max() * 60000).astype(np.uint16))
+    (folder / "lfm.toml").write_text(microscope_toml(name="tiny-lfm", pitch=0.0475, f_s=0.95, grid=None,
+                                                     wavelength=510))
+    return folder
+
+
+def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
+    a_values = [-0.5, 0.0, 0.75]
+    proc = run_cli("refocus", lfm / "capture.tif", "--camera", lfm / "lfm.toml", "--white", lfm / "white.tif",
+                   "--a", ",".join(map(str, a_values)), "-o", tmp_path / "cli")
+    assert proc.returncode == 0, proc.stderr
+    (tmp_path / "home").mkdir()
+    with quiet_library(tmp_path / "home") as run:
+        lf = lfproc.read_light_field(str(lfm / "capture.tif"), str(lfm / "lfm.toml"), white=str(lfm / "white.tif"))
+        fs = lfproc.focal_stack(lf, a=a_values)
+        by_depth = lfproc.focal_stack(lf, z_um=fs.z_um)
+    assert run["printed"] == "" and list((tmp_path / "home").iterdir()) == []
+    assert fs.distance_mm is None and fs.aperture_f_number is None
+    np.testing.assert_allclose(by_depth.a, a_values, rtol=1e-9, atol=1e-12)
+    for i, a in enumerate(a_values):
+        name = f"capture_a{a:+.3f}"
+        sidecar = read_json(tmp_path / "cli" / f"{name}.json")
+        assert_same_record(fs.records()[i], sidecar)
+        for key in ("z_um", "z_near_um", "z_far_um", "dof_um"):
+            assert getattr(fs, key)[i] == pytest.approx(sidecar[key], rel=1e-9)
+        tiff = tifffile.imread(tmp_path / "cli" / f"{name}.tif")
+        np.testing.assert_allclose(fs.images[i], tiff.reshape(fs.images[i].shape), rtol=2e-7, atol=1e-7)
+    assert sidecar["provenance"]["inputs"]["camera"]["sha256"] == sha256(lfm / "lfm.toml")
+    fs.save(tmp_path / "api")
+    assert_same_files(tmp_path / "api", tmp_path / "cli")
+
+
+def test_each_input_is_hashed_once_per_process(tmp_path, monkeypatch):
+    import lfproc.provenance as prov
+
+    files = []
+    for name in ("a.bin", "b.bin"):
+        (tmp_path / name).write_bytes(name.encode() * 1000)
+        files.append(tmp_path / name)
+    calls = []
+
+    class CountingHashlib:
+        @staticmethod
+        def sha256(*args):
+            calls.append(1)
+            return hashlib.sha256(*args)
+
+    monkeypatch.setattr(prov, "hashlib", CountingHashlib)
+    first = prov.provenance({"capture": files[0], "white": files[1]})
+    again = prov.provenance({"white": files[1], "capture": str(files[0])})
+    assert first == again and len(calls) == 2
+    assert list(first["inputs"]) == ["capture", "white"]
+    assert first["inputs"]["white"]["sha256"] == sha256(files[1])
+    (tmp_path / "a.bin").write_bytes(b"changed, and longer than before")   # a new size: hashed again
+    assert prov.provenance({"capture": files[0]})["inputs"]["capture"]["sha256"] == sha256(files[0])
+    assert len(calls) == 3
+
+
+def test_decode_stores_its_inputs_and_outputs_of_the_light_field_name_them(tmp_path):
+    inputs = [SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--white", SAMPLE / "white.png"]
+    proc = run_cli("decode", *inputs, "-o", tmp_path / "lf.lfp.npz")
+    assert proc.returncode == 0, proc.stderr
+    proc = run_cli("views", tmp_path / "lf.lfp.npz", "--mosaic", "-o", tmp_path / "views")
+    assert proc.returncode == 0, proc.stderr
+    for name in ("lf_view_05_05.json", "lf_views_mosaic.json"):
+        recorded = read_json(tmp_path / "views" / name)["provenance"]["inputs"]
+        assert list(recorded) == ["light_field", "capture", "camera", "white"], name
+        assert recorded["light_field"]["sha256"] == sha256(tmp_path / "lf.lfp.npz")
+        assert recorded["capture"] == {"path": str(SAMPLE / "capture.png"), "sha256": sha256(SAMPLE / "capture.png")}
+
+
+def test_commands_keep_their_flags_in_errors(tmp_path):
+    proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--a", "1",
+                   "-o", tmp_path / "out")
+    assert proc.returncode == 2 and "--white WHITE" in proc.stderr and "white=" not in proc.stderr, proc.stderr
