@@ -67,7 +67,7 @@ def wobble_order(coords: list) -> list[int]:
 
 def _gif_writer(frames, tags):
     def write(target):
-        from ._previews import write_gif_frames
+        from ..io import write_gif_frames
 
         write_gif_frames(target, [np.ascontiguousarray(f, np.uint8) for f in frames], WOBBLE_FRAME_MS, tags)
     return write
@@ -78,7 +78,7 @@ def lambda_preview(lam: np.ndarray) -> np.ndarray:
     enlarged with Lanczos to about ``PREVIEW_LONG_SIDE_PX``, NaN grey, and a legend in lambda."""
     from PIL import Image, ImageDraw, ImageFont
 
-    from ._colours import UNKNOWN_COLOUR, colour_scale
+    from ..colours import UNKNOWN_COLOUR, colour_scale
 
     known = lam[np.isfinite(lam)]
     lo, hi = (float(v) for v in np.percentile(known, [1, 99])) if known.size else (-1.0, 1.0)
