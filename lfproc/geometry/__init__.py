@@ -14,7 +14,8 @@ uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), 
 """
 
 from ._aperture import aperture_limits, aperture_views, equivalent_f_number, summed_view_extent
-from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check
+from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check, \
+    working_f_number
 from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
                           na_views, plan_z_range, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
                           views_inside_na, z_per_a_um, pupil_positions_mm)
@@ -30,7 +31,7 @@ from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, vie
 __all__ = [
     "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent",
     "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
-    "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
+    "working_f_number", "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
     "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
     "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
     "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
