@@ -249,12 +249,15 @@ def test_an_a_whose_refocused_area_is_under_half_is_refused_with_the_usable_rang
     assert refocused_area(limit * 0.999) >= 0.5 > refocused_area(limit * 1.001)
     assert refocused_area(-limit * 0.999) >= 0.5 > refocused_area(-limit * 1.001)
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "400", "-o", tmp_path / "o")
-    assert_clean_error(proc, "a=400", f"{limit:.3g}", "mm")
+    assert_clean_error(proc, "a=400", "mm")
     assert not (tmp_path / "o").exists()
-    near = float(geometry.slice_distance_mm(camera, limit))
-    far = float(geometry.slice_distance_mm(camera, -limit))
-    assert far > near or math.isinf(far)
-    text = f"from {'infinity' if math.isinf(far) else f'{far:.1f} mm'} (a={-limit:+.3g}) to {near:.1f} mm (a=+{limit:.3g})"
+    # the whole usable range, low-to-high in a: from the slice at infinity (a = 0, the lens focused at
+    # infinity; not -limit, which focuses beyond it) to the area's bound, rounded inwards to 3 decimals
+    assert geometry.infinity_parameter(camera) == 0.0
+    printed = math.floor(limit * 1000 + 1e-6) / 1000
+    assert 0 < limit - printed < 1e-3
+    near = float(geometry.slice_distance_mm(camera, printed))
+    text = f"usable: a from +0 (infinity) to {printed:+.3f}".rstrip("0") + f" ({near:.1f} mm)"
     assert text in proc.stderr, proc.stderr
     # just inside the usable range: written, with one plain warning line about the wide border band
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", f"{0.98 * limit:.3f}", "-o", tmp_path / "in")
@@ -275,9 +278,12 @@ def test_slices_nearer_than_the_front_focal_plane_are_refused(sample, tmp_path):
         proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "o")
         assert_clean_error(proc, "front focal plane", f"{front:.1f} mm")
         assert not (tmp_path / "o").exists()
-    # a slice beyond infinity is allowed (its DOF reaches infinity, which its tags say)
-    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a=-0.3", "-o", tmp_path / "b")
-    assert proc.returncode == 0, proc.stderr
+    # a slice beyond infinity is refused too (issue 30: it was written tagged "in focus [inf, inf]"), and a
+    # sweep partly beyond it as a whole, before any work, with the usable range low-to-high
+    for option in (["--a=-0.3"], ["--a=-0.5:2"]):
+        proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "b")
+        assert_clean_error(proc, "beyond infinity", "a from +0 (infinity) to +inf", f"{front:.1f} mm")
+        assert not (tmp_path / "b").exists()
 
 
 def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file(tmp_path):

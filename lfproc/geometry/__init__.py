@@ -8,7 +8,7 @@ Private modules: ``_slices`` (distance, DOF and inverse, Eqs. 13–31), ``_plann
 uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), ``_triangulation``
 (baseline, tilt and distance of a disparity), ``_exit_pupil`` (micro image drift),
 ``_aperture`` (the summed views as an aperture: DOF extent, equivalent f-number, synthetic apertures),
-``_diffraction`` (Eq. 22), ``_ray_model`` (the model's parameters without a decoder's m̂),
+``_diffraction`` (Eq. 22), ``_range`` (the usable range of a: infinity to the front focal plane), ``_ray_model`` (the model's parameters without a decoder's m̂),
 ``_transfer`` (the main optics as a paraxial ray transfer: thick main lens or objective + tube lens),
 ``_microscope`` (a light-field microscope's slices in µm, view angles, aplanatic per-view shifts).
 """
@@ -20,6 +20,8 @@ from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, 
                           na_views, plan_z_range, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
                           views_inside_na, z_per_a_um, pupil_positions_mm)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
+from ._range import (check_usable_a, check_usable_distances, format_a, front_focal_plane_mm, usable_a_range,
+                     usable_range_text)
 from ._ray_model import RayModel
 from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
 from ._slices import SliceGeometry, infinity_parameter, refocus_parameter, slice_distance_mm, slice_geometry
@@ -32,7 +34,8 @@ __all__ = [
     "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent",
     "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
     "working_f_number", "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
-    "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
+    "check_usable_a", "check_usable_distances", "format_a", "front_focal_plane_mm", "usable_a_range",
+    "usable_range_text", "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range", "plan_slices", "uncovered_depths",
     "SliceGeometry", "infinity_parameter", "refocus_parameter", "slice_distance_mm", "slice_geometry",
     "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer",
     "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
