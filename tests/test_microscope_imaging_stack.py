@@ -95,7 +95,8 @@ def test_refocus_stack_of_a_photographic_capture_carries_distances(tmp_path):
         assert [s["a"] for s in info["slices"]] == [0.0, 0.5, 1.0]
         for s in info["slices"]:
             assert s["distance_mm"] == sidecars[s["a"]]["distance_mm"]
-        slice_half = tifffile.imread(out / "cap_a+0.500.tif")
+        [half_path] = out.glob("cap_01_z+*um.tif")         # a = 0, 0.5, 1 in focus order: 0.5 is second
+        slice_half = tifffile.imread(half_path)
         assert np.array_equal(data[1], np.squeeze(slice_half))
 
 

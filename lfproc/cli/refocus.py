@@ -92,13 +92,15 @@ def run(args) -> int:
         if args.preview:
             write_slice_previews(args.outdir, stems[path], stack, lf.camera, values, args.preview_format,
                                  view_mask=lf.view_mask)
+        stack_file = stack_path(args.outdir, stems[path], args.stack) if args.stack else None
         if args.stack:
-            write_focal_stack(stack_path(args.outdir, stems[path], args.stack), stack,
+            write_focal_stack(stack_file, stack,
                               slice_metadata(os.path.abspath(path), lf.camera, values, lf.view_mask, args.upsample),
                               kind=args.stack,
                               lens_um=lateral_um_per_lens(lf.camera), upsample=args.upsample)
         progress.update(len(values))
-        print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
+        print(f"{path}: {len(written)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_*"
+              + (f"; z-stack -> {stack_file}" if stack_file else ""))
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
 

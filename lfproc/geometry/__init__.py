@@ -18,7 +18,7 @@ from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWa
     working_f_number
 from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
                           na_views, plan_z_range, paraxial_depth_error, refocus_parameter_z, refocus_slopes, uses_aplanatic,
-                          views_inside_na, z_per_a_um, pupil_positions_mm)
+                          views_inside_na, z_per_a_um, pupil_positions_mm, z_step_advice, FINE_STEP_FACTOR)
 from ._exit_pupil import exit_pupil_from_scale, micro_image_scale, pupil_curvature, virtual_camera_plane_mm
 from ._range import (check_usable_a, check_usable_distances, format_a, front_focal_plane_mm, usable_a_range,
                      usable_range_text)
@@ -41,7 +41,7 @@ __all__ = [
     "MicroscopeViews", "aplanatic_gain", "lateral_sampling_um", "microscope_slices", "microscope_views", "na_views",
     "plan_z_range",    "paraxial_depth_error", "refocus_parameter_z", "refocus_slopes", "uses_aplanatic", "views_inside_na",
     "pupil_positions_mm",
-    "z_per_a_um",
+    "z_per_a_um", "z_step_advice", "FINE_STEP_FACTOR",
     "ViewGeometry", "baseline_mm", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
     "view_tilts_deg", "views_inside_aperture",
 ]

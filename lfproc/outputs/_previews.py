@@ -137,7 +137,7 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
     frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method, labels=labels)
     return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame,
                               {"preview": "refocused slice", "a": float(a), "label": label})
-            for name, frame, a, label in zip(slice_names(stem, a_values), frames, np.atleast_1d(a_values), labels)]
+            for name, frame, a, label in zip(slice_names(stem, a_values, camera), frames, np.atleast_1d(a_values), labels)]
 
 
 def view_label(camera, ky: int, kx: int, centre=None) -> str:
