@@ -133,7 +133,7 @@ def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_
     assert proc.returncode == 0, proc.stderr
     camera = Camera.from_toml(sample / "camera.toml")
     a = float(geometry.refocus_parameter(camera, 650.0))
-    slices = list(tmp_path.glob("capture_a*.tif"))
+    slices = list(tmp_path.glob("capture_*_a*.tif"))
     assert len(slices) == 1 and slices[0].stem == f"capture_a{a:+.3f}"
     from lfproc.io import read_image
     ny, nx = read_image(slices[0]).shape[:2]

@@ -213,13 +213,13 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, a_values, extent)
     if extent is not None:
-        print(f"{int(np.count_nonzero(view_mask))} views summed (f/{geometry.equivalent_f_number(camera, extent):.2g} "
-              f"equivalent); the DOF follows them", file=out)
+        print(f"{int(np.count_nonzero(view_mask))} views summed ({geometry.aperture_text(camera, extent)}); the DOF "
+              f"follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
     if geo.microscope:
         for r in geo.records():
-            print(f"  a={r['a']:+.4f}  z = {r['z_um']:.2f} um  in focus [{r['z_far_um']:.2f}, {r['z_near_um']:.2f}] um",
-                  file=out)
+            low, high = sorted((r['z_far_um'], r['z_near_um']))
+            print(f"  a={r['a']:+.4f}  z = {r['z_um']:+.2f} um  in focus [{low:+.2f}, {high:+.2f}] um", file=out)
         return
     for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)

@@ -13,7 +13,8 @@ uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), 
 ``_microscope`` (a light-field microscope's slices in µm, view angles, aplanatic per-view shifts).
 """
 
-from ._aperture import aperture_limits, aperture_views, equivalent_f_number, summed_view_extent
+from ._aperture import (aperture_limits, aperture_text, aperture_views, equivalent_f_number,
+                        equivalent_numerical_aperture, summed_view_extent)
 from ._diffraction import DEFAULT_WAVELENGTH_MM, DiffractionCheck, DiffractionWarning, airy_radius_mm, diffraction_check, \
     working_f_number
 from ._microscope import (MicroscopeViews, aplanatic_gain, lateral_sampling_um, microscope_slices, microscope_views,
@@ -31,7 +32,8 @@ from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, vie
                      view_tilts_deg, views_inside_aperture)
 
 __all__ = [
-    "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent",
+    "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent", "aperture_text",
+    "equivalent_numerical_aperture",
     "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
     "working_f_number", "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
     "check_usable_a", "check_usable_distances", "format_a", "front_focal_plane_mm", "usable_a_range",

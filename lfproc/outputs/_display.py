@@ -50,22 +50,85 @@ def as_rgb(image: np.ndarray) -> np.ndarray:
     return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image[:, :, :3]
 
 
+def _font(size: int):
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except (TypeError, OSError):  # Pillow < 10.1 or without FreeType: the small bitmap font
+        return ImageFont.load_default()
+
+
+def _text_width(font, text: str) -> int:
+    left, _, right, _ = font.getbbox(text)
+    return int(math.ceil(right - min(left, 0)))
+
+
+def label_layout(width: int, text: str, max_size: int | None = None) -> tuple[int, list[str], int, int]:
+    """(font size, lines, band height, margin) of a label under an image ``width`` pixels wide.
+
+    The largest font from ``max_size`` (width/34, 10 to 28 px) down to 8 px that holds the text on one
+    line inside the margins; below that, the text wraps at ``" | "`` and spaces (several lines, each
+    inside the margins). Every line is measured with the font that draws it, so no label is clipped.
+    """
+    size = max_size or max(10, min(28, width // 34))
+    margin = max(2, size // 3)
+    while size > 8 and _text_width(_font(size), text) > width - 2 * margin:
+        size -= 1
+        margin = max(2, size // 3)
+    font = _font(size)
+    lines = _wrap(font, text, width - 2 * margin)
+    step = int(round(size * 1.25))
+    band = int(round(size * 1.6)) + step * (len(lines) - 1)
+    return size, lines, band, margin
+
+
+def _wrap(font, text: str, room: int) -> list[str]:
+    """``text`` in lines no wider than ``room``: broken after ``" | "`` first, then at spaces, then anywhere."""
+    if _text_width(font, text) <= room:
+        return [text]
+    words = [w for part in text.split(" | ") for w in (part.split(" ") + ["|"])][:-1]
+    lines, line = [], ""
+    for word in words:
+        candidate = word if not line else f"{line} {word}"
+        if _text_width(font, candidate) <= room or not line:
+            line = candidate
+        else:
+            lines.append(line)
+            line = "" if word == "|" else word
+    if line:
+        lines.append(line)
+    out = []
+    for line in lines:   # a single word wider than the room: cut it
+        line = line.strip(" |")
+        while _text_width(font, line) > room and len(line) > 1:
+            cut = len(line)
+            while cut > 1 and _text_width(font, line[:cut]) > room:
+                cut -= 1
+            out.append(line[:cut])
+            line = line[cut:]
+        out.append(line)
+    return [line for line in out if line]
+
+
 def add_label(image: np.ndarray, text: str) -> np.ndarray:
-    """The 8-bit image with a black band below it holding ``text`` in white; returns ``(H + band, W, 3)``."""
-    from PIL import Image, ImageDraw, ImageFont
+    """The 8-bit image with a black band below it holding ``text`` in white; returns ``(H + band, W, 3)``.
+
+    The text never leaves the image (:func:`label_layout`: a smaller font, then more lines).
+    """
+    from PIL import Image, ImageDraw
 
     rgb = as_rgb(image)
     height, width = rgb.shape[:2]
-    size = max(10, min(28, width // 34))
-    band = int(round(size * 1.6))
+    size, lines, band, margin = label_layout(width, text)
+    font = _font(size)
     canvas = Image.new("RGB", (width, height + band), (0, 0, 0))
     canvas.paste(Image.fromarray(np.ascontiguousarray(rgb)), (0, 0))
-    try:
-        font = ImageFont.load_default(size=size)
-    except (TypeError, OSError):  # Pillow < 10.1 or without FreeType: the small bitmap font
-        font = ImageFont.load_default()
-    ImageDraw.Draw(canvas).text((max(2, size // 3), height + (band - size) // 2), text, fill=(255, 255, 255),
-                                font=font)
+    draw = ImageDraw.Draw(canvas)
+    step = int(round(size * 1.25))
+    top = height + (int(round(size * 1.6)) - size) // 2
+    for k, line in enumerate(lines):
+        draw.text((margin, top + k * step), line, fill=(255, 255, 255), font=font)
     return np.asarray(canvas)
 
 
