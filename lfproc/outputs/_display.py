@@ -1,15 +1,18 @@
-"""Display helpers for 8-bit previews: upscaling to a readable size, text labels, distances in metres.
+"""Display helpers for 8-bit previews: enlarging to a readable size, text labels, distances in metres.
 
 A light field's images have one pixel per micro lens (75 × 53 for the bundled sample), far too small
 to look at. Previews are enlarged by an integer factor until their long side reaches at least
-:data:`MIN_LONG_SIDE_PX` (default 512): ``"nearest"`` (the default) repeats each pixel, so every lens
-stays one visible block and nothing is invented; ``"smooth"`` resamples bicubically (Pillow), which
-looks softer and hides the lens grid. Labels are drawn with Pillow's built-in font in a black band
-added below the image, so they never hide image content.
+:data:`MIN_LONG_SIDE_PX` (default 512): ``"lanczos"`` (the default) resamples with OpenCV's Lanczos-4
+kernel (8 × 8 lenses), the band-limited interpolation between lens samples, so the picture shows what
+the lenses sampled without a lens grid of blocks; ``"nearest"`` repeats each pixel, so every lens
+stays one visible block (for inspecting single lenses); ``"smooth"`` resamples bicubically (Pillow).
+Labels are drawn with Pillow's default font in a black band added below the image, so they never hide
+image content, and are sized (smaller font, then more lines) so that they never leave it.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -18,7 +21,9 @@ from ..errors import LfprocError
 
 #: default smallest long side of a preview, in display pixels
 MIN_LONG_SIDE_PX = 512
-UPSCALE_METHODS = ("nearest", "smooth")
+UPSCALE_METHODS = ("lanczos", "nearest", "smooth")
+#: how previews are enlarged unless told otherwise
+DEFAULT_UPSCALE = "lanczos"
 
 
 def upscale_factor(shape, min_long_side: int = MIN_LONG_SIDE_PX) -> int:
@@ -27,14 +32,24 @@ def upscale_factor(shape, min_long_side: int = MIN_LONG_SIDE_PX) -> int:
     return max(1, math.ceil(min_long_side / long_side))
 
 
-def upscale(image: np.ndarray, factor: int, method: str = "nearest") -> np.ndarray:
-    """Enlarge an 8-bit ``(H, W)`` or ``(H, W, C)`` image by an integer ``factor`` (see module docstring)."""
+def upscale(image: np.ndarray, factor: int, method: str = DEFAULT_UPSCALE) -> np.ndarray:
+    """Enlarge an 8-bit ``(H, W)`` or ``(H, W, C)`` image by an integer ``factor`` (see module docstring).
+
+    Pixel centres keep their places (pixel j's centre lands at (j + 0.5)·factor); Lanczos ringing is
+    clipped to 0–255.
+    """
     if method not in UPSCALE_METHODS:
         raise LfprocError(f"unknown upscaling {method!r}; use one of {', '.join(UPSCALE_METHODS)}")
     if factor == 1:
         return image
     if method == "nearest":
         return np.repeat(np.repeat(image, factor, axis=0), factor, axis=1)
+    if method == "lanczos":
+        import cv2
+
+        size = (image.shape[1] * factor, image.shape[0] * factor)
+        out = cv2.resize(np.ascontiguousarray(image), size, interpolation=cv2.INTER_LANCZOS4)
+        return out.reshape(size[1], size[0], *image.shape[2:])
     from PIL import Image
 
     squeeze = image.ndim == 3 and image.shape[2] == 1
@@ -50,6 +65,7 @@ def as_rgb(image: np.ndarray) -> np.ndarray:
     return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image[:, :, :3]
 
 
+@functools.lru_cache(maxsize=64)
 def _font(size: int):
     from PIL import ImageFont
 
@@ -112,23 +128,25 @@ def _wrap(font, text: str, room: int) -> list[str]:
 
 
 def add_label(image: np.ndarray, text: str) -> np.ndarray:
-    """The 8-bit image with a black band below it holding ``text`` in white; returns ``(H + band, W, 3)``.
+    """The 8-bit image with a black band below it holding ``text`` in white: ``(H + band, W)`` for a grey
+    ``(H, W)`` image, else ``(H + band, W, 3)``.
 
     The text never leaves the image (:func:`label_layout`: a smaller font, then more lines).
     """
     from PIL import Image, ImageDraw
 
-    rgb = as_rgb(image)
-    height, width = rgb.shape[:2]
+    grey = image.ndim == 2
+    pixels = image if grey else as_rgb(image)
+    height, width = pixels.shape[:2]
     size, lines, band, margin = label_layout(width, text)
     font = _font(size)
-    canvas = Image.new("RGB", (width, height + band), (0, 0, 0))
-    canvas.paste(Image.fromarray(np.ascontiguousarray(rgb)), (0, 0))
+    canvas = Image.new("L" if grey else "RGB", (width, height + band), 0 if grey else (0, 0, 0))
+    canvas.paste(Image.fromarray(np.ascontiguousarray(pixels)), (0, 0))
     draw = ImageDraw.Draw(canvas)
     step = int(round(size * 1.25))
     top = height + (int(round(size * 1.6)) - size) // 2
     for k, line in enumerate(lines):
-        draw.text((margin, top + k * step), line, fill=(255, 255, 255), font=font)
+        draw.text((margin, top + k * step), line, fill=255 if grey else (255, 255, 255), font=font)
     return np.asarray(canvas)
 
 

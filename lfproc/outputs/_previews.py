@@ -1,7 +1,7 @@
 """Pictures for people: refocus and view animations, mosaic previews (8-bit sRGB, enlarged, labelled).
 
 Each preview is tone-mapped with one exposure for all its frames (:class:`ToneMap`, documented
-there), enlarged to at least :data:`MIN_LONG_SIDE_PX` on its long side (:func:`upscale`, nearest by
+there), enlarged to at least :data:`MIN_LONG_SIDE_PX` on its long side (:func:`upscale`, Lanczos by
 default) and, for focal stacks, each frame is labelled with its distance and depth of field in
 metres. The linear TIFF/EXR outputs stay the data products; these files are for looking at. PNG/JPEG
 previews embed what they show and their label (:func:`write_png_preview`), for ``lfproc info``.
@@ -17,7 +17,7 @@ from .. import geometry
 from ..atomic import atomic_path, json_safe
 from ..errors import LfprocError
 from ..viewpoints import circular_walk
-from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
+from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._names import slice_names, view_name
 from ._products import mosaic_of_shown
 from ._tone import ToneMap
@@ -26,16 +26,24 @@ SLICE_FRAME_MS, VIEW_FRAME_MS = 400, 80
 
 
 def display_frames(images, tone: ToneMap | None = None, min_long_side: int = MIN_LONG_SIDE_PX,
-                   method: str = "nearest", labels=None) -> list[np.ndarray]:
-    """8-bit RGB display frames of linear images: one exposure, enlarged, optionally labelled."""
+                   method: str = DEFAULT_UPSCALE, labels=None) -> list[np.ndarray]:
+    """8-bit display frames of linear images (grey ``(H, W)`` or RGB ``(H, W, 3)``): one exposure, enlarged
+    (``method``: :func:`upscale`), optionally labelled."""
     images = np.asarray(images)
     tone = tone or ToneMap.for_images(images)
     factor = upscale_factor(images.shape[1:], min_long_side)
     frames = []
     for k, image in enumerate(images):
-        frame = as_rgb(upscale(tone(image), factor, method))
+        frame = _grey_or_rgb(upscale(tone(image), factor, method))
         frames.append(add_label(frame, labels[k]) if labels is not None else frame)
     return frames
+
+
+def _grey_or_rgb(image: np.ndarray) -> np.ndarray:
+    """``(H, W)`` for a one-channel image (a third of the bytes to encode), ``(H, W, 3)`` otherwise."""
+    if image.ndim == 3 and image.shape[2] == 1:
+        return image[:, :, 0]
+    return image if image.ndim == 2 else as_rgb(image)
 
 
 def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float, tags: dict | None = None) -> str:
@@ -63,6 +71,9 @@ def write_gif_frames(path: str | os.PathLike, frames, duration_ms: float, tags: 
 
 PREVIEW_FORMATS = {"png": ".png", "jpeg": ".jpg"}
 _JPEG_PREVIEW_QUALITY = 92
+#: zlib level of PNG previews: 1 encodes a smooth (Lanczos) picture ~5x faster than Pillow's default 6 for
+#: files ~15 % larger (a preview must cost a small fraction of the refocus it shows; docs/benchmarks-commands.md)
+_PNG_PREVIEW_LEVEL = 1
 
 
 def write_png_preview(path: str | os.PathLike, image: np.ndarray, tags: dict | None = None) -> str:
@@ -83,7 +94,7 @@ def write_png_preview(path: str | os.PathLike, image: np.ndarray, tags: dict | N
             if jpeg:
                 picture.save(tmp, format="JPEG", quality=_JPEG_PREVIEW_QUALITY, **_embedded(tags, jpeg))
             else:
-                picture.save(tmp, format="PNG", **_embedded(tags, jpeg))
+                picture.save(tmp, format="PNG", compress_level=_PNG_PREVIEW_LEVEL, **_embedded(tags, jpeg))
     except OSError as exc:
         raise LfprocError(f"{path}: cannot write {'JPEG' if jpeg else 'PNG'} ({exc.strerror or exc}); check the "
                           f"folder and permissions") from None
@@ -126,7 +137,7 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
 
 
 def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_values, fmt: str = "png", *,
-                         view_mask=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> list[str]:
+                         view_mask=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE) -> list[str]:
     """Display-ready pictures of refocused slices: ``OUTDIR/NAME_preview.png`` (or ``.jpg``) beside each slice.
 
     One exposure for the whole stack (:class:`ToneMap`), so slices compare; enlarged to at least
@@ -157,7 +168,7 @@ def view_label(camera, ky: int, kx: int, centre=None) -> str:
 
 def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None, camera,
                         fmt: str = "png", *, min_long_side: int = MIN_LONG_SIDE_PX,
-                        method: str = "nearest", centre=None) -> list[str]:
+                        method: str = DEFAULT_UPSCALE, centre=None) -> list[str]:
     """Display-ready pictures of the views ``keep`` marks: ``OUTDIR/STEM_view_KY_KX_preview.png``, one exposure."""
     m = views.shape[0]
     chosen = [(ky, kx) for ky in range(m) for kx in range(m) if keep is None or keep[ky, kx]]
@@ -174,7 +185,7 @@ def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndar
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_values=None, *,
-                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", view_mask=None) -> str:
+                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE, view_mask=None) -> str:
     """An animation running through a focal stack in the given order and back: ``OUTDIR/STEM_refocus.gif``.
 
     With ``camera`` and ``a_values`` (one per image) each frame is labelled with its distance and DOF
@@ -193,7 +204,7 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
 
 
 def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray | None = None, camera=None, *,
-                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", centre=None) -> str:
+                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE, centre=None) -> str:
     """An animation walking the views along a circle inside the aperture: ``OUTDIR/STEM_views.gif``.
 
     With ``camera`` each frame is labelled with its view and its virtual camera's distance from the
@@ -209,7 +220,7 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
 
 
 def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None = None, *,
-                         camera=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                         camera=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE) -> str:
     """The view mosaic as an 8-bit PNG for looking at: ``OUTDIR/STEM_views_mosaic_preview.png``.
 
     Like the mosaic data product it shows the views ``keep`` marks, cropped to their rows and columns
