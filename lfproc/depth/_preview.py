@@ -15,7 +15,8 @@ import numpy as np
 from ..outputs import UNKNOWN_COLOUR as UNKNOWN_RGB
 from ..outputs import colour_scale
 
-#: the preview's depth map is enlarged (nearest) to about this many pixels on its long side
+#: the preview's depth map is enlarged (Lanczos, unknown lenses kept unknown: :func:`enlarge_scale`) to about
+#: this many pixels on its long side
 TARGET_SIZE_PX = 480
 
 
@@ -81,6 +82,34 @@ def _z_scale(z_um: np.ndarray):
     return t, ticks, "z (um)"
 
 
+def enlarge_scale(t: np.ndarray, unknown: np.ndarray, scale: int) -> np.ndarray:
+    """uint8 RGB of the colour position ``t`` per lens enlarged ``scale`` times, unknown lenses kept unknown.
+
+    The known lenses are resampled with OpenCV's Lanczos-4 kernel (as the other previews,
+    :func:`lfproc.outputs.upscale`), after each unknown lens took its nearest known lens's value, so that
+    no unknown value leaks into the colours around it; every display pixel whose nearest lens is unknown
+    is then grey (:data:`lfproc.outputs.UNKNOWN_COLOUR`): unknown stays unknown, exactly where it was.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    unknown = np.asarray(unknown, bool) | ~np.isfinite(t)
+    if scale == 1 or unknown.all():
+        rgb = colour_map(np.nan_to_num(t))
+        rgb[unknown] = UNKNOWN_RGB
+        return np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
+    import cv2
+    from scipy.ndimage import distance_transform_edt
+
+    filled = t
+    if unknown.any():
+        nearest = distance_transform_edt(unknown, return_distances=False, return_indices=True)
+        filled = t[tuple(nearest)]
+    ny, nx = t.shape
+    smooth = cv2.resize(filled.astype(np.float32), (nx * scale, ny * scale), interpolation=cv2.INTER_LANCZOS4)
+    rgb = colour_map(smooth)
+    rgb[np.repeat(np.repeat(unknown, scale, axis=0), scale, axis=1)] = UNKNOWN_RGB
+    return rgb
+
+
 def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> np.ndarray:
     """uint8 RGB ``(H, W, 3)``: the enlarged colour-mapped depth map with a legend on its right.
 
@@ -91,11 +120,9 @@ def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None
 
     values = distance_mm if z_um is None else z_um
     t, ticks, title = _distance_scale(distance_mm) if z_um is None else _z_scale(z_um)
-    rgb = colour_map(np.nan_to_num(t))
-    rgb[np.isnan(values)] = UNKNOWN_RGB
     ny, nx = values.shape
     scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
-    body = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
+    body = enlarge_scale(t, np.isnan(values), scale)
     height = max(body.shape[0], 160)
     bar_w, margin, label_w = 18, 10, 80
     canvas = Image.new("RGB", (body.shape[1] + margin + bar_w + label_w, height + 2 * margin), (255, 255, 255))

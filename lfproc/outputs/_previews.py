@@ -19,7 +19,7 @@ from ..errors import LfprocError
 from ..viewpoints import circular_walk
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._names import slice_names, view_name
-from ._products import mosaic_of_shown
+from ._products import mosaic_of_shown, shown_block
 from ._tone import ToneMap
 
 SLICE_FRAME_MS, VIEW_FRAME_MS = 400, 80
@@ -236,6 +236,16 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
         label += f" | {geometry.lateral_sampling_um(camera):.3g} um per lens"
     elif camera is not None:
         label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
-    frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
+    factor = upscale_factor(tiled.shape, min_long_side)
+    if factor > 1 and method != "nearest":   # each view enlarged alone: none bleeds into its neighbours or gaps
+        from ..viewpoints import mosaic
+
+        rows, cols = shown_block(keep, m)
+        lit = np.ones((m, m), bool) if keep is None else np.asarray(keep, bool)
+        big = np.stack([np.stack([upscale(tone(views[ky, kx]), factor, method) * np.uint8(lit[ky, kx])
+                                  for kx in range(cols.start, cols.stop)]) for ky in range(rows.start, rows.stop)])
+        frame = add_label(_grey_or_rgb(mosaic(big, gap=factor).astype(np.uint8)), label)
+    else:
+        frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
     return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame,
                              {"preview": "view mosaic", "views_shown": shown, "views_per_side": m, "label": label})
