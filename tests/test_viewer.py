@@ -88,7 +88,7 @@ def test_slice_label_gives_distance_and_dof_in_metres():
     cam = scene_camera()
     rec = geometry.slice_geometry(cam, 1.3).records()[0]
     text = slice_label(rec["distance_mm"], rec["near_mm"], rec["far_mm"])
-    assert text == (f"focus {rec['distance_mm'] / 1000:.3f} m | DOF {rec['near_mm'] / 1000:.3f} m - "
+    assert text == (f"focus {rec['distance_mm'] / 1000:.3f} m | DOF {rec['near_mm'] / 1000:.3f} m to "
                     f"{rec['far_mm'] / 1000:.3f} m")
     assert metres(1236.4) == "1.24 m" and metres(float("inf")) == "inf" and metres(658.99) == "0.659 m"
 

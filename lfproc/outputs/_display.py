@@ -161,5 +161,5 @@ def metres(distance_mm: float | None) -> str:
 
 
 def slice_label(distance_mm: float, near_mm: float, far_mm: float) -> str:
-    """``"focus 0.659 m | DOF 0.558 m - 0.782 m"``: the text each refocus frame carries."""
-    return f"focus {metres(distance_mm)} | DOF {metres(near_mm)} - {metres(far_mm)}"
+    """``"focus 0.659 m | DOF 0.558 m to 0.782 m"``: the text each refocus frame carries, near to far."""
+    return f"focus {metres(distance_mm)} | DOF {metres(near_mm)} to {metres(far_mm)}"

@@ -131,7 +131,8 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
     if geo.microscope:   # µm from the native object plane, positive towards the objective
-        return [f"z {r['z_um']:+.1f} um | DOF {r['z_far_um']:+.1f} - {r['z_near_um']:+.1f} um" for r in geo.records()]
+        return [f"z {r['z_um']:+.1f} um | DOF {min(r['z_far_um'], r['z_near_um']):+.1f} to "
+                f"{max(r['z_far_um'], r['z_near_um']):+.1f} um" for r in geo.records()]   # low to high
     return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
                                                        np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
 
