@@ -36,7 +36,7 @@ class PageOptions:
     """How a page shows its images: enlarged to ``min_long_side`` px by ``upscale`` (nearest or smooth)."""
 
     min_long_side: int = MIN_LONG_SIDE_PX
-    upscale: str = "nearest"
+    upscale: str = "smooth"
 
 
 def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibration: dict | None = None,

@@ -42,7 +42,9 @@
   var width = nx * data.display.scale, height = ny * data.display.scale;
   [photo, depth].forEach(function (img) {
     img.width = width; img.height = height;
-    if (data.display.upscale === "nearest") { img.classList.add("pixelated"); }
+    // the depth map stays one block per lens whatever the upscaling: an unknown (grey) lens must not blend
+    // into its known neighbours, and a click reads the lens under it
+    if (data.display.upscale === "nearest" || img === depth) { img.classList.add("pixelated"); }
   });
   $("frame").style.width = width + "px";
   $("title").textContent = "lfproc viewer: " + data.stem;
