@@ -143,13 +143,23 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
 
     One exposure for the whole stack (:class:`ToneMap`), so slices compare; enlarged to at least
     ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres (of the views
-    ``view_mask`` marks: those summed).
+    ``view_mask`` marks: those summed). Up to four slices are enlarged and written at a time.
     """
+    from concurrent.futures import ThreadPoolExecutor
+
+    images = np.asarray(images)
     labels = slice_labels(camera, a_values, view_mask)
-    frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method, labels=labels)
-    return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame,
-                              {"preview": "refocused slice", "a": float(a), "label": label})
-            for name, frame, a, label in zip(slice_names(stem, a_values, camera), frames, np.atleast_1d(a_values), labels)]
+    tone = ToneMap.for_images(images)
+    names = slice_names(stem, a_values, camera)
+    a_list = [float(a) for a in np.atleast_1d(a_values)]
+
+    def one(k: int) -> str:   # enlarging (OpenCV) and encoding (zlib) release the GIL: slices in parallel
+        frame = display_frames(images[k][None], tone, min_long_side, method, [labels[k]])[0]
+        return write_png_preview(os.path.join(outdir, f"{names[k]}_preview{PREVIEW_FORMATS[fmt]}"), frame,
+                                 {"preview": "refocused slice", "a": a_list[k], "label": labels[k]})
+
+    with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1, max(len(names), 1))) as pool:
+        return list(pool.map(one, range(len(names))))
 
 
 def view_label(camera, ky: int, kx: int, centre=None) -> str:
