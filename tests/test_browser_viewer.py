@@ -68,6 +68,40 @@ def page(tmp_path_factory):
     return dict(truth, out=out, data=data)
 
 
+_LEGEND_BOXES = """
+var box = document.getElementById('legend-ticks').getBoundingClientRect();
+return [[box.left, box.right]].concat(Array.prototype.map.call(document.querySelectorAll('#legend-ticks span'),
+  function (s) { var r = s.getBoundingClientRect();
+                 return [r.left, r.right, getComputedStyle(s).visibility !== 'hidden']; }));
+"""
+
+
+def assert_legend_labels_apart(browser):
+    """Issue 32 ("-12.72 µm-6.36 µm"): with the widest tick labels the page can show, at several window
+    widths, the visible legend labels stay inside the legend and apart from each other."""
+    import time
+
+    size = browser.get_window_size()
+    try:
+        _legend_at_widths(browser, time)
+    finally:
+        browser.set_window_size(size["width"], size["height"])
+        browser.refresh()
+
+
+def _legend_at_widths(browser, time):
+    for width in (1400, 900, 600):
+        browser.set_window_size(width, 1000)
+        browser.execute_script("document.querySelectorAll('#legend-ticks span').forEach(function (s) {"
+                               "s.textContent = '-12345.67 \u00b5m'; }); window.dispatchEvent(new Event('resize'));")
+        time.sleep(0.2)
+        (left, right), *spans = browser.execute_script(_LEGEND_BOXES)
+        shown = sorted((a, b) for a, b, visible in spans if visible)
+        assert len(shown) >= (2 if width >= 1400 else 1), (width, spans)
+        assert all(left - 0.5 <= a and b <= right + 0.5 for a, b in shown), (width, left, right, shown)
+        assert all(b0 + 1 <= a1 for (_, b0), (a1, _) in zip(shown, shown[1:])), (width, shown)
+
+
 def _open(browser, page):
     from selenium.webdriver.support.ui import WebDriverWait
 
@@ -213,3 +247,8 @@ def test_aperture_control_and_viewpoint_marker(browser, page):
     # kx + 1: near things move left in the picture (Eq. 9: view k is read at j + a(c - k)), so the camera
     # moved right, and so does its marker
     assert after > before
+
+
+def test_depth_legend_labels_stay_inside_and_apart(browser, page):
+    _open(browser, page)
+    assert_legend_labels_apart(browser)

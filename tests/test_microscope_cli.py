@@ -15,7 +15,7 @@ import tifffile
 from lfproc import Camera
 
 from conftest import SAMPLES, assert_clean_error, run_cli
-from test_browser_viewer import _click_lens, browser  # noqa: F401  (the browser fixture)
+from test_browser_viewer import _click_lens, assert_legend_labels_apart, browser  # noqa: F401  (the fixture)
 from scopefile import microscope_toml
 from whitegen import covering_grid, white_image
 
@@ -170,3 +170,8 @@ def test_viewer_page_reads_micrometres_in_the_browser(lfm, browser):
     assert here.endswith(" µm") or here == "unknown", here
     assert "µm" in browser.find_element("id", "slice-readout").text
     assert "native object plane" in browser.find_element("id", "depth-method").text
+    # issue 32: a DOF reads from low to high z ("sharp from 1.71 µm to -1.71 µm" was backwards)
+    import re
+    ends = re.search(r"sharp from (-?[\d.]+) µm to (-?[\d.]+) µm", browser.find_element("id", "slice-readout").text)
+    assert ends and float(ends.group(1)) < float(ends.group(2)), browser.find_element("id", "slice-readout").text
+    assert_legend_labels_apart(browser)
