@@ -71,11 +71,11 @@ def test_refocus_preview_and_jpeg_use_the_display_range(sample_lf, tmp_path):
     assert proc.returncode == 0, proc.stderr
     from PIL import Image
     jpegs = []
-    for a in ("+1.000", "+2.000"):
-        sidecar = json.loads((tmp_path / f"sample_a{a}.json").read_text())
-        jpegs.append(np.asarray(Image.open(tmp_path / f"sample_a{a}.jpg")))
+    for a in ("00_a+1.000", "01_a+2.000"):
+        sidecar = json.loads((tmp_path / f"sample_{a}.json").read_text())
+        jpegs.append(np.asarray(Image.open(tmp_path / f"sample_{a}.jpg")))
         assert "tone_map" in sidecar
-        preview = np.asarray(Image.open(tmp_path / f"sample_a{a}_preview.png"))
+        preview = np.asarray(Image.open(tmp_path / f"sample_{a}_preview.png"))
         assert preview.shape[1] >= 512 and preview.shape[2] == 3
         assert preview.shape[0] > 512 * jpegs[-1].shape[0] / jpegs[-1].shape[1]   # the image plus its label band
         assert np.median(preview[-10:]) == 0 and preview[-10:].max() == 255
