@@ -78,12 +78,15 @@ def usable_range_text(camera, a_low: float | None = None, a_high: float | None =
     area) are narrowed to it. The printed ends are rounded inwards, so they can be typed back.
     """
     low, high = usable_a_range(camera)
+    at_infinity = a_low is None or float(a_low) <= low
     if a_low is not None:
         low = max(low, float(a_low))
     if a_high is not None:
         high = min(high, float(a_high))
     lo_text, hi_text = format_a(low, +1), format_a(high, -1)
-    return (f"a from {lo_text} ({_where(camera, float(lo_text))}) to "
+    far = ("infinity" if at_infinity and getattr(camera, "microscope", None) is None
+           else _where(camera, float(lo_text)))
+    return (f"a from {lo_text} ({far}) to "
             f"{hi_text} ({_where(camera, float(hi_text) if math.isfinite(high) else high)})")
 
 
