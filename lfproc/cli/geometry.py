@@ -95,11 +95,14 @@ def with_aperture_tags(report: dict, aperture: dict) -> dict:
     return report
 
 
-def aperture_line(aperture: dict) -> str:
+def aperture_line(aperture: dict, camera=None) -> str:
     tags = aperture["tags"]
     if aperture["f_number"] is None:
         return ""
     equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
+    if camera is not None and camera.is_microscope and tags:   # microscopists read NA (issue 32)
+        from .. import geometry
+        equivalent = f" ({geometry.aperture_text(camera, aperture['extent'])})"
     summed = f"{tags['views_summed']} views summed{equivalent}" if tags else "all views summed"
     return f"synthetic aperture f/{aperture['f_number']:g}: {summed}; the DOF follows them\n"
 
@@ -118,7 +121,7 @@ def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
     if args.json:
         print(dumps_strict(with_aperture_tags(microscope_report(camera, slices, views), aperture)))
         return 0
-    sys.stdout.write(aperture_line(aperture) + format_microscope_table(camera, slices, views, args.camera))
+    sys.stdout.write(aperture_line(aperture, camera) + format_microscope_table(camera, slices, views, args.camera))
     return 0
 
 
