@@ -159,7 +159,7 @@ def test_slider_and_viewpoint_change_the_picture_and_a_screenshot_is_taken(brows
     slider = browser.find_element("id", "slider")
     start = int(slider.get_attribute("value"))
     before_src, before_png = photo.get_attribute("src"), photo.screenshot_as_png
-    slider.send_keys(Keys.ARROW_LEFT if start == len(slices) - 1 else Keys.ARROW_RIGHT)
+    slider.send_keys(Keys.ARROW_DOWN if start == len(slices) - 1 else Keys.ARROW_UP)   # any slider direction
     moved = int(slider.get_attribute("value"))
     assert moved != start and photo.get_attribute("src").endswith(slices[moved]["image"])
     assert photo.screenshot_as_png != before_png
@@ -252,3 +252,18 @@ def test_aperture_control_and_viewpoint_marker(browser, page):
 def test_depth_legend_labels_stay_inside_and_apart(browser, page):
     _open(browser, page)
     assert_legend_labels_apart(browser)
+
+
+def test_the_focus_slider_reads_near_to_far(browser, page):
+    """Issue 32: ranges read near to far: the slider's labels grow from left to right, and its left end is the
+    nearest slice."""
+    import re
+
+    _open(browser, page)
+    spans = browser.find_elements("css selector", "#slider-labels span")
+    placed = sorted((s.location["x"], float(re.match(r"([\d.]+) m", s.text).group(1))) for s in spans)
+    metres = [m for _, m in placed]
+    assert len(metres) >= 2 and metres == sorted(metres), placed
+    slider = browser.find_element("id", "slider")
+    direction = browser.execute_script("return getComputedStyle(arguments[0]).direction;", slider)
+    assert direction == "rtl"                               # index 0 (the farthest slice) on the right

@@ -193,12 +193,16 @@
   // ---------------------------------------------------------------- slider over the slices, in metres
   slider.max = String(slices.length - 1);
   slider.addEventListener("input", function () { showSlice(Number(slider.value)); });
+  // a camera's slices read near (left) to far like every range on the page; a microscope's low to high z
+  if (!micro) { slider.style.direction = "rtl"; }
   var labels = $("slider-labels"), every = Math.max(1, Math.ceil(slices.length / 6));
-  slices.forEach(function (s, k) {
+  var order = slices.map(function (s, k) { return k; });
+  if (!micro) { order.reverse(); }
+  order.forEach(function (k) {
     if (k % every !== 0 && k !== slices.length - 1) { return; }
-    var span = document.createElement("span");
-    span.textContent = depthText(at(s));
-    span.style.left = (slices.length > 1 ? k / (slices.length - 1) * 100 : 50) + "%";
+    var span = document.createElement("span"), place = slices.length > 1 ? k / (slices.length - 1) : 0.5;
+    span.textContent = depthText(at(slices[k]));
+    span.style.left = ((micro ? place : 1 - place) * 100) + "%";
     labels.appendChild(span);
   });
 
