@@ -175,7 +175,7 @@ def test_refocus_bad_inputs_fail_cleanly_and_write_nothing(capture, tmp_path):
     base = [folder / "capture.png", "--camera", folder / "camera.toml", "-o", out]
     assert_clean_error(run_cli("refocus", *base, "--white", tmp_path / "missing.png", "--a", "1"), "missing.png")
     assert_clean_error(run_cli("refocus", *base, "--white", folder / "white.png", "--depth-range", "10:20"),
-                       "depth range")
+                       "--depth-range 10:20", "front focal plane", "usable")
     assert_clean_error(run_cli("refocus", *base, "--white", folder / "white.png", "--at", "20"), "20")
     assert_clean_error(run_cli("refocus", *base, "--a", "1"), "--white")
     small = tmp_path / "small.png"
