@@ -124,7 +124,7 @@ def test_decoded_light_fields_are_inputs_of_refocus_views_and_batch(sample, tmp_
     assert len(list((tmp_path / "v").glob("cap_view_*.tif"))) == (m * m if lit is None else int(lit.sum()))
     proc = run_cli("batch", lf_path, "--a", "0,1", "--workers", "1", "-o", tmp_path / "b")
     assert proc.returncode == 0, proc.stderr
-    assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_a+0.000.tif", "cap_00_a+1.000.tif"]
+    assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_00_a+0.000.tif", "cap_01_a+1.000.tif"]
 
 
 def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_path):
@@ -134,7 +134,7 @@ def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_
     camera = Camera.from_toml(sample / "camera.toml")
     a = float(geometry.refocus_parameter(camera, 650.0))
     slices = list(tmp_path.glob("capture_*_a*.tif"))
-    assert len(slices) == 1 and slices[0].stem == f"capture_a{a:+.3f}"
+    assert len(slices) == 1 and slices[0].stem == f"capture_00_a{a:+.3f}"
     from lfproc.io import read_image
     ny, nx = read_image(slices[0]).shape[:2]
     views = sorted(tmp_path.glob("capture_view_*.tif"))
