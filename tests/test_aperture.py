@@ -157,7 +157,7 @@ def test_cli_aperture_tags_and_errors(tmp_path):
     assert not (tmp_path / "w").exists() and not (tmp_path / "n").exists()
     proc = run_cli("refocus", *base, "--a", "1", "--aperture", "8", "-o", tmp_path / "o")
     assert proc.returncode == 0, proc.stderr
-    tags = json.loads((tmp_path / "o" / "capture_a+1.000.json").read_text())
+    tags = json.loads((tmp_path / "o" / "capture_00_a+1.000.json").read_text())
     camera = Camera.from_toml(sample / "camera.toml")
     keep = g.aperture_views(camera, 8.0)
     assert tags["views_summed"] <= keep.sum()

@@ -154,7 +154,7 @@ def test_batch_outputs_are_those_of_lfproc_refocus(data, reference, tmp_path):
                    "--white", data / "white.png", "--a", REFOCUS, "-o", tmp_path)
     assert proc.returncode == 0, proc.stderr
     single = tree_bytes(tmp_path)
-    assert sorted(single) == ["cap0_a+0.000.json", "cap0_a+0.000.tif", "cap0_a+1.500.json", "cap0_a+1.500.tif"]
+    assert sorted(single) == ["cap0_00_a+0.000.json", "cap0_00_a+0.000.tif", "cap0_01_a+1.500.json", "cap0_01_a+1.500.tif"]
     assert single == {name: reference[1][name] for name in single}
 
 
@@ -227,7 +227,7 @@ def test_rerun_skips_everything_and_redoes_exactly_what_changed(data, reference,
 
     assert main(batch_argv(data, out, "--workers", "1", refocus="0,2")) == 0  # a changed parameter: all redone
     assert statuses(out) == {f"cap{i}.png": ("done", "done") for i in range(4)}
-    assert all((out / f"cap{i}_a+2.000.tif").is_file() for i in range(4))
+    assert all((out / f"cap{i}_01_a+2.000.tif").is_file() for i in range(4))
     assert manifest(out)["captures"][str(data / "captures" / "cap0.png")]["parameters"]["refocus_a"] == [0.0, 2.0]
 
 

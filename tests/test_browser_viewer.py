@@ -68,6 +68,40 @@ def page(tmp_path_factory):
     return dict(truth, out=out, data=data)
 
 
+_LEGEND_BOXES = """
+var box = document.getElementById('legend-ticks').getBoundingClientRect();
+return [[box.left, box.right]].concat(Array.prototype.map.call(document.querySelectorAll('#legend-ticks span'),
+  function (s) { var r = s.getBoundingClientRect();
+                 return [r.left, r.right, getComputedStyle(s).visibility !== 'hidden']; }));
+"""
+
+
+def assert_legend_labels_apart(browser):
+    """Issue 32 ("-12.72 µm-6.36 µm"): with the widest tick labels the page can show, at several window
+    widths, the visible legend labels stay inside the legend and apart from each other."""
+    import time
+
+    size = browser.get_window_size()
+    try:
+        _legend_at_widths(browser, time)
+    finally:
+        browser.set_window_size(size["width"], size["height"])
+        browser.refresh()
+
+
+def _legend_at_widths(browser, time):
+    for width in (1400, 900, 600):
+        browser.set_window_size(width, 1000)
+        browser.execute_script("document.querySelectorAll('#legend-ticks span').forEach(function (s) {"
+                               "s.textContent = '-12345.67 \u00b5m'; }); window.dispatchEvent(new Event('resize'));")
+        time.sleep(0.2)
+        (left, right), *spans = browser.execute_script(_LEGEND_BOXES)
+        shown = sorted((a, b) for a, b, visible in spans if visible)
+        assert len(shown) >= (2 if width >= 1400 else 1), (width, spans)
+        assert all(left - 0.5 <= a and b <= right + 0.5 for a, b in shown), (width, left, right, shown)
+        assert all(b0 + 1 <= a1 for (_, b0), (a1, _) in zip(shown, shown[1:])), (width, shown)
+
+
 def _open(browser, page):
     from selenium.webdriver.support.ui import WebDriverWait
 
@@ -125,7 +159,7 @@ def test_slider_and_viewpoint_change_the_picture_and_a_screenshot_is_taken(brows
     slider = browser.find_element("id", "slider")
     start = int(slider.get_attribute("value"))
     before_src, before_png = photo.get_attribute("src"), photo.screenshot_as_png
-    slider.send_keys(Keys.ARROW_LEFT if start == len(slices) - 1 else Keys.ARROW_RIGHT)
+    slider.send_keys(Keys.ARROW_DOWN if start == len(slices) - 1 else Keys.ARROW_UP)   # any slider direction
     moved = int(slider.get_attribute("value"))
     assert moved != start and photo.get_attribute("src").endswith(slices[moved]["image"])
     assert photo.screenshot_as_png != before_png
@@ -213,3 +247,23 @@ def test_aperture_control_and_viewpoint_marker(browser, page):
     # kx + 1: near things move left in the picture (Eq. 9: view k is read at j + a(c - k)), so the camera
     # moved right, and so does its marker
     assert after > before
+
+
+def test_depth_legend_labels_stay_inside_and_apart(browser, page):
+    _open(browser, page)
+    assert_legend_labels_apart(browser)
+
+
+def test_the_focus_slider_reads_near_to_far(browser, page):
+    """Issue 32: ranges read near to far: the slider's labels grow from left to right, and its left end is the
+    nearest slice."""
+    import re
+
+    _open(browser, page)
+    spans = browser.find_elements("css selector", "#slider-labels span")
+    placed = sorted((s.location["x"], float(re.match(r"([\d.]+) m", s.text).group(1))) for s in spans)
+    metres = [m for _, m in placed]
+    assert len(metres) >= 2 and metres == sorted(metres), placed
+    slider = browser.find_element("id", "slider")
+    direction = browser.execute_script("return getComputedStyle(arguments[0]).direction;", slider)
+    assert direction == "rtl"                               # index 0 (the farthest slice) on the right

@@ -83,10 +83,15 @@ def test_refocus_names_the_depths_it_leaves_uncovered(sample, tmp_path):
 
 @pytest.mark.parametrize("spelling", [["--a", "-0.4:0.6:0.2"], ["--a=-0.4:0.6:0.2"]])
 def test_negative_a_lists_work_with_and_without_equals(sample, tmp_path, spelling):
-    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *spelling, "-o", tmp_path)
+    """Negative a are real slices when the main lens is focused nearer than infinity (here b_U = f_U + 2 mm:
+    a_inf = -0.45); ``ls`` lists the slices in focus order, far to near, negatives first."""
+    text = (sample / "camera.toml").read_text().replace("image_distance_mm = 50.0", "image_distance_mm = 52.0")
+    (tmp_path / "near.toml").write_text(text)
+    args = ["--camera", tmp_path / "near.toml", "--calib", sample / "grid.json", "--white", sample / "white.png"]
+    proc = run_cli("refocus", sample / "capture.png", *args, *spelling, "-o", tmp_path / "o")
     assert proc.returncode == 0, proc.stderr
-    names = sorted(p.stem for p in tmp_path.glob("*.tif"))
-    assert names == sorted(f"capture_a{a:+.3f}" for a in (-0.4, -0.2, 0.0, 0.2, 0.4, 0.6))
+    names = sorted(p.stem for p in (tmp_path / "o").glob("*.tif"))
+    assert names == [f"capture_{k:02d}_a{a:+.3f}" for k, a in enumerate((-0.4, -0.2, 0.0, 0.2, 0.4, 0.6))]
 
 
 def test_geometry_accepts_a_negative_list_without_equals(paper_camera):
@@ -104,13 +109,13 @@ def test_decoded_light_fields_are_inputs_of_refocus_views_and_batch(sample, tmp_
     # no --camera, --calib or --white: the light field carries its camera and grid
     proc = run_cli("refocus", lf_path, "--a", "1", "-o", tmp_path / "r")
     assert proc.returncode == 0, proc.stderr
-    from_lf = json.loads((tmp_path / "r" / "cap_a+1.000.json").read_text())
+    from_lf = json.loads((tmp_path / "r" / "cap_00_a+1.000.json").read_text())
     assert from_lf["source"].endswith("cap.lfp.npz")
-    assert from_lf["distance_mm"] == json.loads((tmp_path / "direct" / "capture_a+1.000.json").read_text())[
+    assert from_lf["distance_mm"] == json.loads((tmp_path / "direct" / "capture_00_a+1.000.json").read_text())[
         "distance_mm"]
     from lfproc.io import read_image
-    np.testing.assert_array_equal(read_image(tmp_path / "r" / "cap_a+1.000.tif"),
-                                  read_image(tmp_path / "direct" / "capture_a+1.000.tif"))
+    np.testing.assert_array_equal(read_image(tmp_path / "r" / "cap_00_a+1.000.tif"),
+                                  read_image(tmp_path / "direct" / "capture_00_a+1.000.tif"))
     proc = run_cli("views", lf_path, "-o", tmp_path / "v")
     assert proc.returncode == 0, proc.stderr
     from lfproc import LightField
@@ -119,7 +124,7 @@ def test_decoded_light_fields_are_inputs_of_refocus_views_and_batch(sample, tmp_
     assert len(list((tmp_path / "v").glob("cap_view_*.tif"))) == (m * m if lit is None else int(lit.sum()))
     proc = run_cli("batch", lf_path, "--a", "0,1", "--workers", "1", "-o", tmp_path / "b")
     assert proc.returncode == 0, proc.stderr
-    assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_a+0.000.tif", "cap_a+1.000.tif"]
+    assert sorted(p.name for p in (tmp_path / "b").glob("*.tif")) == ["cap_00_a+0.000.tif", "cap_01_a+1.000.tif"]
 
 
 def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_path):
@@ -128,8 +133,8 @@ def test_batch_offers_every_per_capture_option_of_refocus_and_views(sample, tmp_
     assert proc.returncode == 0, proc.stderr
     camera = Camera.from_toml(sample / "camera.toml")
     a = float(geometry.refocus_parameter(camera, 650.0))
-    slices = list(tmp_path.glob("capture_a*.tif"))
-    assert len(slices) == 1 and slices[0].stem == f"capture_a{a:+.3f}"
+    slices = list(tmp_path.glob("capture_*_a*.tif"))
+    assert len(slices) == 1 and slices[0].stem == f"capture_00_a{a:+.3f}"
     from lfproc.io import read_image
     ny, nx = read_image(slices[0]).shape[:2]
     views = sorted(tmp_path.glob("capture_view_*.tif"))
@@ -249,12 +254,15 @@ def test_an_a_whose_refocused_area_is_under_half_is_refused_with_the_usable_rang
     assert refocused_area(limit * 0.999) >= 0.5 > refocused_area(limit * 1.001)
     assert refocused_area(-limit * 0.999) >= 0.5 > refocused_area(-limit * 1.001)
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "400", "-o", tmp_path / "o")
-    assert_clean_error(proc, "a=400", f"{limit:.3g}", "mm")
+    assert_clean_error(proc, "a=400", "mm")
     assert not (tmp_path / "o").exists()
-    near = float(geometry.slice_distance_mm(camera, limit))
-    far = float(geometry.slice_distance_mm(camera, -limit))
-    assert far > near or math.isinf(far)
-    text = f"from {'infinity' if math.isinf(far) else f'{far:.1f} mm'} (a={-limit:+.3g}) to {near:.1f} mm (a=+{limit:.3g})"
+    # the whole usable range, low-to-high in a: from the slice at infinity (a = 0, the lens focused at
+    # infinity; not -limit, which focuses beyond it) to the area's bound, rounded inwards to 3 decimals
+    assert geometry.infinity_parameter(camera) == 0.0
+    printed = math.floor(limit * 1000 + 1e-6) / 1000
+    assert 0 < limit - printed < 1e-3
+    near = float(geometry.slice_distance_mm(camera, printed))
+    text = f"usable: a from +0 (infinity) to {printed:+.3f}".rstrip("0") + f" ({near:.1f} mm)"
     assert text in proc.stderr, proc.stderr
     # just inside the usable range: written, with one plain warning line about the wide border band
     proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", f"{0.98 * limit:.3f}", "-o", tmp_path / "in")
@@ -275,9 +283,12 @@ def test_slices_nearer_than_the_front_focal_plane_are_refused(sample, tmp_path):
         proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "o")
         assert_clean_error(proc, "front focal plane", f"{front:.1f} mm")
         assert not (tmp_path / "o").exists()
-    # a slice beyond infinity is allowed (its DOF reaches infinity, which its tags say)
-    proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a=-0.3", "-o", tmp_path / "b")
-    assert proc.returncode == 0, proc.stderr
+    # a slice beyond infinity is refused too (issue 30: it was written tagged "in focus [inf, inf]"), and a
+    # sweep partly beyond it as a whole, before any work, with the usable range low-to-high
+    for option in (["--a=-0.3"], ["--a=-0.5:2"]):
+        proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "b")
+        assert_clean_error(proc, "beyond infinity", "a from +0 (infinity) to +inf", f"{front:.1f} mm")
+        assert not (tmp_path / "b").exists()
 
 
 def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file(tmp_path):
@@ -290,7 +301,7 @@ def test_batch_reads_lytro_captures_with_a_calibration_folder_and_no_camera_file
     single = run_cli("refocus", lytro / "IMG_0001.lfr", *args, "-o", tmp_path / "r")
     assert single.returncode == 0, single.stderr
     from lfproc.io import read_image
-    for name in ("IMG_0001_a+0.250", "IMG_0001_a+1.250"):
+    for name in ("IMG_0001_00_a+0.250", "IMG_0001_01_a+1.250"):
         np.testing.assert_array_equal(read_image(tmp_path / "b" / f"{name}.tif"),
                                       read_image(tmp_path / "r" / f"{name}.tif"))
         assert json.loads((tmp_path / "b" / f"{name}.json").read_text()) == \
@@ -305,7 +316,7 @@ def test_float_tiffs_open_in_tifffile_and_opencv(sample, tmp_path):
 
     proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), "--a", "1", "-o", tmp_path)
     assert proc.returncode == 0, proc.stderr
-    path = tmp_path / "capture_a+1.000.tif"
+    path = tmp_path / "capture_00_a+1.000.tif"
     ours = read_image(path)
     np.testing.assert_array_equal(tifffile.imread(path), ours)
     np.testing.assert_array_equal(cv2.imread(str(path), cv2.IMREAD_UNCHANGED)[..., ::-1], ours)
@@ -345,7 +356,7 @@ def test_slices_on_a_finer_grid_say_so_in_their_sidecars(tmp_path):
         proc = run_cli("refocus", tmp_path / "lit.lfp.npz", "--a", "0.5", "--upsample", upsample, "--stack", "imagej",
                        "-o", out)
         assert proc.returncode == 0, proc.stderr
-        image = out / "lit_a+0.500.tif"
+        image = out / "lit_00_a+0.500.tif"
         sidecar = json.loads(image.with_suffix(".json").read_text())
         s = int(upsample)
         assert read_image(image).shape[:2] == ((20 - 1) * s + 1, (24 - 1) * s + 1)

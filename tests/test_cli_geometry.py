@@ -111,7 +111,7 @@ def test_geometry_aperture_gives_the_dof_refocus_tags(tmp_path, camera_path, f_n
     lf = _all_lit_light_field(camera_path, tmp_path / "lit.lfp.npz")
     proc = run_cli("refocus", lf, "--a", a_list, "--aperture", f_number, "-o", tmp_path / "r")
     assert proc.returncode == 0, proc.stderr
-    sidecars = [json.loads(p.read_text()) for p in sorted((tmp_path / "r").glob("lit_a*.json"), key=lambda p:
+    sidecars = [json.loads(p.read_text()) for p in sorted((tmp_path / "r").glob("lit_*.json"), key=lambda p:
                                                           json.loads(p.read_text())["a"])]
     proc = run_cli("geometry", "--camera", camera_path, "--a", a_list, "--aperture", f_number, "--json")
     assert proc.returncode == 0, proc.stderr

@@ -36,8 +36,8 @@ def test_refocus_previews_are_preview_pictures_with_their_tags(small_lf, tmp_pat
     assert proc.returncode == 0, proc.stderr
     proc = run_cli("refocus", small_lf, "--a", "0.5", "--preview", "--preview-format", "jpeg", "-o", tmp_path / "jpg")
     assert proc.returncode == 0, proc.stderr
-    sidecar = json.loads((tmp_path / "png" / "small_a+0.500.json").read_text())
-    for path in (tmp_path / "png" / "small_a+0.500_preview.png", tmp_path / "jpg" / "small_a+0.500_preview.jpg"):
+    sidecar = json.loads((tmp_path / "png" / "small_00_a+0.500.json").read_text())
+    for path in (tmp_path / "png" / "small_00_a+0.500_preview.png", tmp_path / "jpg" / "small_00_a+0.500_preview.jpg"):
         info = info_json(path)
         assert info["format"] == "lfproc-output" and info["raw_light_field"] is False, info
         assert info["product"] == "preview picture" and info["preview_of"] == "refocused slice"

@@ -165,8 +165,8 @@ def test_bad_capture_among_good_ones_is_skipped_and_named(capture, tmp_path):
                    "--a", "0,1", "-o", out)
     assert proc.returncode == 2
     assert "bad.png" in proc.stderr and "Traceback" not in proc.stderr
-    assert sorted(p.name for p in out.iterdir()) == ["good_a+0.000.json", "good_a+0.000.tif",
-                                                     "good_a+1.000.json", "good_a+1.000.tif"]
+    assert sorted(p.name for p in out.iterdir()) == ["good_00_a+0.000.json", "good_00_a+0.000.tif",
+                                                     "good_01_a+1.000.json", "good_01_a+1.000.tif"]
 
 
 def test_refocus_bad_inputs_fail_cleanly_and_write_nothing(capture, tmp_path):
@@ -175,7 +175,7 @@ def test_refocus_bad_inputs_fail_cleanly_and_write_nothing(capture, tmp_path):
     base = [folder / "capture.png", "--camera", folder / "camera.toml", "-o", out]
     assert_clean_error(run_cli("refocus", *base, "--white", tmp_path / "missing.png", "--a", "1"), "missing.png")
     assert_clean_error(run_cli("refocus", *base, "--white", folder / "white.png", "--depth-range", "10:20"),
-                       "depth range")
+                       "--depth-range 10:20", "front focal plane", "usable")
     assert_clean_error(run_cli("refocus", *base, "--white", folder / "white.png", "--at", "20"), "20")
     assert_clean_error(run_cli("refocus", *base, "--a", "1"), "--white")
     small = tmp_path / "small.png"
@@ -277,7 +277,7 @@ def test_slice_names_stay_apart():
     from lfproc import LfprocError
     from lfproc.outputs import slice_names
 
-    assert slice_names("c", [1.0, -0.0, 0.5]) == ["c_a+1.000", "c_a+0.000", "c_a+0.500"]
-    assert slice_names("c", [1.0001, 1.0002]) == ["c_a+1.0001", "c_a+1.0002"]
+    assert slice_names("c", [1.0, -0.0, 0.5]) == ["c_02_a+1.000", "c_00_a+0.000", "c_01_a+0.500"]
+    assert slice_names("c", [1.0001, 1.0002]) == ["c_00_a+1.0001", "c_01_a+1.0002"]
     with pytest.raises(LfprocError, match="equal"):
         slice_names("c", [2.0, 2.0])

@@ -261,6 +261,21 @@ def test_diffraction_check():
     assert g.airy_radius_mm(4.0, 550e-6) == pytest.approx(1.22 * 550e-6 * 4)
 
 
+def test_main_lens_airy_radius_uses_the_working_f_number():
+    """The cone converging on the MLA has f-number b_U / D, D = f_U / N (issue 30): at a near focus b_U > f_U
+    and the Airy disk grows by b_U / f_U over the object-side N's."""
+    cam = load("paper-f100-b10")
+    assert cam.image_distance_mm > cam.main_focal_length_mm * 1.01      # focused near: the two differ
+    diameter = cam.main_focal_length_mm / cam.f_number
+    working = cam.image_distance_mm / diameter
+    assert g.working_f_number(cam) == pytest.approx(working, rel=1e-12)
+    check = g.diffraction_check(cam, warn=False)
+    assert check.main_lens_airy_mm == pytest.approx(1.22 * 550e-6 * working, rel=1e-12)
+    assert check.main_lens_airy_mm > 1.22 * 550e-6 * cam.f_number * 1.01
+    at_infinity = dataclasses.replace(cam, image_distance_mm=cam.main_focal_length_mm)
+    assert g.working_f_number(at_infinity) == pytest.approx(cam.f_number, rel=1e-12)
+
+
 # ------------------------------------------------------------------ properties over wide ranges
 cameras = st.builds(
     lambda pm, ratio, fs, fu, eps, gap_s, gap_u: Camera(

@@ -142,8 +142,8 @@ def test_refocus_a_lytro_capture_with_its_calibration_folder(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "camera from" in proc.stderr and "caldata/MOD_0000.RAW" in proc.stderr
     camera = camera_for_captures(None, [str(capture)])
-    for a in (0.25, 1.25):
-        sidecar = json.loads((out / f"IMG_0001_a+{a:.3f}.json").read_text())
+    for k, a in enumerate((0.25, 1.25)):
+        sidecar = json.loads((out / f"IMG_0001_{k:02d}_a+{a:.3f}.json").read_text())
         assert sidecar["source"] == str(capture.resolve()) and sidecar["a"] == a
         assert sidecar["distance_mm"] == pytest.approx(geometry.slice_distance_mm(camera, a), rel=1e-12)
 

@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 import tifffile
 
+from lfproc import Camera
+
 from conftest import SAMPLES, assert_clean_error, run_cli
-from test_browser_viewer import _click_lens, browser  # noqa: F401  (the browser fixture)
+from test_browser_viewer import _click_lens, assert_legend_labels_apart, browser  # noqa: F401  (the fixture)
 from scopefile import microscope_toml
 from whitegen import covering_grid, white_image
 
@@ -65,6 +67,24 @@ def test_geometry_z_range_plans_cover_or_step():
     assert [s["z_um"] for s in stepped] == pytest.approx([-10, -5, 0, 5, 10])
 
 
+def test_a_z_step_far_finer_than_the_dof_is_warned_with_a_sensible_step():
+    """Issue 32: a 0.2 um step against a 25 um DOF repeats each slice; the warning names half the DOF."""
+    from lfproc import geometry
+    cam_path = SAMPLES / "cameras" / "lfm-20x.toml"
+    cam = Camera.from_toml(cam_path)
+    ends = geometry.slice_geometry(cam, [geometry.refocus_parameter_z(cam, z) for z in (-10.0, 10.0)])
+    dof = float(min(ends.z_near_um - ends.z_far_um))          # the thinnest DOF over the range, from its limits
+    fine = dof / 40
+    proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{fine:.6g}", "--json")
+    assert proc.returncode == 0, proc.stderr
+    warnings = [line for line in proc.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and "finer than the slices' depth of field" in warnings[0], proc.stderr
+    assert f"about {dof / 2:.2g} um" in warnings[0] and f"({dof:.3g} um)" in warnings[0]
+    for step in (dof / 2, dof / 9):                            # sensible steps: silent
+        proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{step:.6g}", "--json")
+        assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+
+
 def test_bad_depth_options_are_one_line_errors(lfm):
     assert_clean_error(run_cli("refocus", *_inputs(lfm), "--depth-range", "100:200", "-o", lfm / "x"),
                        "--z-range")
@@ -83,13 +103,16 @@ def test_refocus_decode_and_batch_tag_slices_in_micrometres(lfm):
     tags = [json.loads(p.read_text()) for p in sidecars]
     assert all(set(t) - SUMMED == SLICE_KEYS and t["refocus_shifts"] == "paraxial" for t in tags)
     assert sorted(t["z_um"] for t in tags) == pytest.approx([-8, -4, 0, 4, 8])
+    # issue 32: named by z, and `ls` (lexical order) lists them from low to high z
+    assert [t["z_um"] for t in tags] == sorted(t["z_um"] for t in tags)
+    assert [p.stem for p in sidecars] == [f"capture_{k:02d}_z{t['z_um']:+.3f}um" for k, t in enumerate(tags)]
     embedded = tifffile.TiffFile(str(sidecars[0].with_suffix(".tif"))).pages[0].description
     assert json.loads(embedded)["z_um"] == pytest.approx(json.loads(sidecars[0].read_text())["z_um"])
     proc = run_cli("decode", *_inputs(lfm), "-o", lfm / "decoded.lfp.npz")
     assert proc.returncode == 0, proc.stderr
     proc = run_cli("batch", *_inputs(lfm), "--z-range", "-4:4", "--views", "-o", lfm / "batch")
     assert proc.returncode == 0, proc.stderr
-    batch_tags = [json.loads(p.read_text()) for p in (lfm / "batch").glob("capture_a*.json")]
+    batch_tags = [json.loads(p.read_text()) for p in (lfm / "batch").glob("capture_*_z*um.json")]
     assert batch_tags and all(set(t) - SUMMED == SLICE_KEYS for t in batch_tags)
     # the batch's provenance names the same files as the command's, by absolute path (batch jobs are absolute)
     assert {k: v["sha256"] for k, v in batch_tags[0]["provenance"]["inputs"].items()} == \
@@ -151,3 +174,8 @@ def test_viewer_page_reads_micrometres_in_the_browser(lfm, browser):
     assert here.endswith(" µm") or here == "unknown", here
     assert "µm" in browser.find_element("id", "slice-readout").text
     assert "native object plane" in browser.find_element("id", "depth-method").text
+    # issue 32: a DOF reads from low to high z ("sharp from 1.71 µm to -1.71 µm" was backwards)
+    import re
+    ends = re.search(r"sharp from (-?[\d.]+) µm to (-?[\d.]+) µm", browser.find_element("id", "slice-readout").text)
+    assert ends and float(ends.group(1)) < float(ends.group(2)), browser.find_element("id", "slice-readout").text
+    assert_legend_labels_apart(browser)

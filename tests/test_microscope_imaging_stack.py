@@ -87,7 +87,8 @@ def test_refocus_stack_of_a_photographic_capture_carries_distances(tmp_path):
         out = tmp_path / kind
         proc = run_cli("refocus", tmp_path / "cap.lfp.npz", "--a", "1,0,0.5", "--stack", kind, "-o", out)
         assert proc.returncode == 0, proc.stderr
-        sidecars = {json.loads(p.read_text())["a"]: json.loads(p.read_text()) for p in out.glob("cap_a*.json")}
+        sidecars = {json.loads(p.read_text())["a"]: json.loads(p.read_text()) for p in out.glob("cap_*_a*.json")}
+        assert len(sidecars) == 3 and f"z-stack -> {out / name}" in proc.stdout, proc.stdout   # issue 32
         with tifffile.TiffFile(out / name) as tif:
             data = tif.asarray()
             info = json.loads(tif.imagej_metadata["Info"] if kind == "imagej" else _ome_description(tif.ome_metadata))
@@ -95,7 +96,7 @@ def test_refocus_stack_of_a_photographic_capture_carries_distances(tmp_path):
         assert [s["a"] for s in info["slices"]] == [0.0, 0.5, 1.0]
         for s in info["slices"]:
             assert s["distance_mm"] == sidecars[s["a"]]["distance_mm"]
-        slice_half = tifffile.imread(out / "cap_a+0.500.tif")
+        slice_half = tifffile.imread(out / "cap_01_a+0.500.tif")   # a = 0, 0.5, 1 in focus order: 0.5 second
         assert np.array_equal(data[1], np.squeeze(slice_half))
 
 
@@ -143,7 +144,7 @@ def test_refocus_command_writes_a_microscope_stack(tmp_path):
     with tifffile.TiffFile(tmp_path / "out" / "lfm_stack.ome.tif") as tif:
         pixels = ET.fromstring(tif.ome_metadata).find(".//ome:Pixels", ns)
         assert tif.series[0].shape == (3, 10, 11)
-    sidecars = sorted((json.loads(p.read_text()) for p in (tmp_path / "out").glob("lfm_a*.json")),
+    sidecars = sorted((json.loads(p.read_text()) for p in (tmp_path / "out").glob("lfm_*_z*um.json")),
                       key=lambda r: r["a"])
     z = [r["z_um"] for r in sidecars]
     assert float(pixels.get("PhysicalSizeX")) == pytest.approx(6.25)

@@ -71,11 +71,11 @@ def test_refocus_preview_and_jpeg_use_the_display_range(sample_lf, tmp_path):
     assert proc.returncode == 0, proc.stderr
     from PIL import Image
     jpegs = []
-    for a in ("+1.000", "+2.000"):
-        sidecar = json.loads((tmp_path / f"sample_a{a}.json").read_text())
-        jpegs.append(np.asarray(Image.open(tmp_path / f"sample_a{a}.jpg")))
+    for a in ("00_a+1.000", "01_a+2.000"):
+        sidecar = json.loads((tmp_path / f"sample_{a}.json").read_text())
+        jpegs.append(np.asarray(Image.open(tmp_path / f"sample_{a}.jpg")))
         assert "tone_map" in sidecar
-        preview = np.asarray(Image.open(tmp_path / f"sample_a{a}_preview.png"))
+        preview = np.asarray(Image.open(tmp_path / f"sample_{a}_preview.png"))
         assert preview.shape[1] >= 512 and preview.shape[2] == 3
         assert preview.shape[0] > 512 * jpegs[-1].shape[0] / jpegs[-1].shape[1]   # the image plus its label band
         assert np.median(preview[-10:]) == 0 and preview[-10:].max() == 255
@@ -86,18 +86,18 @@ def test_refocus_preview_and_jpeg_use_the_display_range(sample_lf, tmp_path):
     # a preview in JPEG on request
     assert run_cli("refocus", "--preview", sample_lf, "--a", "1", "--preview-format", "jpeg",
                    "-o", tmp_path / "j").returncode == 0     # --preview before the input: a flag, it takes no value
-    assert (tmp_path / "j" / "sample_a+1.000_preview.jpg").is_file()
+    assert (tmp_path / "j" / "sample_00_a+1.000_preview.jpg").is_file()
 
 
 def test_info_shows_the_tags_of_lfproc_outputs(sample_lf, tmp_path):
     assert run_cli("refocus", sample_lf, "--a", "1", "-o", tmp_path).returncode == 0
-    proc = run_cli("info", tmp_path / "sample_a+1.000.tif", "--json")
+    proc = run_cli("info", tmp_path / "sample_00_a+1.000.tif", "--json")
     info = json.loads(proc.stdout)
     assert info["format"] == "lfproc-output" and info["raw_light_field"] is False
     assert info["product"] == "refocused slice"
-    sidecar = json.loads((tmp_path / "sample_a+1.000.json").read_text())
+    sidecar = json.loads((tmp_path / "sample_00_a+1.000.json").read_text())
     assert info["tags"] == sidecar
-    text = run_cli("info", tmp_path / "sample_a+1.000.tif").stdout
+    text = run_cli("info", tmp_path / "sample_00_a+1.000.tif").stdout
     assert "distance_mm" in text and "refocused slice" in text
     # a capture lfproc simulated is still a capture, whatever writer made it
     capture = json.loads(run_cli("info", SAMPLE / "capture.png", "--json").stdout)

@@ -49,11 +49,34 @@ def test_tone_map_is_a_percentile_stretch_then_srgb():
     assert tone(images).min() == 0 and tone(images).max() == 255  # the whole display range: not washed out
 
 
+def test_previews_are_resampled_not_blocks():
+    """Issue 32: previews were one lens per nearest-neighbour block. The default (Lanczos) follows a smooth
+    scene between the lenses: each display pixel within 1.5 DN of the scene at that place (pixel centres
+    kept: display pixel x is at lens (x + 0.5)/7 - 0.5), where blocks are off by 22 DN; no block is flat."""
+    def scene(y, x):
+        return 128 + 100 * np.sin(2 * np.pi * x / 15) * np.cos(2 * np.pi * y / 12)
+
+    y, x = np.mgrid[0:53, 0:75].astype(float)
+    image = np.round(scene(y, x)).astype(np.uint8)
+    for shape in ((53, 75), (53, 75, 1), (53, 75, 3)):
+        lenses = image if len(shape) == 2 else np.repeat(image[:, :, None], shape[2], axis=2)
+        big = upscale(lenses, 7)
+        assert big.shape == (371, 525) + shape[2:] and big.dtype == np.uint8
+    big = upscale(image, 7).astype(float)
+    yy, xx = np.mgrid[0:371, 0:525]
+    truth = scene((yy + 0.5) / 7 - 0.5, (xx + 0.5) / 7 - 0.5)
+    inner = (slice(28, -28), slice(28, -28))                    # 4 lenses from the border (the kernel's reach)
+    assert np.abs(big - truth)[inner].max() < 1.5
+    assert np.abs(upscale(image, 7, "nearest") - truth)[inner].max() > 20
+    blocks = big[:364, :525].reshape(52, 7, 75, 7).transpose(0, 2, 1, 3).reshape(52, 75, 49)
+    assert (np.ptp(blocks, axis=2) > 0).mean() > 0.95           # not piecewise constant
+
+
 def test_upscaling_reaches_the_display_size_and_nearest_keeps_blocks():
     image = np.arange(53 * 75 * 3, dtype=np.uint8).reshape(53, 75, 3)
     factor = upscale_factor(image.shape)
     assert factor == 7 and 75 * 6 < 512 <= 75 * 7
-    big = upscale(image, factor)
+    big = upscale(image, factor, "nearest")
     assert big.shape == (371, 525, 3)
     np.testing.assert_array_equal(big[::7, ::7], image)
     np.testing.assert_array_equal(big[6::7, 6::7], image)
@@ -65,7 +88,7 @@ def test_slice_label_gives_distance_and_dof_in_metres():
     cam = scene_camera()
     rec = geometry.slice_geometry(cam, 1.3).records()[0]
     text = slice_label(rec["distance_mm"], rec["near_mm"], rec["far_mm"])
-    assert text == (f"focus {rec['distance_mm'] / 1000:.3f} m | DOF {rec['near_mm'] / 1000:.3f} m - "
+    assert text == (f"focus {rec['distance_mm'] / 1000:.3f} m | DOF {rec['near_mm'] / 1000:.3f} m to "
                     f"{rec['far_mm'] / 1000:.3f} m")
     assert metres(1236.4) == "1.24 m" and metres(float("inf")) == "inf" and metres(658.99) == "0.659 m"
 
@@ -371,6 +394,30 @@ def test_page_offers_synthetic_apertures_with_their_dof(page, scene):
         previous = [s["near_mm"] for s in ap["slices"]]
     js = (ROOT / "lfproc" / "viewer" / "assets" / "viewer.js").read_text()
     assert "aperture-select" in js and "marker_mm" in js
+
+
+def test_depth_preview_is_resampled_and_unknown_stays_unknown():
+    """Issue 32: the depth preview is resampled (Lanczos) like the other previews, but an unknown lens is
+    never smeared: exactly the display pixels nearest an unknown lens are grey, and known colours next to
+    them are those of the known lenses (a constant depth stays one colour up to the unknown block)."""
+    from lfproc.depth._preview import TARGET_SIZE_PX, colour_map, preview_image
+    from lfproc.outputs import UNKNOWN_COLOUR
+
+    ny, nx = 30, 40
+    scale = round(TARGET_SIZE_PX / nx)
+    distance = np.full((ny, nx), 1000.0)
+    distance[:, 20:] = np.linspace(600.0, 3000.0, 20)[None, :]     # a smooth ramp on the right
+    distance[10:16, 5:12] = np.nan                                 # unknown inside the constant part
+    distance[3:6, 30:33] = np.nan                                  # and inside the ramp
+    body = preview_image(distance)[10:10 + ny * scale, :nx * scale]
+    grey = np.all(body == np.array(UNKNOWN_COLOUR, np.uint8), axis=2)
+    unknown = np.repeat(np.repeat(np.isnan(distance), scale, axis=0), scale, axis=1)
+    np.testing.assert_array_equal(grey, unknown)
+    constant = body[:, : 15 * scale][~unknown[:, : 15 * scale]]     # 5 lenses from the ramp: past the kernel
+    reference = body[0, 0]
+    assert np.all(constant == reference)                           # no grey bled into the known colours
+    ramp = body[20 * scale:25 * scale, 22 * scale:38 * scale].astype(int)
+    assert (np.ptp(ramp[:scale].reshape(scale, -1, scale, 3), axis=(0, 2)) > 0).any(axis=1).mean() > 0.9
 
 
 def test_depth_preview_and_viewer_share_one_colour_scale():

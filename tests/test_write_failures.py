@@ -137,7 +137,7 @@ def test_refocus_on_a_filling_disk_is_one_line_and_leaves_no_file(tmp_path):
                           env=dict(os.environ, LFPROC_NO_CACHE="1"))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and str(out / "capture_a+0.000.tif") in lines[0], proc.stderr
+    assert len(lines) == 1 and str(out / "capture_00_a+0.000.tif") in lines[0], proc.stderr
     assert os.listdir(out) == []
 
 

@@ -11,42 +11,31 @@ from ..errors import LfprocError, LfprocWarning
 
 
 def lowest_meaningful_a(camera) -> float:
-    """The lowest a whose slice is beyond the front focal plane or at infinity (the macro regime below it)."""
+    """The lowest a of a real slice: the one focused at infinity (:func:`lfproc.geometry.usable_a_range`)."""
     from .. import geometry
 
-    inside = camera.sensor_to_main_lens_mm
-    return float(geometry.refocus_parameter(camera, inside + 1e-9 * max(inside, 1.0)))
+    return geometry.usable_a_range(camera)[0]
 
 
 def check_slice_meaning(camera, a_values, what: str = "a") -> None:
-    """Refuse slices focused nearer than the main lens's front focal plane (the paraxial model's macro
-    regime, between the lens and f_U in front of it): no object there forms a real image. Slices
-    beyond infinity (distance ``inf``) stay allowed; their tags say so."""
+    """Refuse slices that focus beyond infinity or nearer than the main lens's front focal plane
+    (:func:`lfproc.geometry.check_usable_a`): a sweep partly outside is refused whole, before any work,
+    with the usable range low-to-high in a and in distance (``what`` names the argument: ``a`` from
+    Python, ``--a`` from a command)."""
     from .. import geometry
 
-    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
-    d = np.atleast_1d(geometry.slice_distance_mm(camera, np.asarray(a_values, dtype=np.float64)))
-    bad = np.flatnonzero(np.isfinite(d) & (d <= front))
-    if len(bad):
-        a = float(np.atleast_1d(a_values)[bad[0]])
-        raise LfprocError(f"{what}: a={a:g} would focus {d[bad[0]]:.1f} mm from the sensor, nearer than the main "
-                          f"lens's front focal plane ({front:.1f} mm), where nothing forms a real image; give "
-                          f"a >= {lowest_meaningful_a(camera):+.3g}")
+    geometry.check_usable_a(camera, a_values, what)
 
 
 def check_refocused_area(camera, a_values, lens_shape, view_mask, source: str) -> None:
     """Refuse slices whose refocused area is under half the image (:func:`lfproc.refocus.check_refocused_area`),
-    with the usable range in a and in distance, far end first."""
+    with the usable range low-to-high in a and in distance (narrowed to the real slices)."""
     from .. import geometry
     from ..refocus import check_refocused_area as check
 
     mask = camera.m_hat if view_mask is None else view_mask
-    if camera.is_microscope:
-        check(a_values, mask, lens_shape, source,
-              lambda a: f"z = {float(geometry.slice_geometry(camera, a).z_um):.4g} um")
-        return
-    check(a_values, mask, lens_shape, source, lambda a: geometry.slice_distance_mm(camera, a),
-          lowest_meaningful_a(camera))
+    check(a_values, mask, lens_shape, source, lowest_a=lowest_meaningful_a(camera),
+          range_text=lambda lo, hi: geometry.usable_range_text(camera, lo, hi))
 
 
 def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=None) -> None:

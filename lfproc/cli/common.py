@@ -133,6 +133,7 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
         what = "--z-range"
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)
+        geometry.check_usable_distances(camera, near, f"--depth-range {depth_range}")
         plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
                                          max_slices=max_slices, view_extent=view_extent)
         values = [float(a) for a in plan.a]
@@ -143,14 +144,11 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     elif not math.isfinite(at_mm):
         raise LfprocError(f"--at must be a finite distance in mm from the sensor, got {at_mm}")
     else:
-        front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
-        if at_mm <= front:
-            raise LfprocError(f"--at {at_mm:g} mm is not beyond the main lens's front focal plane ({front:.1f} mm "
-                              f"from the sensor): nothing there forms a real image to focus on; give a distance "
-                              f"beyond {front:.1f} mm")
+        geometry.check_usable_distances(camera, at_mm, "--at")
         values = [float(geometry.refocus_parameter(camera, at_mm))]
     if not microscope:   # a microscope's object space has no front focal plane to pass (z in µm, any sign)
-        check_slice_meaning(camera, values, what if a_list is not None else "--depth-range")
+        check_slice_meaning(camera, values, what if a_list is not None else "--depth-range" if depth_range
+                            else "--at")
     if len(values) > max_slices:
         asked = what if a_list is not None or z_range is not None else "--depth-range"
         raise LfprocError(f"{asked} asks for {len(values)} slices, more than --max-slices {max_slices}; use a "
@@ -195,13 +193,13 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, a_values, extent)
     if extent is not None:
-        print(f"{int(np.count_nonzero(view_mask))} views summed (f/{geometry.equivalent_f_number(camera, extent):.2g} "
-              f"equivalent); the DOF follows them", file=out)
+        print(f"{int(np.count_nonzero(view_mask))} views summed ({geometry.aperture_text(camera, extent)}); the DOF "
+              f"follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
     if geo.microscope:
         for r in geo.records():
-            print(f"  a={r['a']:+.4f}  z = {r['z_um']:.2f} um  in focus [{r['z_far_um']:.2f}, {r['z_near_um']:.2f}] um",
-                  file=out)
+            low, high = sorted((r['z_far_um'], r['z_near_um']))
+            print(f"  a={r['a']:+.4f}  z = {r['z_um']:+.2f} um  in focus [{low:+.2f}, {high:+.2f}] um", file=out)
         return
     for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)

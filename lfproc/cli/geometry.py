@@ -114,11 +114,14 @@ def with_aperture_tags(report: dict, aperture: dict) -> dict:
     return report
 
 
-def aperture_line(aperture: dict) -> str:
+def aperture_line(aperture: dict, camera=None) -> str:
     tags = aperture["tags"]
     if aperture["f_number"] is None:
         return ""
     equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
+    if camera is not None and camera.is_microscope and tags:   # microscopists read NA (issue 32)
+        from .. import geometry
+        equivalent = f" ({geometry.aperture_text(camera, aperture['extent'])})"
     summed = f"{tags['views_summed']} views summed{equivalent}" if tags else "all views summed"
     return f"synthetic aperture f/{aperture['f_number']:g}: {summed}; the DOF follows them\n"
 
@@ -137,7 +140,7 @@ def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
     if args.json:
         print(dumps_strict(with_aperture_tags(microscope_report(camera, slices, views), aperture)))
         return 0
-    sys.stdout.write(aperture_line(aperture) + format_microscope_table(camera, slices, views, args.camera))
+    sys.stdout.write(aperture_line(aperture, camera) + format_microscope_table(camera, slices, views, args.camera))
     return 0
 
 
@@ -198,7 +201,11 @@ def z_range_parameters(camera, text: str):
         values = []
     if len(values) not in (2, 3):
         raise LfprocError(f"--z-range: {text!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres, e.g. -50:50 or -50:50:2")
-    return geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
+    planned = geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
+    if len(values) == 3 and (advice := geometry.z_step_advice(camera, values[2], values[0], values[1])):
+        import warnings
+        warnings.warn(f"--z-range {text}: {advice}", stacklevel=2)
+    return planned
 
 
 def camera_summary(camera) -> dict:

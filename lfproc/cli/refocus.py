@@ -87,8 +87,10 @@ def run(args) -> int:
         describe_once(key, lf.camera, values, lf.view_mask)
         written = stack.save(args.outdir, stems[path], format=args.format, preview=preview_format(args),
                              stack=args.stack)
+        stack_file = written[-1] if args.stack else None      # save returns the slices, previews, then the stack
         progress.update(len(values))
-        print(f"{path}: {len(values)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_a*")
+        print(f"{path}: {len(values)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_*"
+              + (f"; z-stack -> {stack_file}" if stack_file else ""))
 
     return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
 

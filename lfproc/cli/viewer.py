@@ -27,9 +27,10 @@ def register(sub) -> None:
     add_decode_options(p)
     add_slice_options(p)
     add_output_folder_option(p)
-    p.add_argument("--upscale", default="nearest", choices=("nearest", "smooth"),
-                   help="how the page enlarges its images (one pixel per lens) to --display-size: nearest keeps "
-                        "every lens a sharp block (default), smooth interpolates")
+    p.add_argument("--upscale", default="smooth", choices=("smooth", "nearest"),
+                   help="how the page enlarges its slices and views (one pixel per lens) to --display-size: smooth "
+                        "lets the browser interpolate (default), nearest keeps every lens a sharp block; the depth "
+                        "map always shows its lenses as blocks (an unknown lens stays grey)")
     p.add_argument("--display-size", type=int, default=512, metavar="PX",
                    help="smallest long side of the shown pictures in screen pixels (default 512)")
     p.add_argument("--serve", action="store_true", help="then serve OUTDIR on 127.0.0.1 and print the URL")

@@ -15,7 +15,8 @@ import numpy as np
 from ..colours import UNKNOWN_COLOUR as UNKNOWN_RGB
 from ..colours import colour_scale
 
-#: the preview's depth map is enlarged (nearest) to about this many pixels on its long side
+#: the preview's depth map is enlarged (Lanczos, unknown lenses kept unknown: :func:`enlarge_scale`) to about
+#: this many pixels on its long side
 TARGET_SIZE_PX = 480
 
 
@@ -70,6 +71,11 @@ def _distance_scale(distance_mm: np.ndarray):
     return t, [(v / (inv_near - inv_far), label) for v, label in ticks], "distance"
 
 
+def _um(z: float) -> str:
+    """A legend's z: signed, four significant digits without an exponent (``"+11500 um"``, ``"-6.36 um"``)."""
+    return f"{z:+.0f} um" if abs(z) >= 1000 else f"{z:+.4g} um"
+
+
 def _z_scale(z_um: np.ndarray):
     """(t per lens, ticks, title) of a microscope's depth in µm: linear in z, 1 nearest the objective."""
     known = z_um[np.isfinite(z_um)]
@@ -77,8 +83,36 @@ def _z_scale(z_um: np.ndarray):
     if hi <= lo:
         lo, hi = lo - 1.0, hi + 1.0
     t = (z_um - lo) / (hi - lo)
-    ticks = [((z - lo) / (hi - lo), f"{z:.4g} um") for z in [hi, lo] + list(np.linspace(lo, hi, 5)[1:-1])]
+    ticks = [((z - lo) / (hi - lo), _um(z)) for z in [hi, lo] + list(np.linspace(lo, hi, 5)[1:-1])]
     return t, ticks, "z (um)"
+
+
+def enlarge_scale(t: np.ndarray, unknown: np.ndarray, scale: int) -> np.ndarray:
+    """uint8 RGB of the colour position ``t`` per lens enlarged ``scale`` times, unknown lenses kept unknown.
+
+    The known lenses are resampled with OpenCV's Lanczos-4 kernel (as the other previews,
+    :func:`lfproc.outputs.upscale`), after each unknown lens took its nearest known lens's value, so that
+    no unknown value leaks into the colours around it; every display pixel whose nearest lens is unknown
+    is then grey (:data:`lfproc.outputs.UNKNOWN_COLOUR`): unknown stays unknown, exactly where it was.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    unknown = np.asarray(unknown, bool) | ~np.isfinite(t)
+    if scale == 1 or unknown.all():
+        rgb = colour_map(np.nan_to_num(t))
+        rgb[unknown] = UNKNOWN_RGB
+        return np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
+    import cv2
+    from scipy.ndimage import distance_transform_edt
+
+    filled = t
+    if unknown.any():
+        nearest = distance_transform_edt(unknown, return_distances=False, return_indices=True)
+        filled = t[tuple(nearest)]
+    ny, nx = t.shape
+    smooth = cv2.resize(filled.astype(np.float32), (nx * scale, ny * scale), interpolation=cv2.INTER_LANCZOS4)
+    rgb = colour_map(smooth)
+    rgb[np.repeat(np.repeat(unknown, scale, axis=0), scale, axis=1)] = UNKNOWN_RGB
+    return rgb
 
 
 def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> np.ndarray:
@@ -91,32 +125,43 @@ def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None
 
     values = distance_mm if z_um is None else z_um
     t, ticks, title = _distance_scale(distance_mm) if z_um is None else _z_scale(z_um)
-    rgb = colour_map(np.nan_to_num(t))
-    rgb[np.isnan(values)] = UNKNOWN_RGB
     ny, nx = values.shape
     scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
-    body = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
+    body = enlarge_scale(t, np.isnan(values), scale)
     height = max(body.shape[0], 160)
-    bar_w, margin, label_w = 18, 10, 80
+    font = ImageFont.load_default()
+    bar_w, margin = 18, 10
+    words = [label for _, label in ticks] + [title, "grey: unknown"]
+    label_w = max(80, max(_width(font, w) for w in words) + 12)   # every label inside the picture
     canvas = Image.new("RGB", (body.shape[1] + margin + bar_w + label_w, height + 2 * margin), (255, 255, 255))
     canvas.paste(Image.fromarray(body), (0, margin))
-    bar_h = height - 24
+    line_h = _height(font)
+    bar_h = height - 24 - 8   # room below the bar for the bottom tick's lower half and "grey: unknown"
     bar_t = np.linspace(1.0, 0.0, bar_h)[:, None].repeat(bar_w, axis=1)   # near at the top
     x0, y0 = body.shape[1] + margin, margin + 12
     canvas.paste(Image.fromarray(colour_map(bar_t)), (x0, y0))
     draw = ImageDraw.Draw(canvas)
-    font = ImageFont.load_default()
     draw.text((x0, margin - 8), title, fill=(0, 0, 0), font=font)
     drawn: list[int] = []
     for position, label in ticks:   # the ends first, then round values between
         y = y0 + round((1.0 - position) * (bar_h - 1))
-        if any(abs(y - other) < 14 for other in drawn):
+        if any(abs(y - other) < line_h + 3 for other in drawn):   # labels never overlap
             continue
         drawn.append(y)
         draw.line([(x0 + bar_w, y), (x0 + bar_w + 4, y)], fill=(0, 0, 0))
         draw.text((x0 + bar_w + 6, y - 5), label, fill=(0, 0, 0), font=font)
-    draw.text((x0, y0 + bar_h + 2), "grey: unknown", fill=(80, 80, 80), font=font)
+    draw.text((x0, y0 + bar_h + 8), "grey: unknown", fill=(80, 80, 80), font=font)
     return np.asarray(canvas)
+
+
+def _width(font, text: str) -> int:
+    left, _, right, _ = font.getbbox(text)
+    return int(math.ceil(right - min(left, 0)))
+
+
+def _height(font) -> int:
+    _, top, _, bottom = font.getbbox("0123456789-+.e um")
+    return int(math.ceil(bottom - min(top, 0)))
 
 
 def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> None:

@@ -119,3 +119,23 @@ def aperture_views(camera: Camera, f_number: float) -> np.ndarray:
     radius = length / (2.0 * f)
     r2 = pos[:, None] ** 2 + pos[None, :] ** 2
     return r2 <= radius * radius * (1.0 + 1e-12)
+
+
+def equivalent_numerical_aperture(camera: Camera, view_extent=None) -> float:
+    """A microscope's summed views as an object-side NA: M / (2·N_eq), N_eq the image-side equivalent
+    f-number (:func:`equivalent_f_number`; paraxial, NA_image = 1/(2·N)), at most the objective's NA
+    (views outside it carry no light). Microscopists think in NA, as photographers in f-numbers."""
+    if getattr(camera, "microscope", None) is None:
+        raise LfprocError("an equivalent numerical aperture needs a microscope camera ([microscope]); a camera's "
+                          "summed views have an equivalent f-number (equivalent_f_number)")
+    scope = camera.microscope
+    na = scope.objective_magnification / (2.0 * equivalent_f_number(camera, view_extent))
+    return float(min(na, scope.numerical_aperture))
+
+
+def aperture_text(camera: Camera, view_extent=None) -> str:
+    """How people name the summed views' aperture: ``"f/5.6 equivalent"`` for a camera, ``"NA 0.42
+    equivalent"`` for a microscope (:func:`equivalent_numerical_aperture`)."""
+    if getattr(camera, "microscope", None) is not None:
+        return f"NA {equivalent_numerical_aperture(camera, view_extent):.2f} equivalent"
+    return f"f/{equivalent_f_number(camera, view_extent):.2g} equivalent"

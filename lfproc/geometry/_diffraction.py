@@ -24,7 +24,8 @@ def airy_radius_mm(f_number, wavelength_mm: float = DEFAULT_WAVELENGTH_MM):
 class DiffractionCheck:
     """Eq. 22 against the effective pixel pitch for the two apertures in the path.
 
-    ``main_lens_airy_mm`` uses the main lens f-number (``None`` without one); ``micro_lens_airy_mm``
+    ``main_lens_airy_mm`` uses the main lens's working f-number b_U / D = N · b_U / f_U (the cone that
+    converges on the micro lenses; ``None`` without an f-number); ``micro_lens_airy_mm``
     the micro lenses' working f-number f_s / p_m, which sets the spot every collimated beam forms on
     the sensor. ``pixel_limited`` is true when both are at most the effective pixel pitch: then the
     pixels, as the model assumes, bound the depth of field.
@@ -52,13 +53,25 @@ class DiffractionCheck:
                     pixel_limited=self.pixel_limited, message=self.message())
 
 
+def working_f_number(camera: Camera) -> float | None:
+    """The main lens's working (image-side) f-number b_U / D, with D = f_U / N its entrance pupil's diameter.
+
+    The Airy disk on the micro lenses (Eq. 22) follows the cone that converges there, whose f-number is
+    N · b_U / f_U, not the object-side N (they agree only when focused at infinity, b_U = f_U).
+    ``None`` without an f-number.
+    """
+    if camera.f_number is None:
+        return None
+    return float(camera.f_number) * camera.image_distance_mm / camera.main_focal_length_mm
+
+
 def diffraction_check(camera: Camera, wavelength_mm: float = DEFAULT_WAVELENGTH_MM,
                       warn: bool = True) -> DiffractionCheck:
     """Compare the Airy limit (Eq. 22) with the effective pixel pitch; warn when diffraction dominates."""
     if not (wavelength_mm > 0 and math.isfinite(wavelength_mm)):
         raise LfprocError(f"wavelength must be a positive number of millimetres, got {wavelength_mm}")
     pitch = camera.effective_pixel_pitch_mm
-    main = None if camera.f_number is None else float(airy_radius_mm(camera.f_number, wavelength_mm))
+    main = None if camera.f_number is None else float(airy_radius_mm(working_f_number(camera), wavelength_mm))
     micro = float(airy_radius_mm(camera.mla_focal_length_mm / camera.mla_pitch_mm, wavelength_mm))
     limited = micro <= pitch and (main is None or main <= pitch)
     check = DiffractionCheck(wavelength_mm, pitch, main, micro, limited)

@@ -295,3 +295,26 @@ def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = Non
             return np.array(slices)
         if len(slices) >= max_slices:
             raise LfprocError(f"--z-range {z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")
+
+
+#: a z step finer than the depth of field by more than this factor earns a warning (``z_step_advice``)
+FINE_STEP_FACTOR = 10.0
+
+
+def z_step_advice(camera, step_um: float, z0_um: float, z1_um: float) -> str | None:
+    """A warning's text when an evenly spaced z-stack's step is far finer than the slices' depth of field.
+
+    Slices a small fraction of their DOF apart show the same thing again (25 µm of DOF sampled every
+    0.2 µm repeats each slice a hundred times, issue 32). Returns ``None`` unless ``step_um`` is more than
+    :data:`FINE_STEP_FACTOR` times finer than the thinnest DOF over [z0, z1] (all views summed, the
+    thinnest they can be); the text names a sensible step, half that DOF (neighbours overlap by half,
+    so every depth is in focus in two slices).
+    """
+    lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
+    ends = microscope_slices(camera, np.array([lo, hi]) / z_per_a_um(camera))
+    dof = float(np.min(ends.dof_um))
+    if not (math.isfinite(dof) and dof > 0 and step_um * FINE_STEP_FACTOR < dof):
+        return None
+    return (f"a z step of {step_um:g} um is {dof / step_um:.0f}x finer than the slices' depth of field "
+            f"({dof:.3g} um): neighbouring slices show the same; a step of about {dof / 2:.2g} um (half the DOF) "
+            f"samples the depth fully")

@@ -17,7 +17,7 @@ OpenImageIO load only when something is written.
 
 from ..colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
 from ..io import write_gif_frames, write_png_preview
-from ._display import MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
+from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
 from ._lytro_pictures import export_picture
 from ._names import FORMATS, slice_name, slice_names, view_name
 from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
@@ -30,7 +30,7 @@ from ._view_set import ViewSet, shown_views, write_view_set
 
 __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata", "summed_views_metadata",
            "write_slices", "write_views", "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX",
-           "UPSCALE_METHODS", "upscale", "upscale_factor", "add_label", "metres", "slice_label", "display_frames",
+           "UPSCALE_METHODS", "DEFAULT_UPSCALE", "upscale", "upscale_factor", "add_label", "metres", "slice_label", "display_frames",
            "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
            "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
            "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",

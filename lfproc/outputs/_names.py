@@ -1,4 +1,5 @@
-"""File names of lfproc's outputs (contract: one image per slice or view, each with its sidecar)."""
+"""File names of lfproc's outputs (contract: one image per slice or view, each with its sidecar; slices named
+so that ``ls`` lists them in the order they are focused)."""
 
 from __future__ import annotations
 
@@ -13,21 +14,50 @@ def slice_name(stem: str, a: float, decimals: int = 3) -> str:
     return f"{stem}_a{a + 0.0:+.{decimals}f}"
 
 
-def slice_names(stem: str, a_values) -> list[str]:
-    """Names for every slice, with as many decimals (3 to 12) as it takes to keep them apart.
+def slice_names(stem: str, a_values, camera=None) -> list[str]:
+    """Names for every slice, whose lexical order (``ls``) is the order they are focused in.
+
+    ``STEM_RR_a+1.500`` for a camera, ``STEM_RR_z-12.500um`` for a microscope (``camera`` given, z in µm
+    from the native object plane, :func:`lfproc.geometry.slice_geometry`): ``RR`` is the slice's rank by
+    increasing a, zero-padded (at least two digits), so the files list from the farthest slice to the
+    nearest (a camera: from infinity towards the lens; a microscope: from low to high z) whatever the order
+    of ``a_values``; the a or z that follows is for people, with as many decimals (3 to 12) as it takes to
+    keep the slices apart. (A plain signed number cannot sort: ``a+…`` lists before ``a-…``, and
+    ``a-0.5`` before ``a-1.0``.)
 
     Raises
     ------
     LfprocError
-        When two values of ``a`` are equal to 12 decimals: they would overwrite each other's file.
+        When two values of ``a`` are equal to 12 decimals: they would be the same slice twice.
     """
     values = [float(a) for a in a_values]
+    labels = _labels(values, camera)
+    order = sorted(range(len(values)), key=values.__getitem__)
+    rank = [0] * len(values)
+    for position, index in enumerate(order):
+        rank[index] = position
+    width = max(2, len(str(len(values) - 1)))
+    return [f"{stem}_{r:0{width}d}_{label}" for r, label in zip(rank, labels)]
+
+
+def _labels(values: list[float], camera) -> list[str]:
+    """``a+1.500`` (or a microscope's ``z-12.500um``) for each slice, with decimals enough to tell them apart."""
+    if len({round(a, 12) for a in values}) != len(values):
+        raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
+                          "remove the duplicate from the list")
+    z = None
+    if camera is not None and getattr(camera, "microscope", None) is not None:
+        from ..geometry import slice_geometry
+
+        z = [float(v) for v in (slice_geometry(camera, values).z_um if values else [])]
     for decimals in range(3, 13):
-        names = [slice_name(stem, a, decimals) for a in values]
-        if len(set(names)) == len(names):
-            return names
-    raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
-                      "remove the duplicate from the list")
+        if z is None:
+            labels = [f"a{a + 0.0:+.{decimals}f}" for a in values]
+        else:
+            labels = [f"z{v + 0.0:+.{decimals}f}um" for v in z]
+        if len(set(labels)) == len(labels):
+            return labels
+    return labels
 
 
 def view_name(stem: str, ky: int, kx: int) -> str:

@@ -1,7 +1,7 @@
 """Pictures for people: refocus and view animations, mosaic previews (8-bit sRGB, enlarged, labelled).
 
 Each preview is tone-mapped with one exposure for all its frames (:class:`ToneMap`, documented
-there), enlarged to at least :data:`MIN_LONG_SIDE_PX` on its long side (:func:`upscale`, nearest by
+there), enlarged to at least :data:`MIN_LONG_SIDE_PX` on its long side (:func:`upscale`, Lanczos by
 default) and, for focal stacks, each frame is labelled with its distance and depth of field in
 metres. The linear TIFF/EXR outputs stay the data products; these files are for looking at. PNG/JPEG
 previews embed what they show and their label (:func:`write_png_preview`), for ``lfproc info``.
@@ -16,25 +16,33 @@ import numpy as np
 from .. import geometry
 from ..io import write_gif_frames, write_png_preview
 from ..viewpoints import circular_walk
-from ._display import MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
+from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._names import slice_names, view_name
-from ._products import mosaic_of_shown
+from ._products import mosaic_of_shown, shown_block
 from ._tone import ToneMap
 
 SLICE_FRAME_MS, VIEW_FRAME_MS = 400, 80
 
 
 def display_frames(images, tone: ToneMap | None = None, min_long_side: int = MIN_LONG_SIDE_PX,
-                   method: str = "nearest", labels=None) -> list[np.ndarray]:
-    """8-bit RGB display frames of linear images: one exposure, enlarged, optionally labelled."""
+                   method: str = DEFAULT_UPSCALE, labels=None) -> list[np.ndarray]:
+    """8-bit display frames of linear images (grey ``(H, W)`` or RGB ``(H, W, 3)``): one exposure, enlarged
+    (``method``: :func:`upscale`), optionally labelled."""
     images = np.asarray(images)
     tone = tone or ToneMap.for_images(images)
     factor = upscale_factor(images.shape[1:], min_long_side)
     frames = []
     for k, image in enumerate(images):
-        frame = as_rgb(upscale(tone(image), factor, method))
+        frame = _grey_or_rgb(upscale(tone(image), factor, method))
         frames.append(add_label(frame, labels[k]) if labels is not None else frame)
     return frames
+
+
+def _grey_or_rgb(image: np.ndarray) -> np.ndarray:
+    """``(H, W)`` for a one-channel image (a third of the bytes to encode), ``(H, W, 3)`` otherwise."""
+    if image.ndim == 3 and image.shape[2] == 1:
+        return image[:, :, 0]
+    return image if image.ndim == 2 else as_rgb(image)
 
 
 PREVIEW_FORMATS = {"png": ".png", "jpeg": ".jpg"}
@@ -46,24 +54,35 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
     if geo.microscope:   # µm from the native object plane, positive towards the objective
-        return [f"z {r['z_um']:+.1f} um | DOF {r['z_far_um']:+.1f} - {r['z_near_um']:+.1f} um" for r in geo.records()]
+        return [f"z {r['z_um']:+.1f} um | DOF {min(r['z_far_um'], r['z_near_um']):+.1f} to "
+                f"{max(r['z_far_um'], r['z_near_um']):+.1f} um" for r in geo.records()]   # low to high
     return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
                                                        np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
 
 
 def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_values, fmt: str = "png", *,
-                         view_mask=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> list[str]:
+                         view_mask=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE) -> list[str]:
     """Display-ready pictures of refocused slices: ``OUTDIR/NAME_preview.png`` (or ``.jpg``) beside each slice.
 
     One exposure for the whole stack (:class:`ToneMap`), so slices compare; enlarged to at least
     ``min_long_side`` pixels and labelled with the slice's distance and DOF in metres (of the views
-    ``view_mask`` marks: those summed).
+    ``view_mask`` marks: those summed). Up to four slices are enlarged and written at a time.
     """
+    from concurrent.futures import ThreadPoolExecutor
+
+    images = np.asarray(images)
     labels = slice_labels(camera, a_values, view_mask)
-    frames = display_frames(np.asarray(images), min_long_side=min_long_side, method=method, labels=labels)
-    return [write_png_preview(os.path.join(outdir, f"{name}_preview{PREVIEW_FORMATS[fmt]}"), frame,
-                              {"preview": "refocused slice", "a": float(a), "label": label})
-            for name, frame, a, label in zip(slice_names(stem, a_values), frames, np.atleast_1d(a_values), labels)]
+    tone = ToneMap.for_images(images)
+    names = slice_names(stem, a_values, camera)
+    a_list = [float(a) for a in np.atleast_1d(a_values)]
+
+    def one(k: int) -> str:   # enlarging (OpenCV) and encoding (zlib) release the GIL: slices in parallel
+        frame = display_frames(images[k][None], tone, min_long_side, method, [labels[k]])[0]
+        return write_png_preview(os.path.join(outdir, f"{names[k]}_preview{PREVIEW_FORMATS[fmt]}"), frame,
+                                 {"preview": "refocused slice", "a": a_list[k], "label": labels[k]})
+
+    with ThreadPoolExecutor(max_workers=min(4, os.cpu_count() or 1, max(len(names), 1))) as pool:
+        return list(pool.map(one, range(len(names))))
 
 
 def view_label(camera, ky: int, kx: int, centre=None) -> str:
@@ -83,7 +102,7 @@ def view_label(camera, ky: int, kx: int, centre=None) -> str:
 
 def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None, camera,
                         fmt: str = "png", *, min_long_side: int = MIN_LONG_SIDE_PX,
-                        method: str = "nearest", centre=None) -> list[str]:
+                        method: str = DEFAULT_UPSCALE, centre=None) -> list[str]:
     """Display-ready pictures of the views ``keep`` marks: ``OUTDIR/STEM_view_KY_KX_preview.png``, one exposure."""
     m = views.shape[0]
     chosen = [(ky, kx) for ky in range(m) for kx in range(m) if keep is None or keep[ky, kx]]
@@ -100,7 +119,7 @@ def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndar
 
 
 def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_values=None, *,
-                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", view_mask=None) -> str:
+                    min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE, view_mask=None) -> str:
     """An animation running through a focal stack in the given order and back: ``OUTDIR/STEM_refocus.gif``.
 
     With ``camera`` and ``a_values`` (one per image) each frame is labelled with its distance and DOF
@@ -119,7 +138,7 @@ def write_slice_gif(outdir: str, stem: str, images: np.ndarray, camera=None, a_v
 
 
 def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray | None = None, camera=None, *,
-                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest", centre=None) -> str:
+                   min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE, centre=None) -> str:
     """An animation walking the views along a circle inside the aperture: ``OUTDIR/STEM_views.gif``.
 
     With ``camera`` each frame is labelled with its view and its virtual camera's distance from the
@@ -135,7 +154,7 @@ def write_view_gif(outdir: str, stem: str, views: np.ndarray, mask: np.ndarray |
 
 
 def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None = None, *,
-                         camera=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = "nearest") -> str:
+                         camera=None, min_long_side: int = MIN_LONG_SIDE_PX, method: str = DEFAULT_UPSCALE) -> str:
     """The view mosaic as an 8-bit PNG for looking at: ``OUTDIR/STEM_views_mosaic_preview.png``.
 
     Like the mosaic data product it shows the views ``keep`` marks, cropped to their rows and columns
@@ -151,6 +170,16 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
         label += f" | {geometry.lateral_sampling_um(camera):.3g} um per lens"
     elif camera is not None:
         label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
-    frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
+    factor = upscale_factor(tiled.shape, min_long_side)
+    if factor > 1 and method != "nearest":   # each view enlarged alone: none bleeds into its neighbours or gaps
+        from ..viewpoints import mosaic
+
+        rows, cols = shown_block(keep, m)
+        lit = np.ones((m, m), bool) if keep is None else np.asarray(keep, bool)
+        big = np.stack([np.stack([upscale(tone(views[ky, kx]), factor, method) * np.uint8(lit[ky, kx])
+                                  for kx in range(cols.start, cols.stop)]) for ky in range(rows.start, rows.stop)])
+        frame = add_label(_grey_or_rgb(mosaic(big, gap=factor).astype(np.uint8)), label)
+    else:
+        frame = display_frames(tiled[None], tone, min_long_side, method, [label])[0]
     return write_png_preview(os.path.join(outdir, f"{stem}_views_mosaic_preview.png"), frame,
                              {"preview": "view mosaic", "views_shown": shown, "views_per_side": m, "label": label})

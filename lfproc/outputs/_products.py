@@ -81,7 +81,7 @@ def write_slices(outdir: str, stem: str, source: str, camera, a_values, images: 
     from ..io import write_image, write_sidecar
 
     paths = []
-    names = slice_names(stem, a_values)
+    names = slice_names(stem, a_values, camera)
     tone, tone_meta = display_exposure(images, fmt)
     for name, meta, image in zip(names, slice_metadata(source, camera, a_values, view_mask, upsample, provenance),
                                  images):

@@ -97,7 +97,7 @@ def usable_a_bound(view_mask, lens_shape: tuple[int, int], min_area: float = MIN
 
 
 def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], source: str, distance_mm=None,
-                         lowest_a: float | None = None) -> None:
+                         lowest_a: float | None = None, range_text=None) -> None:
     """Refuse slices whose refocused area (pixels averaging at least half the summed views) is under half.
 
     Parameters
@@ -114,6 +114,9 @@ def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], sourc
     lowest_a : float, optional
         The lowest a with a physical meaning (below it slices focus nearer than the main lens's front
         focal plane); the usable range starts there if that is above −bound.
+    range_text : callable, optional
+        (a_low, a_high) → the usable range in words, low-to-high (``lfproc.geometry.usable_range_text``);
+        replaces the message's range built from ``distance_mm``.
 
     Raises
     ------
@@ -130,6 +133,10 @@ def check_refocused_area(a_values, view_mask, lens_shape: tuple[int, int], sourc
     a, bound = float(a_values[bad[0]]), usable_a_bound(view_mask, lens_shape)
     lo = float(lowest_a) if lowest_a is not None and -bound < lowest_a < bound else -bound
     n = int(np.sum(view_mask)) if np.ndim(view_mask) else int(view_mask) ** 2
+    if range_text is not None:
+        raise LfprocError(f"{source}: at a={a:g} only {100 * share[bad[0]]:.0f} % of the {lens_shape[0]}x"
+                          f"{lens_shape[1]}-lens slice averages at least half of the {n} summed views (the others "
+                          f"shift off the capture); usable: {range_text(lo, bound)}")
     where = ""
     if distance_mm is not None:   # a → mm from the sensor, or a → text (a microscope's z in µm)
         far, near = (d if isinstance(d := distance_mm(x), str) else _mm(float(d)) for x in (lo, bound))

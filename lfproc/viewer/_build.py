@@ -36,7 +36,7 @@ class PageOptions:
     """How a page shows its images: enlarged to ``min_long_side`` px by ``upscale`` (nearest or smooth)."""
 
     min_long_side: int = MIN_LONG_SIDE_PX
-    upscale: str = "nearest"
+    upscale: str = "smooth"
 
 
 def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibration: dict | None = None,
@@ -139,7 +139,7 @@ def _aperture_record(camera, view_mask, f_number, a_values, stem: str, folder: s
     n_views = extra.get("views_summed", camera.m_hat ** 2)
     equivalent = extra.get("aperture_f_number", geometry.equivalent_f_number(camera))
     label = ("all views" if f_number is None else f"f/{f_number:g}") + \
-        f" ({n_views} view{'' if n_views == 1 else 's'}, f/{equivalent:.2g} equivalent)"
+        f" ({n_views} view{'' if n_views == 1 else 's'}, {geometry.aperture_text(camera, extent)})"
     summed = np.argwhere(np.ones((camera.m_hat,) * 2, bool) if view_mask is None else view_mask).tolist()
     return {"f_number": f_number, "aperture_f_number": equivalent, "views_summed": n_views, "label": label,
             "summed_views": summed, "slices": slices}

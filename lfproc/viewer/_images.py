@@ -1,7 +1,8 @@
 """The viewer's 8-bit sRGB images: slices, views and depth maps, written in parallel.
 
 Images are stored at the light field's own resolution (one pixel per lens) and the page enlarges
-them (CSS ``image-rendering: pixelated`` for ``nearest``, the browser's smooth scaling otherwise) to at
+them (the browser's smooth scaling by default, CSS ``image-rendering: pixelated`` for ``nearest`` and always for
+the depth map, whose unknown lenses must stay grey) to at
 least :data:`lfproc.outputs.MIN_LONG_SIDE_PX` on the long side. Small images (long side under that)
 are PNG, lossless and tiny; larger ones JPEG (quality 90, no chroma subsampling), which encodes an
 Illum-sized view in a few milliseconds.

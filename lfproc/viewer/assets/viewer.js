@@ -30,8 +30,10 @@
     return (v === null || v === undefined || !isFinite(v)) ? "unknown" : v.toFixed(2) + " µm";
   }
   function at(s) { return micro ? s.z_um : s.distance_mm; }
-  function nearOf(s) { return micro ? s.z_near_um : s.near_mm; }
-  function farOf(s) { return micro ? s.z_far_um : s.far_mm; }
+  // a DOF's ends as people read them: near to far (m from the sensor), low to high z (µm; a microscope's
+  // z_near_um, nearer the objective, is the higher number)
+  function lowOf(s) { return micro ? Math.min(s.z_near_um, s.z_far_um) : s.near_mm; }
+  function highOf(s) { return micro ? Math.max(s.z_near_um, s.z_far_um) : s.far_mm; }
   function dofOf(s) { return micro ? s.dof_um : s.dof_mm; }
   function posOf(v) { return micro ? v.angle_deg : v.position_mm; }
 
@@ -40,7 +42,9 @@
   var width = nx * data.display.scale, height = ny * data.display.scale;
   [photo, depth].forEach(function (img) {
     img.width = width; img.height = height;
-    if (data.display.upscale === "nearest") { img.classList.add("pixelated"); }
+    // the depth map stays one block per lens whatever the upscaling: an unknown (grey) lens must not blend
+    // into its known neighbours, and a click reads the lens under it
+    if (data.display.upscale === "nearest" || img === depth) { img.classList.add("pixelated"); }
   });
   $("frame").style.width = width + "px";
   $("title").textContent = "lfproc viewer: " + data.stem;
@@ -64,11 +68,11 @@
     slider.value = String(k);
     $("mode").textContent = "Refocused slice " + (k + 1) + " of " + slices.length + " (a = " + s.a.toFixed(3) + ")";
     $("slice-readout").textContent = "This slice is focused at " + depthText(at(s)) + "; sharp from " +
-      depthText(nearOf(s)) + " to " + depthText(farOf(s)) + " (depth of field " +
+      depthText(lowOf(s)) + " to " + depthText(highOf(s)) + " (depth of field " +
       (isFinite(dofOf(s)) && dofOf(s) !== null ? depthText(dofOf(s)) : "infinite") + ").";
     $("aperture-readout").textContent = "depth of field " +
-      (isFinite(dofOf(s)) && dofOf(s) !== null ? depthText(dofOf(s)) : "infinite") + " (" + depthText(nearOf(s)) +
-      " to " + depthText(farOf(s)) + ")";
+      (isFinite(dofOf(s)) && dofOf(s) !== null ? depthText(dofOf(s)) : "infinite") + " (" + depthText(lowOf(s)) +
+      " to " + depthText(highOf(s)) + ")";
     drawAperture();
   }
 
@@ -140,7 +144,7 @@
     var b = document.createElement("b"); b.id = "here-distance"; b.textContent = depthText(d); out.appendChild(b);
     out.appendChild(document.createTextNode((micro ? " from the native object plane" : " from the sensor") +
       (c < data.depth.min_confidence ? " (low confidence: little texture here)" : "") + ". Sharpest slice: " +
-      depthText(at(s)) + ", in focus from " + depthText(nearOf(s)) + " to " + depthText(farOf(s)) + "."));
+      depthText(at(s)) + ", in focus from " + depthText(lowOf(s)) + " to " + depthText(highOf(s)) + "."));
     out.dataset.distanceMm = isFinite(d) ? String(d) : "inf";
     out.dataset.slice = String(k);
   }
@@ -189,12 +193,16 @@
   // ---------------------------------------------------------------- slider over the slices, in metres
   slider.max = String(slices.length - 1);
   slider.addEventListener("input", function () { showSlice(Number(slider.value)); });
+  // a camera's slices read near (left) to far like every range on the page; a microscope's low to high z
+  if (!micro) { slider.style.direction = "rtl"; }
   var labels = $("slider-labels"), every = Math.max(1, Math.ceil(slices.length / 6));
-  slices.forEach(function (s, k) {
+  var order = slices.map(function (s, k) { return k; });
+  if (!micro) { order.reverse(); }
+  order.forEach(function (k) {
     if (k % every !== 0 && k !== slices.length - 1) { return; }
-    var span = document.createElement("span");
-    span.textContent = depthText(at(s));
-    span.style.left = (slices.length > 1 ? k / (slices.length - 1) * 100 : 50) + "%";
+    var span = document.createElement("span"), place = slices.length > 1 ? k / (slices.length - 1) : 0.5;
+    span.textContent = depthText(at(slices[k]));
+    span.style.left = ((micro ? place : 1 - place) * 100) + "%";
     labels.appendChild(span);
   });
 
@@ -231,13 +239,33 @@
 
   // ---------------------------------------------------------------- depth legend and summaries
   var colours = data.depth.colours.map(function (c) { return "rgb(" + c.join(",") + ")"; });
-  $("legend-bar").style.background = "linear-gradient(to right, " + colours.join(", ") + ")";
-  data.depth.ticks.forEach(function (t) {
+  // read as people read ranges: a camera's near (left) to far, a microscope's low z (left) to high z
+  $("legend-bar").style.background = "linear-gradient(to " + (micro ? "right" : "left") + ", " +
+    colours.join(", ") + ")";
+  data.depth.ticks.slice().sort(function (p, q) { return micro ? p.t - q.t : q.t - p.t; }).forEach(function (t) {
     var span = document.createElement("span");
     span.textContent = depthText(micro ? t.z_um : t.distance_mm);
-    span.style.left = (t.t * 100) + "%";
+    span.style.left = ((micro ? t.t : 1 - t.t) * 100) + "%";
     $("legend-ticks").appendChild(span);
   });
+
+  // tick labels never overlap or leave the legend: both ends always, an inner label only where it fits
+  function layoutTicks() {
+    var spans = Array.prototype.slice.call($("legend-ticks").children), kept = [], gap = 6;
+    var box = $("legend-ticks").getBoundingClientRect();
+    var order = spans.length > 1 ? [0, spans.length - 1] : [0];
+    for (var i = 1; i < spans.length - 1; i++) { order.push(i); }
+    order.forEach(function (i) {
+      var span = spans[i];
+      span.style.visibility = "visible";
+      var r = span.getBoundingClientRect();
+      var clash = kept.some(function (k) { return r.left < k.right + gap && k.left < r.right + gap; }) ||
+        r.left < box.left - 0.5 || r.right > box.right + 0.5;
+      if (clash && kept.length) { span.style.visibility = "hidden"; } else { kept.push(r); }
+    });
+  }
+  layoutTicks();
+  window.addEventListener("resize", layoutTicks);
   $("depth-method").textContent = (micro ? "Depth from the native object plane (towards the objective: +), " :
     "Distance from the sensor, ") + data.depth.method + "; colours " +
     data.depth.colour_scale + ".";
