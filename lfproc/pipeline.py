@@ -57,6 +57,7 @@ class DecodeSetup:
     dark: object | None = None             # lfproc.io.Capture of the dark frame
     reference: object | None = None        # lfproc.inputs.ImageFacts every capture must match
     white_path: str | None = None
+    white_is_white: bool = False           # the user says the white image is one: no scene check
 
     @property
     def has_white(self) -> bool:
@@ -105,7 +106,7 @@ class DecodeSetup:
         from .io import read_capture
 
         white = subtract_dark(read_capture(self.white_path, self.camera), self.dark, "white image")
-        check_white_is_white(white.source, white.data, white.cfa, self.grid)
+        check_white_is_white(white.source, white.data, white.cfa, self.grid, white_is_white=self.white_is_white)
         return white
 
     def _cache_key(self, shape: tuple, cfa: str) -> str:
@@ -146,10 +147,11 @@ def read_grid(path: str) -> tuple[LensGrid, str | None]:
     return record.grid, record.white_image
 
 
-def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
+def calibrate_white(white, camera: Camera, record: bool = False, dark=None, *, white_is_white: bool = False):
     """Fit the lens grid to a white :class:`~lfproc.io.Capture`; what ``lfproc calibrate`` would warn about
     (an untrustworthy fit, an exit pupil the camera file contradicts) is warned here too, and a capture of a
-    scene given as the white image is refused (`lfproc.inputs.check_white_is_white`).
+    scene given as the white image is refused (`lfproc.inputs.check_white_is_white`; not with
+    ``white_is_white``).
 
     With ``record``, returns an `lfproc.inputs.GridRecord` holding what the grid was made from (the white
     image's facts and hash, the ``dark`` frame's) instead of the bare `LensGrid`.
@@ -159,7 +161,8 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 
     estimate = find_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
                          source=white.source)
-    check_white_is_white(white.source, white.data, white.cfa, estimate.grid)
+    check_white_is_white(white.source, white.data, white.cfa, estimate.grid, white_is_white=white_is_white,
+                         texture=estimate.texture)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
                               exit_pupil_warning(white.source, pupil, camera))):
@@ -177,7 +180,8 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
                      interpolation: str = "linear", demosaic_method: str = "fast",
                      grid: LensGrid | None = None, white_dir: str | None = None,
-                     captures: tuple | list = (), dark: str | None = None) -> DecodeSetup:
+                     captures: tuple | list = (), dark: str | None = None,
+                     white_is_white: bool = False) -> DecodeSetup:
     """Resolve ``--calib``/``--white``/``--white-dir``/``--dark`` into a :class:`DecodeSetup` (module docstring).
 
     ``grid``, when given, is the grid these files were already calibrated to (by another process):
@@ -187,7 +191,8 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
 
     Cheap checks come first (docs/inputs.md): the grid file is read and checked against the camera, the
     headers of the white image, the dark frame and the captures are read and checked against each other
-    and the grid's record; only then is the white image read and calibrated.
+    and the grid's record; only then is the white image read and calibrated. ``white_is_white`` (``--white-is-white``)
+    skips the check that the white image is not a capture of a scene (`lfproc.inputs.check_white_is_white`).
     """
     from .inputs import check_grid_fits_camera, check_same_sensor, probe_image, read_grid_record, reference_facts
     from .io import read_capture
@@ -229,13 +234,13 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
         record = record or _record_of(grid, white_path)
     elif record is None:
         white_capture = subtract_dark(read_capture(white_path, camera), dark_capture, "white image")
-        record = calibrate_white(white_capture, camera, record=True, dark=dark_capture)
+        record = calibrate_white(white_capture, camera, record=True, dark=dark_capture, white_is_white=white_is_white)
     elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
     setup = DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
                         demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
-                        white_path=white_path)
+                        white_path=white_path, white_is_white=white_is_white)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
     # travel to batch workers); the file is read again only if the decoder must be derived again

@@ -115,7 +115,14 @@ def test_scene_texture_in_the_micro_images_is_reported():
     plain, seen = find_grid(clean, source="clean.tif"), find_grid(textured, source="textured.tif")
     assert plain.texture < 0.01 and not plain.warnings
     assert seen.texture > 0.1
-    assert [w for w in seen.warnings if "texture ratio" in w and w.startswith("textured.tif:") and "\n" not in w]
+    # one measure, one name, one number (issue 30): the estimate's texture is the one the check refuses with
+    from lfproc.calibrate import white_texture
+    from lfproc.errors import LfprocError
+    from lfproc.inputs import check_white_is_white
+    assert seen.texture == white_texture(textured, "none", seen.grid)
+    with pytest.raises(LfprocError, match=rf"^textured\.tif: this is a capture of a scene.*texture ratio "
+                                          rf"{seen.texture:.3f};"):
+        check_white_is_white("textured.tif", textured, "none", seen.grid)
 
 
 def test_an_untrustworthy_residual_is_reported():

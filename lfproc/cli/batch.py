@@ -129,7 +129,7 @@ def run(args) -> int:
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
                       args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
-                      _abs(args.dark), args.stack if a_values else None)
+                      _abs(args.dark), args.stack if a_values else None, white_is_white=args.white_is_white)
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
