@@ -58,6 +58,7 @@ class DecodeSetup:
     reference: object | None = None        # lfproc.inputs.ImageFacts every capture must match
     white_path: str | None = None
     white_is_white: bool = False           # the user says the white image is one: no scene check
+    m_hat_note: str | None = None          # why m̂ differs from the camera file's nominal one (lfproc.inputs.measured_m_hat)
 
     @property
     def has_white(self) -> bool:
@@ -191,7 +192,9 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
 
     Cheap checks come first (docs/inputs.md): the grid file is read and checked against the camera, the
     headers of the white image, the dark frame and the captures are read and checked against each other
-    and the grid's record; only then is the white image read and calibrated. ``white_is_white`` (``--white-is-white``)
+    and the grid's record; only then is the white image read and calibrated. Without ``[decode] micro_image_px``
+    in the camera file, m̂ comes from the grid's measured pitch (`lfproc.inputs.measured_m_hat`; the setup's
+    ``camera`` carries it and ``m_hat_note`` says why). ``white_is_white`` (``--white-is-white``)
     skips the check that the white image is not a capture of a scene (`lfproc.inputs.check_white_is_white`).
     """
     from .inputs import check_grid_fits_camera, check_same_sensor, probe_image, read_grid_record, reference_facts
@@ -238,9 +241,13 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", stacklevel=2)
-    setup = DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
+    from .inputs import measured_m_hat
+
+    used_grid = grid if grid is not None else record.grid
+    measured = measured_m_hat(camera, used_grid.pitch_px, "calibration" if calib is None else calib)
+    setup = DecodeSetup(measured.camera, used_grid, white_capture, interpolation,
                         demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
-                        white_path=white_path, white_is_white=white_is_white)
+                        white_path=white_path, white_is_white=white_is_white, m_hat_note=measured.note)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
     # travel to batch workers); the file is read again only if the decoder must be derived again

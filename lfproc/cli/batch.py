@@ -174,6 +174,7 @@ def _summed_views(camera, aperture, job):
     mask = None
     if job is not None:
         setup = batch.decode_setup(job)
+        camera = setup.camera          # m̂ from the measured pitch where the camera file states none
         if setup.has_white:
             mask = np.asarray(setup.decoder_for((), "none").views_delivered, dtype=bool)
     if aperture is not None:

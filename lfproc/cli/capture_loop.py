@@ -141,10 +141,13 @@ def setup_from_args(args, camera=None, captures=None):
     from ..pipeline import prepare_decoding
 
     camera = camera or camera_from_args(args)
-    return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                            demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
-                            captures=captures_of(args) if captures is None else list(captures),
-                            dark=getattr(args, "dark", None), white_is_white=getattr(args, "white_is_white", False))
+    setup = prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
+                             demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+                             captures=captures_of(args) if captures is None else list(captures),
+                             dark=getattr(args, "dark", None), white_is_white=getattr(args, "white_is_white", False))
+    if setup.m_hat_note:
+        print(f"lfproc: {setup.m_hat_note}", file=sys.stderr)
+    return setup
 
 
 def require_output_folder(path: str, option: str = "-o OUTDIR") -> None:
