@@ -204,11 +204,31 @@ def _choose_model(xy, st, indexed, clean, center, half) -> tuple[LatticeModel, n
 
 
 def _pitch_sigma(model: LatticeModel, xy, st, inlier, residual) -> float:
-    """Standard error of the pitch: residual per axis over the spread of the inliers' lattice coordinates."""
+    """Uncertainty of the pitch: the larger of its standard error (residual per axis over the spread of the
+    inliers' lattice coordinates) and how much it differs between halves of the sensor (`_half_pitches`: a
+    lens array's pitch varies over the sensor by more than a fit of thousands of centres resolves, and a
+    nominal pitch is the pitch somewhere, not the average)."""
     spread = float(np.sum((st[inlier] - st[inlier].mean(0)) ** 2))
     if not spread > 0:
         return math.inf
-    return (residual / math.sqrt(2.0)) / math.sqrt(spread)
+    statistical = (residual / math.sqrt(2.0)) / math.sqrt(spread)
+    halves = _half_pitches(xy, st, inlier)
+    return max(statistical, float(np.std(halves, ddof=1)) if len(halves) >= 2 else 0.0)
+
+
+def _half_pitches(xy, st, inlier) -> list:
+    """Rigid pitches fitted to the left, right, top and bottom halves of the inlier centres (halves of fewer
+    than `MIN_LENSES` centres, or of a single row or column, left out)."""
+    from ._lattice import fit_similarity
+
+    pitches = []
+    for axis in (0, 1):
+        middle = float(np.median(xy[inlier, axis]))
+        for half in (xy[:, axis] < middle, xy[:, axis] >= middle):
+            use = inlier & half
+            if use.sum() >= MIN_LENSES and np.ptp(st[use, 0]) > 0 and np.ptp(st[use, 1]) > 0:
+                pitches.append(fit_similarity(xy[use], st[use]).pitch)
+    return pitches
 
 
 def _asymmetry_limit(values: np.ndarray) -> float:
