@@ -92,8 +92,13 @@ class DecodeSetup:
             data, white_cfa = white.data, white.cfa
         else:
             data, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
-        decoder = make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
-                               demosaic_method=self.demosaic_method)
+        try:
+            decoder = make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
+                                   demosaic_method=self.demosaic_method)
+        except LfprocError as exc:
+            if not self.has_white or str(exc).startswith(str(self.white_path or self.white.source)):
+                raise
+            raise LfprocError(f"{self.white_path or self.white.source}: {exc}") from None
         if not np.asarray(decoder.views_delivered).any():
             where = self.white_path or (self.white.source if self.white is not None else "the grid")
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
