@@ -92,8 +92,10 @@ def measure(name, path, camera_path, kind, white_of, origin, grids) -> dict:
         m_hat = measured_m_hat(camera, grid.pitch_px).camera.m_hat
         decoder = make_decoder(white.data, grid, m_hat, white.cfa)
         views = decoder(image.data, image.cfa)
+        from lfproc.depth import UNLIT_FRACTION, lit_lenses
+        lit = lit_lenses(views, decoder.views_delivered)
         row.update(lens_flatness=lens_flatness(views, decoder.views_delivered), flatness_limit=WHITE_FLATNESS,
-                   m_hat=m_hat)
+                   m_hat=m_hat, lit_lens_fraction=float(lit.mean()), unlit_fraction=UNLIT_FRACTION)
     row["seconds"] = time.perf_counter() - start
     return row
 
@@ -104,17 +106,20 @@ def markdown(rows) -> str:
 
     head = ("| file | origin | kind | calibration: pitch px (± σ) | residual px | rotation ° | lenses (fitted) | m̂ used "
             "(nominal) | texture ratio (refused > 0.04) | lens-to-lens contrast, noise (warned > 0.6 %) | given as "
-            "white | decoded lens flatness (white < 0.5 %) | time s |")
-    lines = [head, "| " + " | ".join(["---"] * 13) + " |"]
+            "white | decoded lens flatness (white < 0.5 %) | lit lenses (≥ 5 % of the bright level) | time s |")
+    lines = [head, "| " + " | ".join(["---"] * 14) + " |"]
     for r in rows:
         cal = (f"{r['pitch_px']:.4f} (± {r['pitch_sigma_px']:.4f})" if "pitch_px" in r else "—")
         lenses = f"{r['lenses']} ({r['lenses_fitted']})" if "lenses" in r else "—"
-        m_hat = (f"{r['m_hat']} ({r['nominal_m_hat']})" if "nominal_m_hat" in r else str(r.get("m_hat", "—")))
+        m_hat = (f"{r['nominal_m_hat']} (stated)" if r.get("m_hat_given") else
+                 f"{r['m_hat']} ({r['nominal_m_hat']})" if "nominal_m_hat" in r else str(r.get("m_hat", "—")))
         flat = f"{100 * r['lens_flatness']:.1f} %" if "lens_flatness" in r else "—"
+        lit = f"{100 * r['lit_lens_fraction']:.1f} %" if "lit_lens_fraction" in r else "—"
+        noise = "—" if r["lens_noise"] == float("inf") else f"{100 * r['lens_noise']:.2f} %"
         lines.append(f"| `{r['file']}`{' (dark subtracted)' if r['dark'] else ''} | {r['origin']} | {r['kind']} | {cal} | "
                      f"{num(r.get('residual_px'), '.4f')} | {num(r.get('rotation_deg'), '.4f')} | {lenses} | {m_hat} | "
-                     f"{r['texture_ratio']:.4f} | {100 * r['lens_contrast']:.2f} %, {100 * r['lens_noise']:.2f} % | "
-                     f"{r['as_white']} | {flat} | {r['seconds']:.1f} |")
+                     f"{r['texture_ratio']:.4f} | {100 * r['lens_contrast']:.2f} %, {noise} | "
+                     f"{r['as_white']} | {flat} | {lit} | {r['seconds']:.1f} |")
     return "\n".join(lines)
 
 
@@ -126,7 +131,9 @@ def main() -> int:
     for entry in FILES:
         rows.append({"name": entry[0], **measure(*entry, grids)})
         print(f"{entry[0]}: done in {rows[-1]['seconds']:.1f} s", file=sys.stderr)
-    (ROOT / "docs" / "real-data.json").write_text(json.dumps(rows, indent=1, default=float) + "\n")
+    safe = [{k: (None if isinstance(v, float) and v != v or v in (float("inf"),) else v) for k, v in r.items()}
+            for r in rows]
+    (ROOT / "docs" / "real-data.json").write_text(json.dumps(safe, indent=1, default=float, allow_nan=False) + "\n")
     text = DOC.read_text()
     before, rest = text.split(START, 1)
     after = rest.split(END, 1)[1]
