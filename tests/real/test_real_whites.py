@@ -94,3 +94,19 @@ def test_seaurchin_decodes_with_m_hat_from_the_measured_pitch(tmp_path, real_dir
     from lfproc.lightfield import LightField
     lf = LightField.load(str(tmp_path / "su.lfp.npz"))
     assert lf.views.shape[:2] == (17, 17) and lf.camera.m_hat == 17
+    # no depth without light: lenses whose micro image averages under 1 DN above the dark frame are unlit
+    from scipy import ndimage
+
+    from lfproc.depth import lit_lenses
+    capture = read_capture(folder / "light_field.tif").data.astype(float) * 255
+    dark = read_capture(folder / "dark_frame.tif").data.astype(float) * 255
+    brightest = ndimage.uniform_filter(capture - dark, size=int(lf.grid.pitch_px))
+    rows, cols = np.meshgrid(np.arange(lf.lens_shape[0]), np.arange(lf.lens_shape[1]), indexing="ij")
+    xy = np.rint(lf.grid.lens_xy(rows, cols)).astype(int)
+    inside = (xy[..., 0] >= 0) & (xy[..., 0] < capture.shape[1]) & (xy[..., 1] >= 0) & (xy[..., 1] < capture.shape[0])
+    peak = np.full(lf.lens_shape, np.inf)
+    peak[inside] = brightest[xy[inside][:, 1], xy[inside][:, 0]]
+    lit = lit_lenses(lf.views, lf.view_mask)
+    dark_lenses = peak <= 1.0
+    assert dark_lenses.sum() > 200 and not lit[dark_lenses].any()       # 308 such lenses, none lit
+    assert 0.2 < lit.mean() < 0.6                     # the larva lights a third of the lenses (docs/real-data.md)
