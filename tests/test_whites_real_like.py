@@ -102,3 +102,29 @@ def test_calibrate_accepts_a_dusty_low_level_uneven_8_bit_white(tmp_path, whites
         assert len([line for line in proc.stderr.splitlines() if "may be a capture of a scene" in line]) == warned
         data = json.loads((tmp_path / "grid.json").read_text())
         assert abs(data["pitch_px"] - PITCH) < 0.01
+
+
+def test_white_is_white_reaches_the_decode_setup_of_every_command_and_batch(monkeypatch):
+    """--white-is-white is an option of every command that reads a white image, and batch jobs carry it to
+    prepare_decoding (without it changing a job's recorded parameters or fingerprint)."""
+    import lfproc.pipeline
+    from lfproc import batch
+    from lfproc.cli import build_parser
+
+    parser = build_parser()
+    extra = {"refocus": ["--a", "0"], "batch": ["--a", "0"]}
+    for command in ("calibrate", "refocus", "views", "depth", "decode", "viewer", "batch"):
+        args = parser.parse_args([command, "x.png", "--camera", "c.toml", "-o", "out", "--white-is-white",
+                                  *extra.get(command, [])])
+        assert args.white_is_white is True, command
+    seen = {}
+    monkeypatch.setattr(lfproc.pipeline, "prepare_decoding", lambda *a, **k: seen.setdefault("kw", k))
+    import lfproc.batch._worker as worker
+    monkeypatch.setattr(worker, "_SETUP_CACHE", {})          # the stand-in setup stays in this test
+    from conftest import SAMPLES
+    camera = (SAMPLES / "sample" / "camera.toml").read_text()
+    job = batch.Job("c.png", "c", "/out", camera, None, "w-is-white.png", (), False, white_is_white=True)
+    batch.decode_setup(job)
+    assert seen["kw"]["white_is_white"] is True
+    plain = batch.Job("c.png", "c", "/out", camera, None, "w-is-white.png", (), False)
+    assert "white_is_white" not in job.parameters() and job.fingerprint() == plain.fingerprint()

@@ -89,6 +89,7 @@ def test_seaurchin_decodes_with_m_hat_from_the_measured_pitch(tmp_path, real_dir
                    folder / "radiometry_frame.tif", "--dark", folder / "dark_frame.tif", "--white-is-white",
                    "-o", tmp_path / "su.lfp.npz")
     assert proc.returncode == 0, proc.stderr
+    assert "may be a capture of a scene" not in proc.stderr        # --white-is-white honoured by decode
     notes = [line for line in proc.stderr.splitlines() if "m_hat 17" in line]
     assert len(notes) == 1 and "17.19" in notes[0] and "gives 15" in notes[0], proc.stderr
     from lfproc.lightfield import LightField
