@@ -200,7 +200,9 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     first_to_decode = next((job for job in todo if job.camera_toml), None)
     if first_to_decode is not None:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
-        batch.decode_setup(first_to_decode)
+        note = batch.decode_setup(first_to_decode).m_hat_note
+        if note:
+            print(f"lfproc batch: {note}", file=sys.stderr)
     if jobs[0].refocus_a:
         describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
                         integer=args.integer, max_slices=args.max_slices, view_mask=summed)
