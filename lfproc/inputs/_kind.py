@@ -9,8 +9,8 @@
   - **texture ratio** (`lfproc.calibrate.white_texture`, the largest over up to 4 × 4 tiles of well-lit
     micro images): in a white image every micro image repeats its neighbour. Real white images measure
     0.0016–0.0063 (a light-field microscope's 8-bit radiometry frame, a 16-bit flat), simulated ones
-    0.0005–0.008 (noise, hot pixels, vignetting with a sharp rim cut, 8-bit quantisation, dust, low level,
-    uneven lenslets); real captures 0.13 and 0.62, the bundled sample's 0.11, the Lytro sample's 0.067, a
+    0.0005–0.008 (noise, hot pixels, vignetting with a sharp rim cut, 8-bit quantisation), up to 0.022 with
+    dust, 30 DN and uneven lenslets together, 0.039 for a tiny 9 × 12-lens white dark beyond its lenses; real captures 0.13 and 0.62, the bundled sample's 0.11, the Lytro sample's 0.067, a
     faint far grating 0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is
     refused; above `TEXTURE_WARN` (0.02) one line warns.
   - **lens-to-lens contrast** (`lens_scene_contrast`): the brightness at the centre of every micro image
