@@ -8,9 +8,9 @@
   that name (GRID.json's ``texture_ratio``, every warning and refusal) is `white_texture`: the largest
   ratio over up to 4 × 4 tiles of well-lit micro images (`lattice_texture`). `texture_ratio` is the same
   ratio over calibration's windows, for diagnostics only. Measured (docs/real-data.md): real white
-  images 0.0016–0.0063, simulated ones 0.0005–0.008 (0.039 for a tiny white dark beyond its 9 × 12 lenses); real captures 0.13 (an 8-bit microscope capture of a
-  sea urchin), 0.62 (fluorescent beads), simulated ones 0.067–0.19. Above `TEXTURE_LIMIT` (0.04, six
-  times the largest real white's) the image is refused as a capture; above `TEXTURE_WARN` (0.02) it is
+  images 0.0016–0.0063, simulated ones 0.0005–0.008 (0.039 for a tiny white dark beyond its 9 × 12
+  lenses); real captures 0.13 (an 8-bit microscope capture of a sea urchin), 0.62 (fluorescent beads),
+  simulated ones 0.067–0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is refused as a capture; above `TEXTURE_WARN` (0.02) it is
   reported (`lfproc.inputs.check_white_is_white`).
 * **Residual**: the lattice fit's inlier RMS beyond `TRUST_RMS_PX` (or 1 % of the pitch, whichever is
   larger), or more than a quarter of the indexed centres rejected, means the micro image centres are

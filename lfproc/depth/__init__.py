@@ -1,8 +1,9 @@
 """Metric depth from one light field: ``lfproc.depth(lf)`` and the outputs of ``lfproc depth``.
 
-Public names: :func:`depth` (also reachable as ``lfproc.depth(lf, ...)``), :class:`DepthMap`, :func:`summary_line`, :func:`lit_lenses`
-(no depth where no light fell) and :func:`write_depth_outputs` (the files of ``lfproc depth`` for one capture). Importing this package
-is light; numba and the writers load on first use.
+Public names: :func:`depth` (also reachable as ``lfproc.depth(lf, ...)``), :class:`DepthMap`,
+:func:`summary_line`, :func:`lit_lenses` (no depth where no light fell) and :func:`write_depth_outputs` (the
+files of ``lfproc depth`` for one capture). Importing this package is light; numba and the writers load on
+first use.
 """
 
 import sys
