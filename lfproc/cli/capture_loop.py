@@ -44,7 +44,7 @@ def add_dark_option(p) -> None:
 def add_white_is_white_option(p) -> None:
     p.add_argument("--white-is-white", action="store_true",
                    help="the white image is a white image: skip the check that refuses (texture ratio above 0.04) or "
-                        "warns about (lens-to-lens contrast, docs/inputs.md) a capture of a scene given as one")
+                        "warns about (lens-to-lens contrast) a capture of a scene given as one")
 
 
 def add_output_folder_option(p) -> None:
