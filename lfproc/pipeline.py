@@ -59,6 +59,8 @@ class DecodeSetup:
     white_path: str | None = None
     cache: bool = True                     # keep derived decoders in the decoder cache (lfproc.decoder_cache)
     inputs: dict = field(default_factory=dict)   # role -> path of the files that shape every light field
+    white_is_white: bool = False           # the user says the white image is one: no scene check
+    m_hat_note: str | None = None          # why m̂ differs from the camera file's nominal one (lfproc.inputs.measured_m_hat)
 
     @property
     def has_white(self) -> bool:
@@ -95,8 +97,13 @@ class DecodeSetup:
             data, white_cfa = white.data, white.cfa
         else:
             data, white_cfa = np.ones(shape, np.float32), cfa  # the capture's own shape and channels
-        decoder = make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
-                               demosaic_method=self.demosaic_method)
+        try:
+            decoder = make_decoder(data, self.grid, self.camera.m_hat, white_cfa, interpolation=self.interpolation,
+                                   demosaic_method=self.demosaic_method)
+        except LfprocError as exc:
+            if not self.has_white or str(exc).startswith(str(self.white_path or self.white.source)):
+                raise
+            raise LfprocError(f"{self.white_path or self.white.source}: {exc}") from None
         if not np.asarray(decoder.views_delivered).any():
             where = self.white_path or (self.white.source if self.white is not None else "the grid")
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
@@ -110,7 +117,7 @@ class DecodeSetup:
         from .io import read_capture
 
         white = subtract_dark(read_capture(self.white_path, self.camera), self.dark, "white image")
-        check_white_is_white(white.source, white.data, white.cfa, self.grid)
+        check_white_is_white(white.source, white.data, white.cfa, self.grid, white_is_white=self.white_is_white)
         return white
 
     def _cache_key(self, shape: tuple, cfa: str) -> str:
@@ -151,10 +158,11 @@ def read_grid(path: str) -> tuple[LensGrid, str | None]:
     return record.grid, record.white_image
 
 
-def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
+def calibrate_white(white, camera: Camera, record: bool = False, dark=None, *, white_is_white: bool = False):
     """Fit the lens grid to a white :class:`~lfproc.io.Capture`; what ``lfproc calibrate`` would warn about
     (an untrustworthy fit, an exit pupil the camera file contradicts) is warned here too, and a capture of a
-    scene given as the white image is refused (`lfproc.inputs.check_white_is_white`).
+    scene given as the white image is refused (`lfproc.inputs.check_white_is_white`; not with
+    ``white_is_white``).
 
     With ``record``, returns an `lfproc.inputs.GridRecord` holding what the grid was made from (the white
     image's facts and hash, the ``dark`` frame's) instead of the bare `LensGrid`.
@@ -164,7 +172,8 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 
     estimate = find_grid(white.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=white.cfa,
                          source=white.source)
-    check_white_is_white(white.source, white.data, white.cfa, estimate.grid)
+    check_white_is_white(white.source, white.data, white.cfa, estimate.grid, white_is_white=white_is_white,
+                         texture=estimate.texture)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings,
                               exit_pupil_warning(white.source, pupil, camera))):
@@ -182,7 +191,8 @@ def calibrate_white(white, camera: Camera, record: bool = False, dark=None):
 def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None = None, *,
                      interpolation: str = "linear", demosaic_method: str = "fast",
                      grid: LensGrid | None = None, white_dir: str | None = None,
-                     captures: tuple | list = (), dark: str | None = None, cache: bool = True) -> DecodeSetup:
+                     captures: tuple | list = (), dark: str | None = None, cache: bool = True,
+                     white_is_white: bool = False) -> DecodeSetup:
     """Resolve ``--calib``/``--white``/``--white-dir``/``--dark`` into a :class:`DecodeSetup` (module docstring).
 
     ``grid``, when given, is the grid these files were already calibrated to (by another process):
@@ -196,7 +206,10 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
 
     Cheap checks come first (docs/inputs.md): the grid file is read and checked against the camera, the
     headers of the white image, the dark frame and the captures are read and checked against each other
-    and the grid's record; only then is the white image read and calibrated.
+    and the grid's record; only then is the white image read and calibrated. Without ``[decode] micro_image_px``
+    in the camera file, m̂ comes from the grid's measured pitch (`lfproc.inputs.measured_m_hat`; the setup's
+    ``camera`` carries it and ``m_hat_note`` says why). ``white_is_white`` (``--white-is-white``)
+    skips the check that the white image is not a capture of a scene (`lfproc.inputs.check_white_is_white`).
     """
     from .inputs import check_grid_fits_camera, check_same_sensor, probe_image, read_grid_record, reference_facts
     from .io import read_capture
@@ -238,16 +251,21 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
         record = record or _record_of(grid, white_path)
     elif record is None:
         white_capture = subtract_dark(read_capture(white_path, camera), dark_capture, "white image")
-        record = calibrate_white(white_capture, camera, record=True, dark=dark_capture)
+        record = calibrate_white(white_capture, camera, record=True, dark=dark_capture, white_is_white=white_is_white)
     elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
                       f"devignetting — pass --white WHITE to correct vignetting", LfprocWarning, stacklevel=2)
     from .provenance import file_inputs
 
     inputs = file_inputs(camera=camera_file(camera), grid=calib, white=white_path, dark=dark_path)
-    setup = DecodeSetup(camera, grid if grid is not None else record.grid, white_capture, interpolation,
+    from .inputs import measured_m_hat
+
+    used_grid = grid if grid is not None else record.grid
+    measured = measured_m_hat(camera, used_grid.pitch_px, "calibration" if calib is None else calib)
+    setup = DecodeSetup(measured.camera, used_grid, white_capture, interpolation,
                         demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
-                        white_path=white_path, cache=cache, inputs=inputs)
+                        white_path=white_path, cache=cache, inputs=inputs, white_is_white=white_is_white,
+                        m_hat_note=measured.note)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
     # travel to batch workers); the file is read again only if the decoder must be derived again

@@ -569,3 +569,63 @@ def test_a_camera_whose_pitch_ratio_overflows_is_refused():
     table.setdefault("decode", {})["micro_image_px"] = 4
     with pytest.raises(LfprocError, match="finite"):
         _camera(_nested_toml(table))
+
+
+# ----------------------------------------------------------------------------- truncated TIFFs: no stderr leaks
+def _truncated_tiffs(folder: Path) -> list[Path]:
+    """TIFFs as cameras and microscopes write them (8 and 16 bits, raw and deflate strips of 8 rows), cut
+    at 40 points from the header through the IFD into the strips, and with a strip offset or byte count
+    pointing past the end of the file (issue 30: libtiff printed "Unexpected end of file" on a second line)."""
+    import tifffile
+
+    paths = []
+    for dtype in (np.uint8, np.uint16):
+        image = (np.arange(64 * 96).reshape(64, 96) % 200).astype(dtype)
+        for compression in (None, "zlib"):
+            base = folder / "base.tif"
+            tifffile.imwrite(base, image, rowsperstrip=8, compression=compression)
+            data = base.read_bytes()
+            with tifffile.TiffFile(base) as tif:
+                page = tif.pages[0]
+                ifd, tags = page.offset, {tag.code: tag for tag in page.tags.values()}
+            cuts = sorted({*range(0, len(data), max(1, len(data) // 40)), ifd + 1, ifd + 2 + 12 * 4 + 5,
+                           page.dataoffsets[len(page.dataoffsets) // 2] + 10, page.dataoffsets[-1] + 3})
+            variants = {f"cut{cut}": data[:cut] for cut in cuts}
+            for code in (273, 279):      # StripOffsets, StripByteCounts: the first one far past the end
+                damaged_bytes = bytearray(data)
+                at, size = tags[code].valueoffset, (4 if tags[code].dtype in (4, 16) else 2)
+                damaged_bytes[at:at + size] = min(3 * len(data), (1 << (8 * size)) - 1).to_bytes(size, "little")
+                variants[f"tag{code}"] = bytes(damaged_bytes)
+            for name, content in variants.items():
+                path = folder / f"{dtype.__name__}-{compression}-{name}.tif"
+                path.write_bytes(content)
+                paths.append(path)
+    return paths
+
+
+def test_truncated_tiffs_are_refused_without_a_word_from_third_party_libraries(tmp_path, capfd):
+    """Every reader (and lfproc info's description, the inputs' header probe) on each damaged TIFF: returns
+    or raises a one-line LfprocError, and nothing reaches the process's stderr (file descriptor 2, where C
+    libraries write) — the command's own error line is the only one."""
+    from lfproc.inputs import probe_image
+    from lfproc.io import describe_file
+
+    paths = _truncated_tiffs(tmp_path)
+    assert len(paths) >= 150
+    for path in paths:
+        for read in (describe_file, probe_image, _read_image):
+            read_or_refuse("truncated TIFF", read, path)
+        leaked = capfd.readouterr().err
+        assert leaked == "", (path.name, leaked)
+
+
+def test_a_truncated_tiff_is_one_line_from_the_command(tmp_path):
+    """The same files through the command line: exit 2 and exactly one line on stderr."""
+    from conftest import assert_clean_error, run_cli
+
+    paths = {p.name: p for p in _truncated_tiffs(tmp_path)}
+    camera = SAMPLES / "sample" / "camera.toml"
+    names = [name for name in paths if name.startswith("uint8-None-tag273") or name.startswith("uint16-zlib-cut")]
+    for name in names[:1] + names[-2:]:
+        proc = run_cli("calibrate", paths[name], "--camera", camera, "-o", tmp_path / "grid.json")
+        assert_clean_error(proc, str(paths[name]))

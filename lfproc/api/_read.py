@@ -21,7 +21,7 @@ from ..errors import speaking_python
 _PATH = (str, os.PathLike)
 
 
-def calibrate_white(white, camera, dark=None) -> LensGrid:
+def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -> LensGrid:
     """The micro-lens grid fitted to a white image (what ``lfproc calibrate`` writes to GRID.json).
 
     Parameters
@@ -33,6 +33,9 @@ def calibrate_white(white, camera, dark=None) -> LensGrid:
         The camera, or its TOML file.
     dark : str, os.PathLike or ndarray, optional
         A dark frame of the same size, subtracted from the white image.
+    white_is_white : bool
+        Say that ``white`` is a white image: skip the check that refuses a capture of a scene given as one
+        (the commands' ``--white-is-white``; docs/inputs.md).
 
     Returns
     -------
@@ -50,11 +53,12 @@ def calibrate_white(white, camera, dark=None) -> LensGrid:
         camera = _camera(camera)
         dark_capture = None if dark is None else _capture(dark, camera, "dark")
         white_capture = subtract_dark(_capture(white, camera, "white"), dark_capture, "white image")
-        return fit(white_capture, camera)
+        return fit(white_capture, camera, white_is_white=white_is_white)
 
 
 def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, white_dir=None,
-                     decode_interpolation: str = "linear", demosaic: str = "fast", cache: bool = False) -> LightField:
+                     decode_interpolation: str = "linear", demosaic: str = "fast", cache: bool = False,
+                     white_is_white: bool = False) -> LightField:
     """Decode a capture into a light field (or read one that ``lfproc decode`` saved).
 
     Parameters
@@ -83,10 +87,15 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
     cache : bool
         Keep the decoder derived from the white image in the decoder cache on disk and reuse it from there
         (docs/cache.md; the commands do). Default False: nothing is written.
+    white_is_white : bool
+        Say that ``white`` is a white image: skip the check that refuses a capture of a scene given as one
+        (the commands' ``--white-is-white``).
 
     Returns
     -------
     LightField
+        Without ``[decode] micro_image_px`` in the camera, m̂ is the largest odd integer not above the
+        grid's measured micro image pitch (as the commands decode; ``lfproc.inputs.measured_m_hat``).
         With its camera, grid, view mask and ``inputs`` (the files it was made from, for provenance).
 
     Raises
@@ -111,9 +120,9 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
                 setup = prepare_decoding(camera, _path(grid), _path(white), interpolation=decode_interpolation,
                                          demosaic_method=demosaic, grid=grid if isinstance(grid, LensGrid) else None,
                                          captures=[os.fspath(capture)],
-                                         dark=_path(dark), cache=cache)
+                                         dark=_path(dark), cache=cache, white_is_white=white_is_white)
             return load_lightfield(os.fspath(capture), setup)
-        return _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache)
+        return _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache, white_is_white)
 
 
 def _white_in_folder(white, folder, capture) -> str:
@@ -154,9 +163,10 @@ def _saved(path, camera) -> LightField:
     return lf
 
 
-def _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache) -> LightField:
+def _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache,
+                 white_is_white=False) -> LightField:
     """The steps of :func:`lfproc.pipeline.prepare_decoding` for inputs given (partly) as arrays or objects."""
-    from ..inputs import read_grid_record, subtract_dark
+    from ..inputs import measured_m_hat, read_grid_record, subtract_dark
     from ..pipeline import DecodeSetup, camera_file, decode_capture, load_lightfield
     from ..pipeline import calibrate_white as fit
     from ..provenance import file_inputs
@@ -173,13 +183,14 @@ def _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demos
                               f"{type(grid).__name__}")
         lattice = grid
     else:
-        lattice = fit(white_capture, camera)
+        lattice = fit(white_capture, camera, white_is_white=white_is_white)
+    camera = measured_m_hat(camera, lattice.pitch_px, "grid").camera
     if white_capture is None:
         warnings.warn("no white image given: decoding without devignetting; pass white= to correct vignetting",
                       LfprocWarning, stacklevel=3)
     inputs = file_inputs(camera=camera_file(camera), grid=grid, white=white, dark=dark)
     setup = DecodeSetup(camera, lattice, white_capture, decode_interpolation, demosaic, dark=dark_capture,
-                        cache=cache, inputs=inputs)
+                        cache=cache, inputs=inputs, white_is_white=white_is_white)
     if isinstance(capture, _PATH):
         return load_lightfield(os.fspath(capture), setup)
     return decode_capture(_capture(capture, camera, "capture"), setup)

@@ -16,7 +16,7 @@ CAPTURE_EXTENSIONS = (".dng", ".cr2", ".cr3", ".nef", ".arw", ".raf", ".orf", ".
                       ".tif", ".tiff", ".png", ".exr", ".lfr", ".lfp", ".raw", ".npz")
 #: Job fields that are not parameters of the outputs (where they go, and the camera file's text,
 #: which the fingerprint hashes separately)
-_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml", "dark", "camera_path")
+_NOT_PARAMETERS = ("source", "stem", "outdir", "camera_toml", "dark", "camera_path", "white_is_white")
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,7 @@ class Job:
     dark: str | None = None     # dark frame (--dark) or None; stamped into the fingerprint when given
     stack: str | None = None    # with slices: also one z-stack file, "imagej" or "ome" (lfproc refocus --stack)
     camera_path: str | None = None  # the camera file (--camera), recorded in the outputs' provenance
+    white_is_white: bool = False  # --white-is-white: the white image is not checked for a scene
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""

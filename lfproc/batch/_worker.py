@@ -19,7 +19,7 @@ _SETUP_CACHE_SIZE = 4
 def setup_key(job: Job) -> tuple:
     """What a decode setup depends on. The grid and white files' sizes and times are part of it, so a
     long-lived Dask worker recalibrates when the white image or grid file is replaced."""
-    return (job.camera_toml, job.calib, job.white, job.decode_interpolation, job.demosaic,
+    return (job.camera_toml, job.calib, job.white, job.decode_interpolation, job.demosaic, job.white_is_white,
             json.dumps([file_stamp(job.calib), file_stamp(job.white), file_stamp(job.dark)]))
 
 
@@ -34,7 +34,8 @@ def decode_setup(job: Job):
 
         camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
         setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
-                                 demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key), dark=job.dark)
+                                 demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key), dark=job.dark,
+                                 white_is_white=job.white_is_white)
         if job.camera_path is not None:   # the camera file, by its path (the job carries its text)
             import dataclasses
             setup = dataclasses.replace(setup, inputs={**setup.inputs, "camera": job.camera_path})

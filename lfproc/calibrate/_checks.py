@@ -4,9 +4,14 @@
   white image every micro image repeats its neighbour, so the flattened image S satisfies
   S(x + a/2) ≈ S(x − a/2) for a lattice vector a. The texture ratio
   ``Σ (S(x + a/2) − S(x − a/2))² / Σ [(S(x + a/2) − S̄)² + (S(x − a/2) − S̄)²]`` is 0 for a perfect
-  lattice and 1 for micro images unrelated to their neighbours. Measured: clean and noisy white images
-  0.000–0.003, a lattice drifting by ±4 % 0.013 (each tile is compared at its own lattice vector), a
-  simulated capture of a textured plane 0.10. Above `TEXTURE_LIMIT` the image is reported.
+  lattice and 1 for micro images unrelated to their neighbours. The one number lfproc reports under
+  that name (GRID.json's ``texture_ratio``, every warning and refusal) is `white_texture`: the largest
+  ratio over up to 4 × 4 tiles of well-lit micro images (`lattice_texture`). `texture_ratio` is the same
+  ratio over calibration's windows, for diagnostics only. Measured (docs/real-data.md): real white
+  images 0.0016–0.0063, simulated ones 0.0005–0.008 (0.039 for a tiny white dark beyond its 9 × 12
+  lenses); real captures 0.13 (an 8-bit microscope capture of a sea urchin), 0.62 (fluorescent beads),
+  simulated ones 0.067–0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is refused as a capture; above `TEXTURE_WARN` (0.02) it is
+  reported (`lfproc.inputs.check_white_is_white`).
 * **Residual**: the lattice fit's inlier RMS beyond `TRUST_RMS_PX` (or 1 % of the pitch, whichever is
   larger), or more than a quarter of the indexed centres rejected, means the micro image centres are
   not where a lattice puts them (a textured or overexposed white image, strong mechanical vignetting).
@@ -27,8 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: texture ratio above which the white image is reported as showing scene texture
+#: texture ratio (`white_texture`) above which a "white image" is a capture of a scene: real whites give <= 0.0063
 TEXTURE_LIMIT = 0.04
+#: texture ratio above which a white image is reported (one warning line) as possibly showing a scene
+TEXTURE_WARN = 0.02
 #: inlier RMS (px) above which the grid is reported as not trustworthy (or 1 % of the pitch if larger)
 TRUST_RMS_PX = 0.1
 #: relative tolerance of the camera file's nominal pitches (MLA and pixel) when checking the exit pupil
@@ -82,12 +89,18 @@ def _half_vector_terms(flat, yy, xx, a) -> tuple[float, float]:
     return float(np.sum((plus - minus) ** 2)), float(np.sum((plus - mean) ** 2 + (minus - mean) ** 2))
 
 
+def white_texture(image, cfa: str, grid) -> float:
+    """The texture ratio of a white image (module docstring): the largest of `lattice_texture`'s tiles, 0.0
+    where no tile holds lit micro images. The one number reported under that name."""
+    return float(max([0.0, *(float(t) for t in lattice_texture(image, cfa, grid))]))
+
+
 def texture_warning(source: str, ratio: float) -> str | None:
-    if ratio <= TEXTURE_LIMIT:
+    """One line when the texture ratio (`white_texture`) lies between `TEXTURE_WARN` and `TEXTURE_LIMIT`."""
+    if not TEXTURE_WARN < ratio <= TEXTURE_LIMIT:
         return None
-    return (f"{source}: warning: the micro images differ from their neighbours (texture ratio {ratio:.2f}, "
-            f"a white image gives < {TEXTURE_LIMIT}): this looks like a capture of a scene, not a white image; "
-            f"give a white image (a uniform bright surface, e.g. a diffuser) as WHITE")
+    return (f"{source}: its micro images differ a little from their neighbours (texture ratio {ratio:.3f}; white "
+            f"images give < {TEXTURE_WARN}, captures of scenes > {TEXTURE_LIMIT}): it may be a capture of a scene")
 
 
 def trust_warning(source: str, residual_px: float, pitch_px: float, inliers: int, indexed: int) -> str | None:

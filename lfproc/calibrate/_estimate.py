@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import LfprocError
 from ..grid import ROW_SPACING, LensGrid
 from ._assign import NoLattice, assign_and_fit
-from ._checks import texture_ratio, texture_warning, trust_warning
+from ._checks import trust_warning, white_texture
 from ._grid_extent import grid_from_fit, lattice_indices_on_sensor
 from ._lattice import LatticeModel, neighbour_lattice, robust_fit
 from ._lattice_guess import central_crop, lattice_guess_from_autocorrelation
@@ -53,10 +53,11 @@ class GridEstimate:
     pitch_sigma_px : float
         Standard error of the fitted (rigid) pitch, from the residuals.
     texture : float
-        How much the micro images differ from their neighbours (`_checks.texture_ratio`): near 0 for a
-        white image, near 1 for a capture of a textured scene.
+        The texture ratio (`_checks.white_texture`): how much the micro images differ from their
+        neighbours, near 0 for a white image, near 1 for a capture of a textured scene. Judged (refused or
+        warned about) by `lfproc.inputs.check_white_is_white`, not here.
     warnings : tuple of str
-        One-line warnings (untrustworthy residual, scene texture), each naming the image.
+        One-line warnings (an untrustworthy residual), each naming the image.
     """
 
     grid: LensGrid
@@ -168,9 +169,8 @@ def _fit_at_pitch(arr, cfa, pitch0, kind, approx_pitch_px, smoothing, source, re
                           f"/ sensor.pixel_pitch_mm) does not match the white image ({pitch:.3f} px); "
                           f"check both pitches in the camera file, or the white image")
     grid = grid_from_fit(fit_kind, model, lattice_indices_on_sensor(fit_kind, model, shape), shape, residual)
-    texture = texture_ratio(measured, model, fit_kind)
-    warnings = tuple(w for w in (trust_warning(source, residual, pitch, int(inlier.sum()), int(indexed.sum())),
-                                 texture_warning(source, texture)) if w)
+    texture = white_texture(arr, cfa, grid)
+    warnings = tuple(w for w in (trust_warning(source, residual, pitch, int(inlier.sum()), int(indexed.sum())),) if w)
     return GridEstimate(grid=grid, centers_xy_px=xy, inlier=inlier, asymmetry=asym,
                         pitch_sigma_px=_pitch_sigma(model, xy, st, inlier, residual), texture=texture,
                         warnings=warnings)
@@ -204,11 +204,31 @@ def _choose_model(xy, st, indexed, clean, center, half) -> tuple[LatticeModel, n
 
 
 def _pitch_sigma(model: LatticeModel, xy, st, inlier, residual) -> float:
-    """Standard error of the pitch: residual per axis over the spread of the inliers' lattice coordinates."""
+    """Uncertainty of the pitch: the larger of its standard error (residual per axis over the spread of the
+    inliers' lattice coordinates) and how much it differs between halves of the sensor (`_half_pitches`: a
+    lens array's pitch varies over the sensor by more than a fit of thousands of centres resolves, and a
+    nominal pitch is the pitch somewhere, not the average)."""
     spread = float(np.sum((st[inlier] - st[inlier].mean(0)) ** 2))
     if not spread > 0:
         return math.inf
-    return (residual / math.sqrt(2.0)) / math.sqrt(spread)
+    statistical = (residual / math.sqrt(2.0)) / math.sqrt(spread)
+    halves = _half_pitches(xy, st, inlier)
+    return max(statistical, float(np.std(halves, ddof=1)) if len(halves) >= 2 else 0.0)
+
+
+def _half_pitches(xy, st, inlier) -> list:
+    """Rigid pitches fitted to the left, right, top and bottom halves of the inlier centres (halves of fewer
+    than `MIN_LENSES` centres, or of a single row or column, left out)."""
+    from ._lattice import fit_similarity
+
+    pitches = []
+    for axis in (0, 1):
+        middle = float(np.median(xy[inlier, axis]))
+        for half in (xy[:, axis] < middle, xy[:, axis] >= middle):
+            use = inlier & half
+            if use.sum() >= MIN_LENSES and np.ptp(st[use, 0]) > 0 and np.ptp(st[use, 1]) > 0:
+                pitches.append(fit_similarity(xy[use], st[use]).pitch)
+    return pitches
 
 
 def _asymmetry_limit(values: np.ndarray) -> float:

@@ -88,7 +88,15 @@ class Camera:
     provenance: tuple = field(default=(), compare=False, repr=False)
 
     def __post_init__(self):
+        # not a field (a replaced or rebuilt camera states its m̂): whether m̂ was left to the nominal pitch
+        object.__setattr__(self, "_m_hat_from_pitch", self.micro_image_px is None)
         object.__setattr__(self, "micro_image_px", validate_camera(self))
+
+    @property
+    def micro_image_px_given(self) -> bool:
+        """Whether m̂ was stated (``[decode] micro_image_px``, ``micro_image_px=``) rather than derived from the
+        nominal pitch; a derived m̂ gives way to the measured micro image pitch (`lfproc.inputs.measured_m_hat`)."""
+        return not getattr(self, "_m_hat_from_pitch", False)
 
     # ----------------------------------------------------------------- derived quantities
     @property

@@ -129,7 +129,8 @@ def run(args) -> int:
     jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
                       args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
-                      _abs(args.dark), args.stack if a_values else None, _abs(args.camera))
+                      _abs(args.dark), args.stack if a_values else None, _abs(args.camera),
+                      white_is_white=args.white_is_white)
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -174,6 +175,7 @@ def _summed_views(camera, aperture, job):
     mask = None
     if job is not None:
         setup = batch.decode_setup(job)
+        camera = setup.camera          # m̂ from the measured pitch where the camera file states none
         if setup.has_white:
             mask = np.asarray(setup.decoder_for((), "none").views_delivered, dtype=bool)
     if aperture is not None:
@@ -199,7 +201,9 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     first_to_decode = next((job for job in todo if job.camera_toml), None)
     if first_to_decode is not None:
         # fail fast on a bad camera, white image or grid file, before any worker starts (exit status 2)
-        batch.decode_setup(first_to_decode)
+        note = batch.decode_setup(first_to_decode).m_hat_note
+        if note:
+            print(f"lfproc batch: {note}", file=sys.stderr)
     if jobs[0].refocus_a:
         describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
                         integer=args.integer, max_slices=args.max_slices, view_mask=summed)

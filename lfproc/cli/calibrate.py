@@ -16,6 +16,8 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, metavar="GRID.json", help="grid file to write")
     p.add_argument("--dark", metavar="DARK", help="dark frame subtracted from the white image first (recorded in "
                                                   "GRID.json, and reused by --calib)")
+    from .capture_loop import add_white_is_white_option
+    add_white_is_white_option(p)
     p.add_argument("--plot", metavar="FILE.png",
                    help="also draw the fitted centres over the white image (needs matplotlib)")
     p.set_defaults(func=run)
@@ -49,7 +51,8 @@ def run(args) -> int:
     estimate = find_grid(capture.data, kind=camera.grid, approx_pitch_px=camera.pitch_px, cfa=cfa,
                          source=args.white)
     grid = estimate.grid
-    check_white_is_white(args.white, capture.data, cfa, grid)
+    check_white_is_white(args.white, capture.data, cfa, grid, white_is_white=args.white_is_white,
+                         texture=estimate.texture)
     pupil = implied_exit_pupil(grid.pitch_px, estimate.pitch_sigma_px, camera)
     record = dict(grid.to_json_dict(), white_image=os.path.abspath(args.white),
                   camera=os.path.abspath(args.camera), texture_ratio=estimate.texture,

@@ -26,6 +26,7 @@ def add_decode_options(p) -> None:
     p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
                                                       "capture's camera with the nearest zoom and focus steps")
     add_dark_option(p)
+    add_white_is_white_option(p)
     p.add_argument("--decode-interpolation", default="linear", choices=("nearest", "linear", "cubic", "lanczos"),
                    help="resampling of the sensor into micro images (default linear)")
     p.add_argument("--demosaic", default="fast", choices=("fast", "careful"),
@@ -38,6 +39,12 @@ def add_dark_option(p) -> None:
                    help="dark frame (same camera, size and mode; lens cap on): subtracted per pixel from every capture "
                         "and white image after the same level mapping; recorded in grids made with it, and a "
                         "different one later is refused")
+
+
+def add_white_is_white_option(p) -> None:
+    p.add_argument("--white-is-white", action="store_true",
+                   help="the white image is a white image: skip the check that refuses (texture ratio above 0.04) or "
+                        "warns about (lens-to-lens contrast) a capture of a scene given as one")
 
 
 def add_output_folder_option(p) -> None:
@@ -85,6 +92,9 @@ def input_camera(args, paths):
     from ..lightfield import LightField
 
     for path in paths:
+        if os.path.isdir(path):
+            raise LfprocError(f"{path}: is a folder, not a capture file; pass the captures in it (e.g. "
+                              f"{os.path.join(path, '*.tif')}), or run 'lfproc batch' on the folder")
         if not os.path.isfile(path):
             raise LfprocError(f"{path}: no such file; check the path")
     to_decode = [p for p in paths if not is_lightfield_file(p)]
@@ -131,10 +141,13 @@ def setup_from_args(args, camera=None, captures=None):
     from ..pipeline import prepare_decoding
 
     camera = camera or camera_from_args(args)
-    return prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                            demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
-                            captures=captures_of(args) if captures is None else list(captures),
-                            dark=getattr(args, "dark", None))
+    setup = prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
+                             demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+                             captures=captures_of(args) if captures is None else list(captures),
+                             dark=getattr(args, "dark", None), white_is_white=getattr(args, "white_is_white", False))
+    if setup.m_hat_note:
+        print(f"lfproc: {setup.m_hat_note}", file=sys.stderr)
+    return setup
 
 
 def require_output_folder(path: str, option: str = "-o OUTDIR") -> None:

@@ -15,6 +15,14 @@ confidence:
     confidence = confidence_corr / (1 + (Δ / 2h)⁴),   Δ = |a_corr − a_defocus|
 
 Estimates below :data:`MIN_CONFIDENCE`, or whose best slice is an end of the sweep, are unknown (NaN).
+
+**No depth without light.** Where no light fell (a black border, the dark background of a fluorescence
+capture) the views hold noise and an offset, and their agreement says nothing about a surface. A lens whose
+luminance averaged over the views is below :data:`UNLIT_FRACTION` of the light field's bright level (the 99th
+percentile of that average over the lenses) is unlit (`lit_lenses`): its confidence is 0 and its depth
+unknown, in the depth map, its preview and the viewer. Devignetted views are in units of the white image, so
+this is also a fraction of the white image's level wherever the capture's brightest parts are as bright as
+the white.
 """
 
 from __future__ import annotations
@@ -27,8 +35,29 @@ from ._search import dof_half_width_a
 #: estimates less confident than this are reported as unknown (NaN)
 MIN_CONFIDENCE = 0.1
 
+#: share of the bright level (99th percentile of the lenses' mean luminance) below which a lens is unlit
+UNLIT_FRACTION = 0.05
+
 #: contrast (relative to the median luminance) below which a texture counts as absent
 NOISE_CONTRAST = 0.01
+
+
+def lit_lenses(views: np.ndarray, weight: np.ndarray | None = None) -> np.ndarray:
+    """``(Ny, Nx)`` booleans: lenses whose luminance averaged over the views (``weight``: those that carry
+    light; channels averaged) reaches :data:`UNLIT_FRACTION` of the 99th percentile over the lenses (module
+    docstring). All False where nothing is lit."""
+    views = np.asarray(views)
+    m = views.shape[0]
+    use = np.ones((m, m), bool) if weight is None else np.asarray(weight, bool)
+    mean = np.zeros(views.shape[2:4])
+    for ky, kx in zip(*np.nonzero(use)):                           # view by view: no copy of the light field
+        mean += views[ky, kx].mean(axis=-1, dtype=np.float64)
+    mean /= max(int(use.sum()), 1)
+    finite = np.isfinite(mean)
+    top = float(np.percentile(mean[finite], 99)) if finite.any() else 0.0
+    if not top > 0:
+        return np.zeros(mean.shape, bool)
+    return finite & (mean >= UNLIT_FRACTION * top)
 
 
 def cost_floor(luminance: np.ndarray) -> float:

@@ -271,7 +271,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     """
     from .. import geometry
     from ._allfocus import allfocus
-    from ._confidence import confidence, cost_floor, defocus_estimate, view_coverage
+    from ._confidence import confidence, cost_floor, defocus_estimate, lit_lenses, view_coverage
     from ._cost import auto_view_step, cost_volume, delivered_views, sweep_luminance
     from ._metric import metric_depth
     from ._refine import aggregate_edge_aware, refine_minimum
@@ -343,6 +343,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         t0 = time.perf_counter()
         minimum, conf = best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf, c)
         timings["half apertures (borders, occlusions)"] = time.perf_counter() - t0
+    conf = np.where(lit_lenses(views, weight), conf, np.float32(0.0))   # no depth where no light fell
     known = conf >= min_confidence
     a_known = np.where(known, minimum.a, np.nan)
 

@@ -27,7 +27,8 @@ def subtract_dark(image, dark, what: str = "capture"):
     Raises
     ------
     LfprocError
-        One line naming both files when their sizes or channels differ.
+        One line naming both files when their sizes or channels differ, or when the dark frame is brighter on
+        average than the white image it is subtracted from (``what="white image"``): the two are swapped.
     """
     from ..io import Capture
 
@@ -42,5 +43,9 @@ def subtract_dark(image, dark, what: str = "capture"):
     if image.cfa != dark.cfa and image.cfa != "none" and dark.cfa != "none":
         raise LfprocError(f"{dark.source}: this dark frame has colour filter {dark.cfa} but the {what} "
                           f"{image.source} has {image.cfa}; take the dark frame with the same camera")
+    if what == "white image" and float(np.mean(dark.data, dtype=np.float64)) > float(np.mean(image.data, dtype=np.float64)):
+        raise LfprocError(f"{image.source} and {dark.source} look swapped: the dark frame {dark.source} is brighter "
+                          f"on average than the white image {image.source}; pass the white image as WHITE (--white) "
+                          f"and the dark frame (lens cap on) as --dark")
     data = np.subtract(image.data, dark.data, dtype=np.float32)
     return Capture(data=data, cfa=image.cfa, source=image.source)

@@ -1,25 +1,29 @@
 """Swapped inputs: a capture given as the white image, a white image given as the capture.
 
-* **A capture given as the white image** (``lfproc calibrate``, ``--white``): in a white image every micro
-  image repeats its neighbour; a capture's micro images carry scene texture. The largest of the per-tile
-  texture ratios over the well-lit micro images (`lfproc.calibrate.lattice_texture`, which also catches
-  a capture whose texture fills only part of the frame) must stay at or below `TEXTURE_LIMIT` (0.04;
-  white images measure 0.0005–0.008 with noise, hot pixels, vignetting with a sharp rim cut and 8-bit
-  quantisation, the bundled sample's capture 0.11 in its most textured tile, the Lytro sample's 0.067).
-  A capture whose micro images hardly differ from their neighbours (a textured plane far from the
-  focus, 0.015) passes that test; the *lens-level* test then catches it: the brightness at the centre of
-  every micro image (`lens_brightness`, a Gaussian of σ = 0.15 pitch, the Bayer colours weighted
-  equally) is, in a white image, the main lens's smooth vignetting, and in a capture the scene as the
-  central view sees it — a pinhole image, sharp at every depth. Its robust spread about a local
-  quadratic fit over 13 × 13 lenses (the lens itself left out; hexagonal rows in lattice coordinates),
-  beyond the noise measured from two interleaved halves of the same pixels (`lens_scene_contrast`, on up
-  to 3 × 3 tiles of 40 × 40 lenses), must stay at or below `SCENE_CONTRAST_LIMIT` (0.6 %) or below
-  `NOISE_MULTIPLE` (2) × that noise. White images measure 0.00–0.03 % (renders at 16 and 8 bits with
-  strong vignetting; a hexagonal white with noise, hot pixels and a rim cut; the Lytro sample's; a
-  microscope's at 8 and 16 bits with a pedestal) and 0.5 % with 300-photon shot noise (noise 1.0 %:
-  not refused); low-texture captures 0.81 % (±5 %, coarse, 3 m), 1.04 % (±10 % at 800 mm), 5.2 % (a
-  textured plane at 800 mm, texture ratio 0.015). Not recognised: a low-texture capture whose noise
-  exceeds half its lens-to-lens contrast (±10 % under 300-photon shot noise: 0.99 % against 1.6 %).
+* **A capture given as the white image** (``lfproc calibrate``, ``--white``): a refusal only where the
+  contradiction is definite, a warning where a heuristic is not sure, and ``--white-is-white``
+  (``white_is_white=True``) to say "this is my white image" and skip both. Two measures, each under one name
+  with one number everywhere (`WhiteEvidence`; their values on every real and simulated file are tabulated in
+  docs/real-data.md by scripts/real_data_report.py):
+
+  - **texture ratio** (`lfproc.calibrate.white_texture`, the largest over up to 4 × 4 tiles of well-lit
+    micro images): in a white image every micro image repeats its neighbour. Real white images measure
+    0.0016–0.0063 (a light-field microscope's 8-bit radiometry frame, a 16-bit flat), simulated ones
+    0.0005–0.008 (noise, hot pixels, vignetting with a sharp rim cut, 8-bit quantisation), up to 0.022 with
+    dust, 30 DN and uneven lenslets together, 0.039 for a tiny 9 × 12-lens white dark beyond its lenses; real captures 0.13 and 0.62, the bundled sample's 0.11, the Lytro sample's 0.067, a
+    faint far grating 0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is
+    refused; above `TEXTURE_WARN` (0.02) one line warns.
+  - **lens-to-lens contrast** (`lens_scene_contrast`): the brightness at the centre of every micro image
+    (`lens_brightness`, a Gaussian of σ = 0.15 pitch, the Bayer colours weighted equally) is, in a white
+    image through identical lenslets, the main lens's smooth vignetting, and in a capture the scene as the
+    central view sees it. Its robust spread about a local quadratic fit over 13 × 13 lenses (the lens itself
+    left out; hexagonal rows in lattice coordinates), beyond the noise measured from two interleaved halves
+    of the same pixels (on up to 3 × 3 tiles of 40 × 40 lenses). It cannot tell uneven lenslets from a
+    low-texture scene far from the focus (both vary the micro images' brightness, not their content): a
+    real microscope radiometry frame measures 1.6 %, more than low-texture captures (0.81 % at ±5 %, 3 m;
+    1.04 % at ±10 %, 800 mm). It therefore only warns, above `SCENE_CONTRAST_LIMIT` (0.6 %) and
+    `NOISE_MULTIPLE` (2) × its noise. Simulated whites (renders at 16 and 8 bits, strong vignetting,
+    hexagonal with a rim cut, the Lytro sample's) measure 0.00–0.03 %, 0.5 % with 300-photon shot noise.
 * **A white image given as the capture**: decoded (and devignetted), a white image is a smooth field with
   no scene in it. Each view is a pinhole image of the scene, sharp at every depth, so a capture shows its
   scene in every view at lens resolution. For the central view and the four views halfway to the rim, the
@@ -33,15 +37,17 @@
 
 from __future__ import annotations
 
+import warnings
+from dataclasses import dataclass
+
 import numpy as np
 
+from ..calibrate import TEXTURE_LIMIT, TEXTURE_WARN
 from ..errors import LfprocError
 
-#: texture ratio above which a "white image" is refused as a capture of a scene
-TEXTURE_LIMIT = 0.04
 #: fewest lenses per side of a light field judged by `lens_flatness` (a crop of a few lenses may be uniform)
 MIN_LENSES_PER_SIDE = 20
-#: spread of the lens-level brightness beyond noise above which a "white image" is refused as a capture
+#: spread of the lens-level brightness beyond noise above which a white image is warned about (never refused)
 SCENE_CONTRAST_LIMIT = 0.006
 #: ... and it must exceed the noise of the lens brightness by this factor (a noisy white's estimate scatters)
 NOISE_MULTIPLE = 2.0
@@ -51,22 +57,78 @@ SCENE_TREND_LENSES = 13
 WHITE_FLATNESS = 0.005
 
 
-def check_white_is_white(source: str, image, cfa: str, grid) -> None:
-    """Refuse a white image that carries scene texture, in its micro images or from lens to lens (module
-    docstring)."""
-    from ..calibrate import lattice_texture
+@dataclass(frozen=True)
+class WhiteEvidence:
+    """What says a "white image" may be a capture of a scene (module docstring): each number under one name.
 
-    worst = max([0.0, *(float(t) for t in lattice_texture(image, cfa, grid))])
-    if worst > TEXTURE_LIMIT:
-        raise LfprocError(f"{source}: this is a capture of a scene, not a white image: its micro images differ from "
-                          f"their neighbours (texture ratio {worst:.2f}, a white image gives < {TEXTURE_LIMIT}); "
-                          f"give a white image (a uniform bright surface, e.g. through a diffuser) as WHITE")
+    Attributes
+    ----------
+    texture : float
+        The texture ratio (`lfproc.calibrate.white_texture`).
+    contrast, noise : float
+        The lens-to-lens contrast beyond noise and that noise (`lens_scene_contrast`), relative to the level.
+    """
+
+    texture: float
+    contrast: float
+    noise: float
+
+    @property
+    def is_scene(self) -> bool:
+        """A definite contradiction: the texture ratio is above `TEXTURE_LIMIT`."""
+        return self.texture > TEXTURE_LIMIT
+
+    @property
+    def doubts(self) -> tuple:
+        """The reasons (plain text, ``()`` when none) to doubt, short of refusing, that this is a white image."""
+        reasons = []
+        if TEXTURE_WARN < self.texture <= TEXTURE_LIMIT:
+            reasons.append(f"its micro images differ a little from their neighbours (texture ratio {self.texture:.3f}; "
+                           f"white images give < {TEXTURE_WARN}, captures of scenes > {TEXTURE_LIMIT})")
+        if self.contrast > SCENE_CONTRAST_LIMIT and self.contrast > NOISE_MULTIPLE * self.noise:
+            reasons.append(f"the brightness of its micro images varies from lens to lens (lens-to-lens contrast "
+                           f"{100 * self.contrast:.1f} % beyond noise; identical lenslets under uniform light give "
+                           f"< {100 * SCENE_CONTRAST_LIMIT:.1f} %, uneven lenslets and low-texture scenes more)")
+        return tuple(reasons)
+
+
+def white_evidence(image, cfa: str, grid, texture: float | None = None) -> WhiteEvidence:
+    """Both measures of the module docstring for ``image`` on ``grid``; ``texture`` when known already
+    (`lfproc.calibrate.GridEstimate.texture`, the same number)."""
+    from ..calibrate import white_texture
+
+    texture = white_texture(image, cfa, grid) if texture is None else float(texture)
     contrast, noise = lens_scene_contrast(image, cfa, grid)
-    if contrast > SCENE_CONTRAST_LIMIT and contrast > NOISE_MULTIPLE * noise:
-        raise LfprocError(f"{source}: this is a capture of a scene, not a white image: the brightness of its micro "
-                          f"images varies from lens to lens like a scene ({100 * contrast:.1f} % beyond noise, a white "
-                          f"image gives < {100 * SCENE_CONTRAST_LIMIT:.1f} %); give a white image (a uniform bright "
-                          f"surface, e.g. through a diffuser) as WHITE")
+    return WhiteEvidence(texture, contrast, noise)
+
+
+def check_white_is_white(source: str, image, cfa: str, grid, *, white_is_white: bool = False,
+                         texture: float | None = None) -> WhiteEvidence | None:
+    """Refuse a white image that is definitely a capture of a scene, warn (`warnings.warn`, one line) where a
+    measure doubts it (module docstring); nothing is measured with ``white_is_white``.
+
+    Returns
+    -------
+    WhiteEvidence or None
+        The measures (None with ``white_is_white``).
+
+    Raises
+    ------
+    LfprocError
+        One line naming ``source`` when its texture ratio is above `TEXTURE_LIMIT`.
+    """
+    if white_is_white:
+        return None
+    evidence = white_evidence(image, cfa, grid, texture)
+    if evidence.is_scene:
+        raise LfprocError(f"{source}: this is a capture of a scene, not a white image: its micro images differ from "
+                          f"their neighbours (texture ratio {evidence.texture:.3f}; white images give < {TEXTURE_WARN}, "
+                          f"refused above {TEXTURE_LIMIT}); give a white image (a uniform bright surface, e.g. through "
+                          f"a diffuser) as WHITE, or pass --white-is-white if this is one")
+    if evidence.doubts:
+        warnings.warn(f"{source}: may be a capture of a scene, not a white image: {'; and '.join(evidence.doubts)}; "
+                      f"if it is a white image, say so with --white-is-white (white_is_white=True)", stacklevel=2)
+    return evidence
 
 
 def lens_brightness(image, cfa: str, grid, rows, cols) -> np.ndarray:

@@ -17,6 +17,8 @@ def existing_file(path) -> str:
     path = os.fspath(path)
     if not os.path.exists(path):
         raise LfprocError(f"{path}: file not found; check the path")
+    if os.path.isdir(path):
+        raise LfprocError(f"{path}: is a folder, not an image file; pass a file in it (e.g. {os.path.join(path, '*.tif')})")
     if not os.path.isfile(path):
         raise LfprocError(f"{path}: is not a regular file; pass an image file")
     if os.path.getsize(path) == 0:
