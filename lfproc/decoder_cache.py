@@ -43,7 +43,7 @@ import warnings
 
 import numpy as np
 
-from .errors import LfprocError
+from .errors import LfprocError, LfprocWarning
 from .grid import LensGrid
 
 #: arrays at least this large are mapped from the entry, smaller ones copied (ordinary writable arrays)
@@ -336,7 +336,7 @@ def cached_decoder(key: str, build):
         lock.__enter__()
     except OSError as exc:
         warnings.warn(f"decoder cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
-                      f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)", stacklevel=2)
+                      f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)", LfprocWarning, stacklevel=2)
         return build()
     try:
         found = load(path, key, Decoder)   # another process may have derived it while we waited
@@ -348,7 +348,7 @@ def cached_decoder(key: str, build):
             prune(folder, max_bytes(), keep=path)
         except Exception as exc:  # noqa: BLE001 - a full or read-only disk must not fail the decode
             warnings.warn(f"decoder cache {folder}: could not store an entry ({exc}); continuing without it",
-                          stacklevel=2)
+                          LfprocWarning, stacklevel=2)
         return decoder
     finally:
         lock.__exit__(None, None, None)

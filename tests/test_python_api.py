@@ -125,6 +125,13 @@ def sample_api(tmp_path_factory):
     return run
 
 
+def slice_files(folder, a_values, camera=None, ext=".json"):
+    """The files ``lfproc refocus`` writes for ``a_values`` (names in focus order: `lfproc.outputs.slice_names`)."""
+    from lfproc.outputs import slice_names
+
+    return [Path(folder) / (name + ext) for name in slice_names("capture", a_values, camera)]
+
+
 def test_the_snippet_prints_nothing_and_writes_nothing_under_home(sample_api):
     assert sample_api["printed"] == ""
     assert list(sample_api["home"].iterdir()) == []
@@ -134,7 +141,7 @@ def test_the_snippet_prints_nothing_and_writes_nothing_under_home(sample_api):
 
 def test_focal_stack_tags_are_the_sidecars(sample_api, sample_cli):
     fs = sample_api["fs"]
-    sidecars = [read_json(sample_cli / "refocus" / f"capture_a{a:+.3f}.json") for a in A_VALUES]
+    sidecars = [read_json(path) for path in slice_files(sample_cli / "refocus", A_VALUES)]
     for record, sidecar in zip(fs.records(), sidecars):
         assert_same_record(record, sidecar)
     for name in ("a", "distance_mm", "near_mm", "far_mm", "dof_mm"):
@@ -147,8 +154,8 @@ def test_focal_stack_tags_are_the_sidecars(sample_api, sample_cli):
 
 
 def test_focal_stack_images_are_the_tiffs(sample_api, sample_cli):
-    for image, a in zip(sample_api["fs"].images, A_VALUES):
-        tiff = tifffile.imread(sample_cli / "refocus" / f"capture_a{a:+.3f}.tif")
+    for image, path in zip(sample_api["fs"].images, slice_files(sample_cli / "refocus", A_VALUES, ext=".tif")):
+        tiff = tifffile.imread(path)
         np.testing.assert_allclose(image, tiff.reshape(image.shape), rtol=2e-7, atol=1e-7)
 
 
@@ -194,7 +201,7 @@ def test_provenance_hashes_are_the_files_sha256(sample_api, sample_cli):
     assert list(prov["inputs"]) == ["capture", "camera", "white"]   # no dark frame, no grid file shaped it
     for role, name in (("capture", "capture.png"), ("camera", "camera.toml"), ("white", "white.png")):
         assert prov["inputs"][role] == {"path": str(SAMPLE / name), "sha256": sha256(SAMPLE / name)}
-    for path in (sample_cli / "refocus" / "capture_a+0.500.json", sample_cli / "views" / "capture_view_05_05.json",
+    for path in (*slice_files(sample_cli / "refocus", A_VALUES), sample_cli / "views" / "capture_view_05_05.json",
                  sample_cli / "depth" / "capture_depth.json", sample_cli / "depth" / "capture_allfocus.json"):
         assert read_json(path)["provenance"] == prov, path
 
@@ -216,8 +223,8 @@ def test_a_grid_file_and_a_saved_light_field_are_recorded(sample_api, sample_cli
     assert inputs["white"] == sample_api["fs"].provenance["inputs"]["white"]
     proc = run_cli("refocus", saved, "--a", ",".join(map(str, A_VALUES)), "-o", tmp_path / "out")
     assert proc.returncode == 0, proc.stderr
-    for record, a in zip(fs.records(), A_VALUES):
-        assert_same_record(record, read_json(tmp_path / "out" / f"capture_a{a:+.3f}.json"))
+    for record, path in zip(fs.records(), slice_files(tmp_path / "out", A_VALUES)):
+        assert_same_record(record, read_json(path))
     np.testing.assert_array_equal(fs.images, sample_api["fs"].images)
 
 
@@ -305,8 +312,7 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert run["printed"] == "" and list((tmp_path / "home").iterdir()) == []
     assert fs.distance_mm is None and fs.aperture_f_number is None
     np.testing.assert_allclose(by_depth.a, a_values, rtol=1e-9, atol=1e-12)
-    for i, a in enumerate(a_values):
-        name = f"capture_a{a:+.3f}"
+    for i, name in enumerate(p.stem for p in slice_files(tmp_path / "cli", a_values, lf.camera)):
         sidecar = read_json(tmp_path / "cli" / f"{name}.json")
         assert_same_record(fs.records()[i], sidecar)
         for key in ("z_um", "z_near_um", "z_far_um", "dof_um"):

@@ -38,7 +38,7 @@ def test_python_example_runs(monkeypatch, capsys, tmp_path):
     exec(compile(code, "README.md", "exec"), namespace)
     assert "'distance_mm': 650.0" in capsys.readouterr().out
     fs = namespace["fs"]
-    sidecars = sorted((tmp_path / "out").glob("capture_a*.json"))
+    sidecars = sorted((tmp_path / "out").glob("capture_*_a*.json"))   # named in focus order: far first
     assert len(sidecars) == 2
     assert [json.loads(p.read_text())["distance_mm"] for p in sidecars] == pytest.approx([1200.0, 650.0])
     records = fs.records()

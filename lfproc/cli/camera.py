@@ -13,7 +13,7 @@ def register(sub) -> None:
                                    "length and f-number at the capture's zoom, exit pupil distance, levels, CFA. "
                                    "What the metadata lacks (the focus distance, principal planes) comes from "
                                    "--focus-distance or a default; the [provenance] table says which. napari-LF's "
-                                   "metadata.txt gives a light-field microscope's camera file (docs/microscope.md). For a "
+                                   "metadata.txt gives a light-field microscope's camera file (ulens_focal_distance as f_s, pixel_size at the lenslets). For a "
                                    "processed Lytro picture without camera metadata (a first-generation stack), "
                                    "write the camera file from another file of that camera and give it to "
                                    "'lfproc export PICTURE --camera CAM.toml [--focus-distance MM]'.")

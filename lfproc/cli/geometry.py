@@ -32,7 +32,7 @@ def register(sub) -> None:
     p.add_argument("--real-rays", action="store_true",
                    help="also trace the model's rays exactly through the main lens's surfaces (a camera with "
                         "main_lens.prescription or [[main_lens.surfaces]]): real distances, DOF and views beside "
-                        "the paraxial ones, with the deviation in %% (docs/real-lens.md)")
+                        "the paraxial ones, with the deviation (paraxial - real)/paraxial in %% (Eq. 37)")
     p.add_argument("--plot", metavar="FILE.png", help="also draw each slice's distance and DOF (needs matplotlib)")
     p.add_argument("--wavelength-nm", type=float, default=550.0, metavar="NM",
                    help="wavelength for the Airy limit (default 550)")

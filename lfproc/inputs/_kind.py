@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibrate import TEXTURE_LIMIT, TEXTURE_WARN
-from ..errors import LfprocError
+from ..errors import LfprocError, LfprocWarning
 
 #: fewest lenses per side of a light field judged by `lens_flatness` (a crop of a few lenses may be uniform)
 MIN_LENSES_PER_SIDE = 20
@@ -127,7 +127,8 @@ def check_white_is_white(source: str, image, cfa: str, grid, *, white_is_white: 
                           f"a diffuser) as WHITE, or pass --white-is-white if this is one")
     if evidence.doubts:
         warnings.warn(f"{source}: may be a capture of a scene, not a white image: {'; and '.join(evidence.doubts)}; "
-                      f"if it is a white image, say so with --white-is-white (white_is_white=True)", stacklevel=2)
+                      f"if it is a white image, say so with --white-is-white (white_is_white=True)", LfprocWarning,
+                      stacklevel=2)
     return evidence
 
 
