@@ -251,3 +251,23 @@ def parallax_only(parallax) -> bytes:
             "metadataArray": [{"width": width, "height": height, "coord": {"x": x, "y": y}}
                               for _, x, y in parallax]}}}]}}
     return assemble(toc, [block])
+
+
+def cli(capsys, *args):
+    """``lfproc ARGS`` in this process: (status, stdout, stderr lines)."""
+    from lfproc.cli import main
+
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err.strip().splitlines()
+
+
+def info_of(capsys, path) -> dict:
+    """``lfproc info PATH --json`` as a dict (strict JSON: no NaN or Infinity)."""
+    status, out, err = cli(capsys, "info", path, "--json")
+    assert status == 0, err
+
+    def strict(constant):
+        raise AssertionError(f"non-strict JSON {constant}")
+
+    return json.loads(out, parse_constant=strict)

@@ -17,22 +17,10 @@ import pytest
 
 import lytrogen
 import lytropics
-from lfproc.cli import main
+from lytropics import cli, info_of
 
 ILLUM_LAMBDAS = (-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 12.5)
 STACK_LAMBDAS = tuple(np.round(np.linspace(-8.9, 5.0, 11), 3))
-
-
-def cli(capsys, *args):
-    status = main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err.strip().splitlines()
-
-
-def info_of(capsys, path) -> dict:
-    status, out, err = cli(capsys, "info", path, "--json")
-    assert status == 0, err
-    return json.loads(out)
 
 
 def newton_distance(lam, *, f_u, n, p_m, f_s, b_u):

@@ -16,24 +16,11 @@ import pytest
 
 import lytrogen
 import lytropics
+from lytropics import cli, info_of
 from conftest import assert_clean_error, run_cli
-from lfproc.cli import main
 
 ILLUM_LAMBDAS = (-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 12.5)
 F01_LAMBDAS = (-8.92, -5.78, -2.6)
-
-
-def cli(capsys, *args):
-    """``lfproc ARGS`` in this process: (status, stdout, stderr lines)."""
-    status = main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err.strip().splitlines()
-
-
-def info_of(capsys, path) -> dict:
-    status, out, err = cli(capsys, "info", path, "--json")
-    assert status == 0, err
-    return json.loads(out, parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
 
 
 @pytest.fixture

@@ -7,14 +7,12 @@ recognise) it, as ``lfproc info`` gives it (issue 23).
 
 from __future__ import annotations
 
-import hashlib
 import os
 from dataclasses import dataclass
 
 from ..errors import LfprocError
 
 #: bytes read per step when hashing a file
-_CHUNK = 1 << 22
 
 
 @dataclass(frozen=True)
@@ -83,15 +81,11 @@ def probe_image(path: str, camera=None) -> ImageFacts:
 
 
 def file_hash(path: str) -> str:
-    """``"sha256:HEX"`` of a file's bytes (a Lytro raw's metadata file is not included)."""
-    digest = hashlib.sha256()
-    try:
-        with open(path, "rb") as fh:
-            while chunk := fh.read(_CHUNK):
-                digest.update(chunk)
-    except OSError as exc:
-        raise LfprocError(f"{path}: cannot be read ({exc.strerror}); check the path and its permissions") from None
-    return "sha256:" + digest.hexdigest()
+    """``"sha256:HEX"`` of a file's bytes (a Lytro raw's metadata file is not included); the digest of
+    `lfproc.provenance.sha256_of`, computed once per file and process."""
+    from ..provenance import sha256_of
+
+    return "sha256:" + sha256_of(path)
 
 
 def same_file_content(path: str, recorded_hash: str | None) -> bool:

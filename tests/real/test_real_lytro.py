@@ -19,19 +19,7 @@ import numpy as np
 import pytest
 
 import lytropics
-from lfproc.cli import main
-
-
-def cli(capsys, *args):
-    status = main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err.strip().splitlines()
-
-
-def info_of(capsys, path) -> dict:
-    status, out, err = cli(capsys, "info", path, "--json")
-    assert status == 0, err
-    return json.loads(out)
+from lytropics import cli, info_of
 
 
 def exiftool_tags(path) -> dict:
