@@ -11,18 +11,15 @@ Before anything is read in full, camera, grid, white image, dark frame and captu
 each other (lattice kind, micro image pitch, sensor size, Bayer pattern) and every input's header is
 read; a capture given as the white image and a white image given as the capture are refused.
 
-Lytro captures: ``--white-dir DIR`` picks the white image of the first capture's camera (serial) with
-the nearest zoom and focus steps from a calibration folder and says which on stderr; a Lytro white
-image of another camera or zoom is refused, for the first capture before any work and for every
-later one before it is decoded. Without a camera file, the camera comes from the first capture's
-metadata (`camera_for_captures`).
+Lytro captures: ``white_dir`` picks the white image of the first capture's camera with the nearest zoom
+and focus steps (named in ``DecodeSetup.white_note``; this module prints nothing); a Lytro white image
+of another camera or zoom is refused. The camera from metadata: `lfproc.cli.lytro_defaults`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import os
-import sys
 import warnings
 from dataclasses import dataclass, field
 
@@ -61,6 +58,7 @@ class DecodeSetup:
     inputs: dict = field(default_factory=dict)   # role -> path of the files that shape every light field
     white_is_white: bool = False           # the user says the white image is one: no scene check
     m_hat_note: str | None = None          # why m̂ differs from the camera file's nominal one (lfproc.inputs.measured_m_hat)
+    white_note: str | None = None          # which white image white_dir picked, and why (the commands print it)
 
     @property
     def has_white(self) -> bool:
@@ -150,14 +148,6 @@ def _reference_name(setup) -> str:
     return f"white image that {setup.record.path} was calibrated on" if setup.record is not None else "white image"
 
 
-def read_grid(path: str) -> tuple[LensGrid, str | None]:
-    """A GRID.json written by ``lfproc calibrate``: the grid and the white image it recorded (or None)."""
-    from .inputs import read_grid_record
-
-    record = read_grid_record(path)
-    return record.grid, record.white_image
-
-
 def calibrate_white(white, camera: Camera, record: bool = False, dark=None, *, white_is_white: bool = False):
     """Fit the lens grid to a white :class:`~lfproc.io.Capture`; what ``lfproc calibrate`` would warn about
     (an untrustworthy fit, an exit pupil the camera file contradicts) is warned here too, and a capture of a
@@ -219,9 +209,10 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     if calib is None and white is None and white_dir is None:
         raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
                           "--calib GRID.json (from lfproc calibrate)")
-    first = _lytro_metadata_of(captures[0]) if captures else None
+    first = lytro_metadata_of(captures[0]) if captures else None
+    white_note = None
     if white_dir is not None:
-        white = _white_from_folder(white_dir, first, captures[0] if captures else None)
+        white, white_note = white_from_folder(white_dir, first, captures[0] if captures else None)
     record = read_grid_record(calib) if calib is not None else None
     if record is not None:
         check_grid_fits_camera(camera, record)
@@ -235,7 +226,7 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     if dark_path is not None:
         check_same_sensor(probe_image(dark_path, camera), reference, "dark frame", _name_of(reference, calib))
     _check_capture_headers(captures, camera, reference, record, calib)
-    white_metadata = _lytro_metadata_of(white_path) if white_path else None
+    white_metadata = lytro_metadata_of(white_path) if white_path else None
     if white_metadata is not None and white_metadata.modulation_frame is False:
         warnings.warn(f"{white_path}: its metadata marks it as a capture, not a white image (modulationFrame "
                       f"false); pass a white image from the camera's calibration folder", LfprocWarning, stacklevel=2)
@@ -265,7 +256,7 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     setup = DecodeSetup(measured.camera, used_grid, white_capture, interpolation,
                         demosaic_method, white_metadata, record=record, dark=dark_capture, reference=reference,
                         white_path=white_path, cache=cache, inputs=inputs, white_is_white=white_is_white,
-                        m_hat_note=measured.note)
+                        m_hat_note=measured.note, white_note=white_note)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor
     # travel to batch workers); the file is read again only if the decoder must be derived again
@@ -347,7 +338,7 @@ def _check_capture_headers(captures, camera, reference, record, calib) -> None:
         raise errors[0]
 
 
-def _lytro_metadata_of(path: str):
+def lytro_metadata_of(path: str):
     """The Lytro metadata of ``path``, or None for files that are not Lytro files."""
     from .io import is_lytro_file, read_lytro_metadata
 
@@ -356,49 +347,16 @@ def _lytro_metadata_of(path: str):
     return read_lytro_metadata(path)
 
 
-def _white_from_folder(folder: str, capture_metadata, capture_path) -> str:
+def white_from_folder(folder: str, capture_metadata, capture_path) -> tuple[str, str]:
+    """(path, reason): the white image of a Lytro calibration folder for a capture of that metadata (same
+    camera, nearest zoom and focus steps), and one line saying which and why."""
     from .io import pick_white_image
 
     if capture_metadata is None:
         raise LfprocError(f"--white-dir {folder}: picks a white image by the metadata of Lytro captures, but "
                           f"{capture_path or 'no capture'} is not a Lytro file; pass --white WHITE instead")
     choice = pick_white_image(capture_metadata, folder)
-    print(f"lfproc: {choice.reason}", file=sys.stderr)
-    return choice.path
-
-
-def white_image_for(captures, white: str | None = None, white_dir: str | None = None) -> str | None:
-    """``--white`` as given, or the white image ``--white-dir`` picks for the first capture (said on stderr)."""
-    if white is not None and white_dir is not None:
-        raise LfprocError("give --white WHITE or --white-dir DIR, not both")
-    if white_dir is None:
-        return white
-    first = captures[0] if captures else None
-    return _white_from_folder(white_dir, _lytro_metadata_of(first), first)
-
-
-def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: float | None = None) -> Camera:
-    """The camera of ``--camera FILE``, or without one the camera in the first Lytro capture's metadata.
-
-    The metadata has no focus distance: the main lens is taken as focused at infinity (or at
-    ``focus_distance_mm``), and one line on stderr says so and how to fix it.
-    """
-    if camera_file is not None:
-        return Camera.from_toml(camera_file)
-    first = _lytro_metadata_of(captures[0]) if captures else None
-    if first is None:
-        where = f"{captures[0]}: " if captures else ""
-        raise LfprocError(f"{where}decoding a capture needs --camera CAM (a camera TOML file); only Lytro files "
-                          f"carry their camera in their metadata")
-    from .io import lytro_camera
-
-    built = lytro_camera(first, focus_distance_mm)
-    focus = "focused at infinity (the metadata has no focus distance)" if focus_distance_mm is None else \
-        f"focused at {focus_distance_mm:g} mm"
-    print(f"lfproc: camera from {first.source}'s metadata (Lytro {first.model}), main lens {focus}; for other "
-          f"settings write it with 'lfproc camera {first.source} -o camera.toml' and pass --camera",
-          file=sys.stderr)
-    return built.camera
+    return choice.path, choice.reason
 
 
 def load_lightfield(path: str, setup: DecodeSetup) -> LightField:
@@ -434,25 +392,3 @@ def decode_capture(capture, setup: DecodeSetup, path=None) -> LightField:
     inputs = dict(setup.inputs) if path is None else {"capture": path, **setup.inputs}
     return LightField.from_views(views, setup.camera, decoder.output_grid, decoder.views_delivered,
                                  decoder.view_centre, inputs)
-
-
-def output_stem(path: str) -> str:
-    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
-    name = os.path.basename(path)
-    if name.lower().endswith(".lfp.npz"):
-        return name[:-len(".lfp.npz")]
-    return os.path.splitext(name)[0]
-
-
-def unique_stems(paths: list[str]) -> dict[str, str]:
-    """Map each input to its output stem; inputs whose names collide get their folder name prefixed."""
-    stems = [output_stem(p) for p in paths]
-    result = {}
-    for path, stem in zip(paths, stems):
-        if stems.count(stem) > 1:
-            parent = os.path.basename(os.path.dirname(os.path.abspath(path))) or "root"
-            stem = f"{parent}_{stem}"
-        result[path] = stem
-    if len(set(result.values())) != len(result):
-        raise LfprocError("several inputs would write outputs of the same name; give each capture a distinct name")
-    return result

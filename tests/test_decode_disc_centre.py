@@ -115,7 +115,8 @@ def test_lytro_sample_discs_are_centred():
     """The Lytro-format sample (hexagonal GRBG, discs filling their cells, centred by construction): no
     offset is found, nothing is re-centred."""
     from lfproc.io import read_capture
-    from lfproc.pipeline import camera_for_captures, prepare_decoding
+    from lfproc.cli.lytro_defaults import camera_for_captures
+    from lfproc.pipeline import prepare_decoding
 
     capture = str(SAMPLES / "lytro" / "IMG_0001.lfr")
     camera = camera_for_captures(None, [capture])

@@ -59,7 +59,8 @@ def _sample_views(sample):
     """(delivered, inside the main lens aperture) view masks of a bundled sample's decoder."""
     from conftest import SAMPLES
     from lfproc import Camera
-    from lfproc.pipeline import camera_for_captures, prepare_decoding
+    from lfproc.cli.lytro_defaults import camera_for_captures
+    from lfproc.pipeline import prepare_decoding
 
     if sample == "lytro":
         capture = str(SAMPLES / "lytro" / "IMG_0001.lfr")

@@ -324,8 +324,8 @@ def _grid_document():
 
 
 def _grid(path):
-    from lfproc.pipeline import read_grid
-    read_grid(str(path))
+    from lfproc.inputs import read_grid_record
+    read_grid_record(str(path))
 
 
 @fuzz(60)

@@ -134,7 +134,7 @@ def test_refocus_a_lytro_capture_with_its_calibration_folder(tmp_path):
     """The README's Lytro workflow on the bundled sample: no camera file, the white image picked by metadata."""
     from conftest import SAMPLES
     from lfproc import geometry
-    from lfproc.pipeline import camera_for_captures
+    from lfproc.cli.lytro_defaults import camera_for_captures
 
     capture = SAMPLES / "lytro" / "IMG_0001.lfr"
     out = tmp_path / "slices"

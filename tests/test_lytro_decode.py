@@ -25,7 +25,8 @@ from lfproc import Camera, geometry
 from lfproc import simulate
 from lfproc.errors import LfprocError
 from lfproc.io import write_image
-from lfproc.pipeline import camera_for_captures, load_lightfield, prepare_decoding
+from lfproc.cli.lytro_defaults import camera_for_captures
+from lfproc.pipeline import load_lightfield, prepare_decoding
 from lfproc.simulate import Noise, Plane, Scene
 
 MODELS = {

@@ -11,7 +11,8 @@ import pytest
 
 from conftest import ROOT, SAMPLES
 from lfproc import geometry, refocus
-from lfproc.pipeline import camera_for_captures, load_lightfield, prepare_decoding
+from lfproc.cli.lytro_defaults import camera_for_captures
+from lfproc.pipeline import load_lightfield, prepare_decoding
 
 LYTRO = SAMPLES / "lytro"
 
@@ -31,7 +32,7 @@ def test_sample_refocuses_on_each_plane(capsys):
     capture = str(LYTRO / "IMG_0001.lfr")
     camera = camera_for_captures(None, [capture])
     setup = prepare_decoding(camera, white_dir=str(LYTRO / "caldata"), captures=[capture])
-    assert "caldata/MOD_0000.RAW" in capsys.readouterr().err      # the matching zoom, not MOD_0001
+    assert "caldata/MOD_0000.RAW" in setup.white_note             # the matching zoom, not MOD_0001 (the commands print it)
     lf = load_lightfield(capture, setup)
     # the script put the planes where slices a = 1.25 (left half) and a = 0.25 (behind) focus: 9280.2 and
     # 45780.1 mm with its f_U 77.59 mm; the metadata's 77.5937 mm moves them by well under 1 %

@@ -234,7 +234,7 @@ def _stem(stem, source) -> str:
         return str(stem)
     if source is None:
         raise LfprocError("save needs stem= for a light field that was not read from a file")
-    from ..pipeline import output_stem
+    from ..outputs import output_stem
     return output_stem(source)
 
 

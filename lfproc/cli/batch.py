@@ -68,7 +68,8 @@ def run(args) -> int:
     from .. import batch
     from ..camera import Camera
     from ..lightfield import LightField, is_lightfield_file
-    from ..pipeline import camera_for_captures, unique_stems, white_image_for
+    from ..outputs import unique_stems
+    from .lytro_defaults import camera_for_captures, white_image_for
     from .common import aperture_extent, slice_parameters
 
     check_render_options(args)
@@ -120,9 +121,9 @@ def run(args) -> int:
     require_output_folder(args.outdir)
     white = _abs(white_image_for(to_decode, args.white, args.white_dir)) if to_decode else None
     if args.calib and not white:  # decode with the white image the grid file recorded (as lfproc refocus
-        from ..pipeline import read_grid  # does), and let its file stamp into every capture's fingerprint
+        from ..inputs import read_grid_record  # does), and let its file stamp into every capture's fingerprint
 
-        _, recorded = read_grid(args.calib)
+        recorded = read_grid_record(args.calib).white_image
         white = os.path.abspath(recorded) if recorded and os.path.isfile(recorded) else None
     stems = unique_stems(sources)
     outdir = os.path.abspath(args.outdir)

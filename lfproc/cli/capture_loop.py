@@ -101,7 +101,7 @@ def input_camera(args, paths):
     if args.camera:
         return Camera.from_toml(args.camera)
     if to_decode:
-        from ..pipeline import camera_for_captures
+        from .lytro_defaults import camera_for_captures
         return camera_for_captures(None, to_decode)    # Lytro metadata, else the error asking for --camera
     camera = LightField.read_camera(paths[0])
     if camera is None:
@@ -127,7 +127,7 @@ def captures_of(args) -> list[str]:
 
 def camera_from_args(args):
     """``--camera``, or for Lytro captures without it the camera in the first capture's metadata."""
-    from ..pipeline import camera_for_captures
+    from .lytro_defaults import camera_for_captures
 
     return camera_for_captures(args.camera, captures_of(args))
 
@@ -145,8 +145,9 @@ def setup_from_args(args, camera=None, captures=None):
                              demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
                              captures=captures_of(args) if captures is None else list(captures),
                              dark=getattr(args, "dark", None), white_is_white=getattr(args, "white_is_white", False))
-    if setup.m_hat_note:
-        print(f"lfproc: {setup.m_hat_note}", file=sys.stderr)
+    for note in (setup.white_note, setup.m_hat_note):
+        if note:
+            print(f"lfproc: {note}", file=sys.stderr)
     return setup
 
 

@@ -85,7 +85,7 @@ def z_sweep(args, camera) -> dict:
 
 def run(args) -> int:
     from ..api import depth_map
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
     from ..viewpoints import with_aperture
 
     require_output_folder(args.outdir)

@@ -40,7 +40,7 @@ def run(args) -> int:
     from ..errors import LfprocError
     from ..io import existing_file, has_container_extension, is_container
     from ..outputs import export_picture
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
     from .capture_loop import require_output_folder
 
     require_output_folder(args.outdir)   # before any input is read

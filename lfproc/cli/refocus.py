@@ -51,7 +51,7 @@ def check_render_options(args) -> None:
 
 def run(args) -> int:
     from ..api import focal_stack
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
     from ..viewpoints import with_aperture
 
     check_render_options(args)

@@ -40,7 +40,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
     from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, serve, write_index
     from ..viewpoints import with_aperture
 
@@ -106,7 +106,7 @@ def _pictures(args) -> bool:
     if len(pictures) != len(args.raw):
         raise LfprocError(f"{pictures[0]}: a processed Lytro picture among captures; view pictures and captures in "
                           f"separate runs")
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
     from ..viewer import build_picture_pages, make_server, serve
 
     require_output_folder(args.outdir)

@@ -44,7 +44,7 @@ def run(args) -> int:
     from .. import geometry
     from ..api import view_stack
     from ..outputs import shown_views
-    from ..pipeline import unique_stems
+    from ..outputs import unique_stems
 
     require_output_folder(args.outdir)
     stems = unique_stems(args.raw)

@@ -19,7 +19,7 @@ from ..colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
 from ..io import write_gif_frames, write_png_preview
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
 from ._lytro_pictures import export_picture
-from ._names import FORMATS, slice_name, slice_names, view_name
+from ._names import FORMATS, output_stem, slice_name, slice_names, unique_stems, view_name
 from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
                         write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
 from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
@@ -28,7 +28,7 @@ from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, write_focal_st
 from ._tone import ToneMap
 from ._view_set import ViewSet, shown_views, write_view_set
 
-__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "slice_metadata", "summed_views_metadata",
+__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "output_stem", "unique_stems", "slice_metadata", "summed_views_metadata",
            "write_slices", "write_views", "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX",
            "UPSCALE_METHODS", "DEFAULT_UPSCALE", "upscale", "upscale_factor", "add_label", "metres", "slice_label", "display_frames",
            "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",

@@ -3,6 +3,8 @@ so that ``ls`` lists them in the order they are focused)."""
 
 from __future__ import annotations
 
+import os
+
 from ..errors import LfprocError
 
 #: output format -> file extension
@@ -63,3 +65,25 @@ def _labels(values: list[float], camera) -> list[str]:
 def view_name(stem: str, ky: int, kx: int) -> str:
     """``STEM_view_07_03`` for view (ky, kx) = (7, 3)."""
     return f"{stem}_view_{ky:02d}_{kx:02d}"
+
+
+def output_stem(path: str) -> str:
+    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
+    name = os.path.basename(path)
+    if name.lower().endswith(".lfp.npz"):
+        return name[:-len(".lfp.npz")]
+    return os.path.splitext(name)[0]
+
+
+def unique_stems(paths: list[str]) -> dict[str, str]:
+    """Map each input to its output stem; inputs whose names collide get their folder name prefixed."""
+    stems = [output_stem(p) for p in paths]
+    result = {}
+    for path, stem in zip(paths, stems):
+        if stems.count(stem) > 1:
+            parent = os.path.basename(os.path.dirname(os.path.abspath(path))) or "root"
+            stem = f"{parent}_{stem}"
+        result[path] = stem
+    if len(set(result.values())) != len(result):
+        raise LfprocError("several inputs would write outputs of the same name; give each capture a distinct name")
+    return result
