@@ -271,3 +271,12 @@ def info_of(capsys, path) -> dict:
         raise AssertionError(f"non-strict JSON {constant}")
 
     return json.loads(out, parse_constant=strict)
+
+
+def illum_thin_lens(toc) -> dict:
+    """The thin-lens numbers of a real Illum picture's metadata (``frames[0].frame.metadata.devices``), in mm:
+    ``f_u``, ``n`` (f-number), ``p_m``, ``f_s`` and ``b_u`` = f_U + infinityLambda·N·p_m (docs/lytro.md)."""
+    devices = toc["frames"][0]["frame"]["metadata"]["devices"]
+    f_u, n = devices["lens"]["focalLength"] * 1e3, devices["lens"]["fNumber"]
+    p_m, f_s = devices["mla"]["lensPitch"] * 1e3, devices["mla"]["sensorOffset"]["z"] * 1e3
+    return {"f_u": f_u, "n": n, "p_m": p_m, "f_s": f_s, "b_u": f_u + devices["lens"]["infinityLambda"] * n * p_m}

@@ -17,7 +17,7 @@ import pytest
 
 import lytrogen
 import lytropics
-from lytropics import cli, info_of
+from lytropics import cli, illum_thin_lens, info_of
 
 ILLUM_LAMBDAS = (-15.0, -10.0, -5.0, 0.0, 5.0, 10.0, 12.5)
 STACK_LAMBDAS = tuple(np.round(np.linspace(-8.9, 5.0, 11), 3))
@@ -79,10 +79,8 @@ def test_illum_schema_export_in_mm(tmp_path, capsys, illum):
     import tifffile
 
     path, toc = illum
-    lens = toc["frames"][0]["frame"]["metadata"]["devices"]
-    f_u, n = lens["lens"]["focalLength"] * 1e3, lens["lens"]["fNumber"]
-    p_m, f_s = lens["mla"]["lensPitch"] * 1e3, lens["mla"]["sensorOffset"]["z"] * 1e3
-    b_u = f_u + lens["lens"]["infinityLambda"] * n * p_m
+    lens = illum_thin_lens(toc)
+    f_u, n, p_m, f_s, b_u = (lens[k] for k in ("f_u", "n", "p_m", "f_s", "b_u"))
     status, _, err = cli(capsys, "export", path, "-o", tmp_path / "out")
     assert status == 0, err
     for k, lam in enumerate(ILLUM_LAMBDAS):

@@ -16,25 +16,16 @@ from lfproc import Camera
 
 from conftest import SAMPLES, assert_clean_error, run_cli
 from test_browser_viewer import _click_lens, assert_legend_labels_apart, browser  # noqa: F401  (the fixture)
-from scopefile import microscope_toml
-from whitegen import covering_grid, white_image
+from scopefile import TINY_LFM, write_tiny_lfm
 
-CAMERA = microscope_toml(name="tiny-lfm", pitch=0.0475, f_s=0.95, grid=None, wavelength=510)
+CAMERA = TINY_LFM
 SLICE_KEYS = {"source", "a", "z_um", "z_near_um", "z_far_um", "dof_um", "refocus_shifts", "provenance"}
 SUMMED = {"views_summed"}   # where decoding delivers fewer than all views, their count (the DOF is theirs)
 
 
 @pytest.fixture(scope="module")
 def lfm(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("lfm")
-    shape = (120, 128)
-    grid = covering_grid(shape, "rectangular", 0.0475 / 0.0065, 0.3, (0.4, -0.2))
-    white = np.asarray(white_image(shape, grid, 3.3), dtype=np.float64)
-    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
-    capture = white * (0.55 + 0.4 * np.sin(xx / 6.0) * np.cos(yy / 9.0))
-    for name, image in (("white.tif", white), ("capture.tif", capture)):
-        tifffile.imwrite(folder / name, np.round(image / image.max() * 60000).astype(np.uint16))
-    (folder / "lfm.toml").write_text(CAMERA)
+    folder = write_tiny_lfm(tmp_path_factory.mktemp("lfm"))
     proc = run_cli("calibrate", folder / "white.tif", "--camera", folder / "lfm.toml", "-o", folder / "grid.json")
     assert proc.returncode == 0, proc.stderr
     return folder

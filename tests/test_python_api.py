@@ -23,8 +23,7 @@ import tifffile
 
 import lfproc
 from conftest import SAMPLES, run_cli
-from scopefile import microscope_toml
-from whitegen import covering_grid, white_image
+from scopefile import write_tiny_lfm
 
 SAMPLE = SAMPLES / "sample"
 A_VALUES = [0.5, 0.682, 1.2]
@@ -286,17 +285,7 @@ def test_to_xarray_when_xarray_is_there(sample_api):
 @pytest.fixture(scope="module")
 def lfm(tmp_path_factory):
     """A tiny light-field microscope's white image and capture (as tests/test_microscope_cli.py renders them)."""
-    folder = tmp_path_factory.mktemp("lfm")
-    shape = (120, 128)
-    grid = covering_grid(shape, "rectangular", 0.0475 / 0.0065, 0.3, (0.4, -0.2))
-    white = np.asarray(white_image(shape, grid, 3.3), dtype=np.float64)
-    yy, xx = np.mgrid[0:shape[0], 0:shape[1]]
-    capture = white * (0.55 + 0.4 * np.sin(xx / 6.0) * np.cos(yy / 9.0))
-    for name, image in (("white.tif", white), ("capture.tif", capture)):
-        tifffile.imwrite(folder / name, np.round(image / image.max() * 60000).astype(np.uint16))
-    (folder / "lfm.toml").write_text(microscope_toml(name="tiny-lfm", pitch=0.0475, f_s=0.95, grid=None,
-                                                     wavelength=510))
-    return folder
+    return write_tiny_lfm(tmp_path_factory.mktemp("lfm"))
 
 
 def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):

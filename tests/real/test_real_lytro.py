@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import lytropics
-from lytropics import cli, info_of
+from lytropics import cli, illum_thin_lens, info_of
 
 
 def exiftool_tags(path) -> dict:
@@ -69,10 +69,8 @@ def test_real_illum_picture_exports_in_mm(illum, tmp_path, capsys):
     import tifffile
 
     path, toc = illum
-    devices = toc["frames"][0]["frame"]["metadata"]["devices"]
-    f_u, n = devices["lens"]["focalLength"] * 1e3, devices["lens"]["fNumber"]
-    p_m, f_s = devices["mla"]["lensPitch"] * 1e3, devices["mla"]["sensorOffset"]["z"] * 1e3
-    b_u = f_u + devices["lens"]["infinityLambda"] * n * p_m
+    lens = illum_thin_lens(toc)
+    f_u, n, p_m, f_s, b_u = (lens[k] for k in ("f_u", "n", "p_m", "f_s", "b_u"))
     status, _, err = cli(capsys, "export", path, "-o", tmp_path / "out")
     assert status == 0, err
     focus = [entry["focus"] for entry in toc["views"][0]["accelerations"][0]["perImage"]]
