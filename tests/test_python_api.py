@@ -275,6 +275,7 @@ def test_errors_name_python_arguments(sample_api, tmp_path):
 
 
 def test_to_xarray_when_xarray_is_there(sample_api):
+    # xarray is not a dependency of lfproc (to_xarray says how to install it): tested only where present
     xarray = pytest.importorskip("xarray")
     da = sample_api["fs"].to_xarray()
     assert isinstance(da, xarray.DataArray) and da.dims == ("slice", "y", "x", "channel")
