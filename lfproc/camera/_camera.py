@@ -12,14 +12,27 @@ from dataclasses import dataclass, field, replace
 
 from ..errors import LfprocError
 from ._lens import LensPrescription
+from ._main_optics import MainLens, ObjectSpace
 from ._microscope import Microscope
 from ._optics import image_distance_for_focus
 from ._validation import validate_camera
 
 
-@dataclass(frozen=True)
+#: a main-lens argument not given (``None`` is a value: "no f-number")
+_UNSET = object()
+_LENS_DEFAULTS = {"focal_length_mm": None, "image_distance_mm": None, "principal_plane_gap_mm": 0.0,
+                  "f_number": None, "exit_pupil_distance_mm": math.inf, "prescription": None}
+
+
+@dataclass(frozen=True, init=False)
 class Camera:
     """Optical parameters of a Standard Plenoptic Camera (the paper's Table 1 and Section 5.1).
+
+    The sensor and the micro lens array are fields; everything in front of the MLA is one field,
+    ``main_optics`` (a :class:`~._main_optics.MainLens` or a :class:`~._microscope.Microscope`, the one
+    interface of :mod:`._main_optics`). The main lens can also be given by its camera-file values
+    (``main_focal_length_mm=…``, as below), which build the :class:`MainLens`; read back, those names are
+    properties of ``main_optics`` (``None`` for a microscope).
 
     Parameters
     ----------
@@ -58,6 +71,8 @@ class Camera:
     microscope : Microscope or None
         The objective, tube lens and relay of a light-field microscope (the ``[microscope]`` table),
         in place of a main lens; ``None`` for a photographic camera.
+    main_optics : MainLens or Microscope, keyword only
+        The main optics as one object, in place of the values above.
     name : str
         Optional label.
     source : str
@@ -70,27 +85,97 @@ class Camera:
     pixel_pitch_mm: float
     mla_pitch_mm: float
     mla_focal_length_mm: float
-    main_focal_length_mm: float | None = None
-    image_distance_mm: float | None = None
+    main_optics: MainLens | Microscope | None
     mla_principal_plane_gap_mm: float = 0.0
-    main_principal_plane_gap_mm: float = 0.0
-    f_number: float | None = None
     grid: str = "rectangular"
     cfa: str = "none"
     black_level: float = 0.0
     white_level: float | None = None
-    exit_pupil_distance_mm: float = math.inf
     micro_image_px: int | None = None
-    main_lens_prescription: LensPrescription | None = None
-    microscope: Microscope | None = None
     name: str = ""
     source: str = field(default="", compare=False, repr=False)
     provenance: tuple = field(default=(), compare=False, repr=False)
 
-    def __post_init__(self):
+    def __init__(self, pixel_pitch_mm, mla_pitch_mm, mla_focal_length_mm, main_focal_length_mm=_UNSET,
+                 image_distance_mm=_UNSET, mla_principal_plane_gap_mm=0.0, main_principal_plane_gap_mm=_UNSET,
+                 f_number=_UNSET, grid="rectangular", cfa="none", black_level=0.0, white_level=None,
+                 exit_pupil_distance_mm=_UNSET, micro_image_px=None, main_lens_prescription=_UNSET,
+                 microscope=None, name="", source="", provenance=(), *, main_optics=None):
+        lens_values = {key: value for key, value in (
+            ("focal_length_mm", main_focal_length_mm), ("image_distance_mm", image_distance_mm),
+            ("principal_plane_gap_mm", main_principal_plane_gap_mm), ("f_number", f_number),
+            ("exit_pupil_distance_mm", exit_pupil_distance_mm), ("prescription", main_lens_prescription))
+            if value is not _UNSET}
+        where = source or "camera"
+        if main_optics is not None and microscope is not None and microscope is not main_optics:
+            raise LfprocError(f"{where}: give the main optics once (main_optics= or microscope=), not both")
+        optics = main_optics if main_optics is not None else microscope
+        if isinstance(optics, MainLens):
+            optics = replace(optics, **lens_values)       # dataclasses.replace(camera, image_distance_mm=...)
+        elif optics is not None:
+            if any(value is not None and value != _LENS_DEFAULTS[key] for key, value in lens_values.items()):
+                raise LfprocError(f"{where}: a microscope camera has no main lens; give [microscope] or "
+                                  f"[main_lens], not both")
+        elif lens_values.get("focal_length_mm") is not None and lens_values.get("image_distance_mm") is not None:
+            optics = MainLens(**{key: _LENS_DEFAULTS[key] if value is None else value
+                                 for key, value in lens_values.items() if key != "f_number"},
+                              f_number=lens_values.get("f_number"))
+        for key, value in (("pixel_pitch_mm", pixel_pitch_mm), ("mla_pitch_mm", mla_pitch_mm),
+                           ("mla_focal_length_mm", mla_focal_length_mm), ("main_optics", optics),
+                           ("mla_principal_plane_gap_mm", mla_principal_plane_gap_mm), ("grid", grid), ("cfa", cfa),
+                           ("black_level", black_level), ("white_level", white_level),
+                           ("micro_image_px", micro_image_px), ("name", name), ("source", source),
+                           ("provenance", provenance)):
+            object.__setattr__(self, key, value)
         # not a field (a replaced or rebuilt camera states its m̂): whether m̂ was left to the nominal pitch
         object.__setattr__(self, "_m_hat_from_pitch", self.micro_image_px is None)
         object.__setattr__(self, "micro_image_px", validate_camera(self))
+
+    # ----------------------------------------------------------------- the main optics' values, by their file keys
+    @property
+    def main_lens(self) -> MainLens | None:
+        """The photographic main lens (``[main_lens]``), or ``None`` for a microscope."""
+        return self.main_optics if isinstance(self.main_optics, MainLens) else None
+
+    @property
+    def microscope(self) -> Microscope | None:
+        """The objective, tube lens and relay (``[microscope]``), or ``None`` for a photographic camera."""
+        return self.main_optics if isinstance(self.main_optics, Microscope) else None
+
+    @property
+    def main_focal_length_mm(self) -> float | None:
+        """f_U (``None`` for a microscope)."""
+        return None if self.main_lens is None else self.main_lens.focal_length_mm
+
+    @property
+    def image_distance_mm(self) -> float | None:
+        """b_U, H2U to the MLA's H1s (``None`` for a microscope)."""
+        return None if self.main_lens is None else self.main_lens.image_distance_mm
+
+    @property
+    def main_principal_plane_gap_mm(self) -> float:
+        """H1U–H2U (0 for a microscope)."""
+        return 0.0 if self.main_lens is None else self.main_lens.principal_plane_gap_mm
+
+    @property
+    def f_number(self) -> float | None:
+        """The main lens f-number (``None`` where not given, and for a microscope: its aperture is its NA)."""
+        return None if self.main_lens is None else self.main_lens.f_number
+
+    @property
+    def main_lens_prescription(self) -> LensPrescription | None:
+        """The main lens's surfaces where the camera file gives them."""
+        return None if self.main_lens is None else self.main_lens.prescription
+
+    @property
+    def exit_pupil_distance_mm(self) -> float:
+        """d_A, the MLA to the main optics' exit pupil (``inf``: image-side telecentric)."""
+        return math.inf if self.main_optics is None else self.main_optics.exit_pupil_distance_mm
+
+    @property
+    def object_space(self) -> ObjectSpace:
+        """Unit and origin of every slice position and depth of this camera (:class:`~._main_optics.ObjectSpace`)."""
+        return self.main_optics.object_space
 
     @property
     def micro_image_px_given(self) -> bool:
@@ -128,7 +213,7 @@ class Camera:
     @property
     def relay_magnification(self) -> float:
         """Lateral magnification from the lenslets' focal plane to the sensor (1 without a relay)."""
-        return 1.0 if self.microscope is None else float(self.microscope.relay_magnification)
+        return 1.0 if self.main_optics is None else float(self.main_optics.relay_magnification)
 
     @property
     def lenslet_pixel_pitch_mm(self) -> float:
@@ -170,8 +255,12 @@ class Camera:
     def sensor_to_main_lens_mm(self) -> float:
         """f_s + H1sH2s + b_U + H1UH2U: the constant path of Eqs. 21 and 31 (sensor to H1U)."""
         self.require_main_lens("a distance from the sensor")
-        return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
-                + self.main_principal_plane_gap_mm)
+        return self.main_lens.sensor_path_mm(self.mla_path_mm)
+
+    @property
+    def mla_path_mm(self) -> float:
+        """f_s + H1sH2s: the sensor to the MLA's H1s, the part of every path the main optics do not set."""
+        return self.mla_focal_length_mm + self.mla_principal_plane_gap_mm
 
     @property
     def pitch_px(self) -> float:

@@ -13,7 +13,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import LfprocError
+from ._main_optics import NATIVE_PLANE_UM
+from ._transfer import RayTransfer, gap, lens
 
 #: camera-file key of each Microscope field (error messages)
 MICROSCOPE_KEYS = ("objective_magnification", "numerical_aperture", "immersion_index",
@@ -87,6 +91,38 @@ class Microscope:
     def wavelength_mm(self) -> float:
         """λ in millimetres (550 nm where the camera file gives none)."""
         return (550.0 if self.wavelength_nm is None else self.wavelength_nm) * 1e-6
+
+    # ----------------------------------------------------------------- the main-optics interface (._main_optics)
+    object_space = NATIVE_PLANE_UM
+    #: the aperture stop in the objective's back focal plane: image-side telecentric, no exit pupil to place
+    exit_pupil_distance_mm = math.inf
+    #: object-side telecentric too: a view is one direction through every lens
+    views_are_orthographic = True
+
+    @property
+    def image_aperture_sine(self) -> float:
+        """NA / M (:attr:`image_numerical_aperture`)."""
+        return self.image_numerical_aperture
+
+    def transfer(self) -> RayTransfer:
+        """S from the native object plane (in immersion n) to the MLA, built from its lenses:
+        T(f_tube)·L(f_tube)·T(f_obj + f_tube)·L(f_obj)·T(f_obj) = [[−M, 0], [0, −1/M]] (``._transfer``)."""
+        f_obj, f_tube = self.objective_focal_length_mm, self.tube_lens_focal_length_mm
+        s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
+        return RayTransfer(s.A, s.B, s.C, s.D, float(self.immersion_index))
+
+    def object_position(self, image_offset_mm, mla_path_mm: float = 0.0):
+        """z in µm of the conjugate of the image point w behind the MLA: n·w/M² through :meth:`transfer`,
+        positive towards the objective (``mla_path_mm`` does not enter: z is from the native object plane)."""
+        z = np.asarray(self.transfer().object_offset_mm(image_offset_mm), dtype=np.float64) * 1000.0
+        return float(z) if z.ndim == 0 else z
+
+    def wave_depth_of_field(self) -> float:
+        """λ·n/NA² in µm, the wave term of a microscope's DOF (Inoué and Spring; Levoy et al. 2006)."""
+        return self.wavelength_mm * 1000.0 * self.immersion_index / self.numerical_aperture ** 2
+
+    def describe(self) -> str:
+        return f"{self.objective_magnification:g}x/{self.numerical_aperture:g} objective"
 
 
 def _positive(value, key: str, where: str) -> None:

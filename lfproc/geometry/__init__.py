@@ -10,8 +10,7 @@ uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), 
 ``_aperture`` (the summed views as an aperture: DOF extent, equivalent f-number, synthetic apertures),
 ``_diffraction`` (Eq. 22), ``_range`` (the usable range of a: infinity to the front focal plane),
 ``_ray_model`` (the model's parameters without a decoder's m̂),
-``_transfer`` (the main optics as a paraxial ray transfer: thick main lens, a lens prescription's surfaces,
-or objective + tube lens), ``_real_rays`` (the model's rays traced exactly through a prescription's
+``_real_rays`` (the model's rays traced exactly through a prescription's
 surfaces: real slice distances and virtual cameras, docs/real-lens.md),
 ``_microscope`` (a light-field microscope's slices in µm, view angles, aplanatic per-view shifts).
 """
@@ -30,7 +29,7 @@ from ._ray_model import RayModel
 from ._real_rays import RealRaySlices, RealRayViews, real_ray_slices, real_ray_views
 from ._planning import MAX_SLICES, SlicePlan, integer_slice_gaps, plan_depth_range, plan_slices, uncovered_depths
 from ._slices import SliceGeometry, infinity_parameter, refocus_parameter, slice_distance_mm, slice_geometry
-from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
+from ..camera import RayTransfer, main_optics_transfer, prescription_transfer
 from ._triangulation import Triangulation, triangulate
 from ._views import (ViewGeometry, baseline_mm, view_geometry, view_offsets, view_positions_mm, view_slopes,
                      view_tilts_deg, views_inside_aperture)

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ._transfer import main_optics_transfer
+from ..camera import main_optics_transfer
 
 UM_PER_MM = 1000.0
 

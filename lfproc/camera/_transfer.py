@@ -10,11 +10,11 @@ i.e. its B element vanishes:
 
     s = n·(B + w·D) / (A + w·C).
 
-Two instances:
+Three instances (each main optics' ``transfer()``, :mod:`._main_optics`):
 
 * the paper's thick main lens (f_U, principal planes H1U/H2U, b_U from H2U to the MLA), reference
   plane H1U: S = T(b_U)·L(f_U), so s = −f_U·(b_U + w)/(b_U + w − f_U), the thin-lens equation. The
-  slice code evaluates it in Newton's form x = f_U²/(ε + w) (:func:`._slices._pair_distance`), which
+  ray model evaluates it in Newton's form x = f_U²/(ε + w) (:meth:`MainLens.object_position`), which
   is the same number without cancellation at infinity; the tests check the two agree.
 * a main lens given by its surfaces (a prescription, :class:`~lfproc.camera.LensPrescription`), the
   same reference plane H1U: S = T(b_U + z(H2U) − z_last)·M·T(z_first − z(H1U)), with M the surfaces'
@@ -93,18 +93,8 @@ def prescription_transfer(prescription, image_distance_mm: float) -> RayTransfer
 
 
 def main_optics_transfer(camera) -> RayTransfer:
-    """S for ``camera``: the main lens from H1U to the MLA (its surfaces where it has a prescription), or a
-    microscope from the native object plane.
-
-    The microscope's transfer is built from its lenses (objective, stop, tube lens), not written as
-    [[−M, 0], [0, −1/M]], so that the afocal, imaging result is a property the tests check.
+    """S for ``camera``: its main optics' transfer from their object-side reference plane to the MLA
+    (H1U of a main lens, its surfaces where it has a prescription; the native object plane of a microscope,
+    built from objective, stop and tube lens so that the afocal, imaging result is a property the tests check).
     """
-    scope = getattr(camera, "microscope", None)
-    prescription = getattr(camera, "main_lens_prescription", None)
-    if scope is None and prescription is not None:
-        return prescription_transfer(prescription, camera.image_distance_mm)
-    if scope is None:
-        return gap(camera.image_distance_mm) @ lens(camera.main_focal_length_mm)
-    f_obj, f_tube = scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm
-    s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
-    return RayTransfer(s.A, s.B, s.C, s.D, float(scope.immersion_index))
+    return camera.main_optics.transfer()
