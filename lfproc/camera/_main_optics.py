@@ -95,9 +95,13 @@ class MainOptics(Protocol):
     def transfer(self) -> RayTransfer:
         """The paraxial transfer from the object-side reference plane to the MLA (reduced angles)."""
 
-    def object_position(self, image_offset_mm, mla_path_mm: float):
-        """Where the object point conjugate to the image point ``image_offset_mm`` behind the MLA lies, in
-        :attr:`object_space` units (``mla_path_mm`` = f_s + H1s–H2s, the sensor to the MLA's H1s)."""
+    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float):
+        """Where two rays meet in object space, in :attr:`object_space` units: rays ``ray_gap_mm`` apart at the
+        MLA whose image-side slopes differ by ``slope_gap`` meet w = ray_gap / slope_gap behind it, and the
+        object point is that image point's conjugate (``mla_path_mm`` = f_s + H1s–H2s, sensor to H1s)."""
+
+    def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
+        """r, the half-extent in view steps of the views the optics fill: the DOF's views when none are named."""
 
     def wave_depth_of_field(self) -> float:
         """The diffraction term added to every slice's geometric DOF, in :attr:`object_space` units."""
@@ -148,23 +152,29 @@ class MainLens:
             return prescription_transfer(self.prescription, self.image_distance_mm)
         return gap(self.image_distance_mm) @ lens(self.focal_length_mm)
 
-    def object_position(self, image_offset_mm, mla_path_mm: float):
-        """Distance from the sensor of the conjugate of the image point w behind the MLA (Eq. 21).
+    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float):
+        """Distance from the sensor where two rays meet in front of the lens (Eqs. 18–21).
 
-        Newton's form d = L + f_U + f_U²/(ε + w), ε = b_U − f_U, L = f_s + H1sH2s + b_U + H1UH2U: the
-        transfer's s = n·(B + w·D)/(A + w·C) without cancellation at infinity (the tests check they agree).
+        Rays g = ``ray_gap_mm`` apart at the MLA with image-side slopes differing by N = ``slope_gap`` meet
+        w = g/N behind the MLA; in Newton's form its conjugate is x = f_U²·N/(g + N·ε) from the front focal
+        plane (ε = b_U − f_U), so d = L + f_U + x with L = f_s + H1sH2s + b_U + H1UH2U: the transfer's
+        s = n·(B + w·D)/(A + w·C) without cancellation at infinity (the tests check they agree).
         ``inf`` where the conjugate lies behind H1U or at infinity; never negative, never NaN.
         """
         f_u = self.focal_length_mm
-        w = np.asarray(image_offset_mm, dtype=np.float64)
+        g = np.asarray(ray_gap_mm, dtype=np.float64)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            z = f_u + f_u * f_u / (self.image_distance_mm - f_u + w)
+            z = f_u + f_u * f_u * slope_gap / (g + slope_gap * (self.image_distance_mm - f_u))
         z = np.where((z > 0) & np.isfinite(z), z, np.inf)
         return self.sensor_path_mm(mla_path_mm) + z
 
     def sensor_path_mm(self, mla_path_mm: float) -> float:
         """L = f_s + H1sH2s + b_U + H1UH2U: the sensor to H1U (Eqs. 21, 31)."""
         return mla_path_mm + self.image_distance_mm + self.principal_plane_gap_mm
+
+    def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
+        """c, the full micro image (the paper's DOF: a main lens matched to the lenslets fills it)."""
+        return float(center_index)
 
     def wave_depth_of_field(self) -> float:
         """0: a camera's diffraction limit is the Airy check of Eq. 22, not a DOF term."""

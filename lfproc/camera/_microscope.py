@@ -111,11 +111,26 @@ class Microscope:
         s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
         return RayTransfer(s.A, s.B, s.C, s.D, float(self.immersion_index))
 
-    def object_position(self, image_offset_mm, mla_path_mm: float = 0.0):
-        """z in µm of the conjugate of the image point w behind the MLA: n·w/M² through :meth:`transfer`,
-        positive towards the objective (``mla_path_mm`` does not enter: z is from the native object plane)."""
-        z = np.asarray(self.transfer().object_offset_mm(image_offset_mm), dtype=np.float64) * 1000.0
+    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float = 0.0):
+        """z in µm where two rays meet: the image point w = ``ray_gap_mm`` / ``slope_gap`` behind the MLA maps to
+        n·w/M² through :meth:`transfer`, positive towards the objective (``mla_path_mm`` does not enter: z is
+        from the native object plane)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.asarray(ray_gap_mm, dtype=np.float64) / slope_gap
+        z = np.asarray(self.transfer().object_offset_mm(w), dtype=np.float64) * 1000.0
         return float(z) if z.ndim == 0 else z
+
+    def na_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index: int) -> int:
+        """c_NA: the largest view offset |i| ≤ c whose image-side ray sine, i·p_p/|(i·p_p, f_s)|, is within NA/M."""
+        i = np.arange(int(center_index) + 1)
+        u = i * sample_pitch_mm
+        sines = u / np.hypot(u, mla_focal_length_mm)
+        return int(i[sines <= self.image_numerical_aperture * (1.0 + 1e-12)][-1])
+
+    def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
+        """The views inside the NA (c_NA, at least 1 and at most c): the DOF of a microscope's slices."""
+        return float(min(max(self.na_view_extent(sample_pitch_mm, mla_focal_length_mm, center_index), 1),
+                         center_index))
 
     def wave_depth_of_field(self) -> float:
         """λ·n/NA² in µm, the wave term of a microscope's DOF (Inoué and Spring; Levoy et al. 2006)."""

@@ -83,10 +83,7 @@ def pupil_positions_mm(camera, centre: float = 0.0) -> np.ndarray:
 
 def na_views(camera) -> int:
     """c_NA: the largest view offset |i| whose image-side ray sine is within the objective's NA/M (≤ c)."""
-    scope = _scope(camera)
-    sines = image_sines(camera)[camera.center_index:]
-    inside = np.nonzero(sines <= scope.image_numerical_aperture * (1.0 + 1e-12))[0]
-    return int(inside[-1])
+    return _scope(camera).na_view_extent(camera.sample_pitch_mm, camera.mla_focal_length_mm, camera.center_index)
 
 
 def _view_grid(camera, centre=(0.0, 0.0)):
@@ -177,37 +174,16 @@ def refocus_slopes(camera, aplanatic: bool | None = None, centre=None):
     return sy - sy[c, c], sx - sx[c, c]
 
 
-def _limit_parameters(camera, a, view_extent=None):
-    """(A_near, A_far): the paper's border-ray pairs (telecentric, a_eq = A) with c = c_NA views, or the
-    extent of the views summed (``view_extent``, :func:`~._aperture.summed_view_extent`) where given."""
-    from ._slices import _dof_pairs
-    extent = min(max(na_views(camera), 1), camera.center_index) if view_extent is None else view_extent
-    (a_near, _), (a_far, _) = _dof_pairs(camera, a, extent)
-    return a_near, a_far
-
-
 def microscope_slices(camera, a, view_extent=None):
-    """z, DOF limits and DOF of slices ``a`` in µm (a :class:`~._slices.SliceGeometry` with the ``_um`` fields).
+    """z, DOF limits and DOF of slices ``a`` in µm: :func:`~._slices.slice_geometry` of a microscope camera.
 
-    ``z_near_um`` is the limit nearer the objective (the larger z), ``z_far_um`` the one farther from
-    it; ``dof_um = z_near_um − z_far_um`` = geometric DOF + λ·n/NA², the wave term split evenly. The
+    ``near`` (``z_near_um``) is the limit nearer the objective (the larger z), ``far`` (``z_far_um``) the one
+    farther from it; ``dof = near − far`` = geometric DOF + λ·n/NA², the wave term split evenly. The
     geometric part is that of the views inside the NA, or of the views summed (``view_extent``) where given.
     """
-    from ._slices import SliceGeometry
-    scope = _scope(camera)
-    a_arr = np.asarray(a, dtype=np.float64)
-    zeta = z_per_a_um(camera)
-    a_near, a_far = _limit_parameters(camera, a_arr, view_extent)
-    wave = scope.wavelength_mm * UM_PER_MM * scope.immersion_index / scope.numerical_aperture ** 2
-    z = zeta * a_arr
-    upper = np.maximum(zeta * np.maximum(a_near, a_far), z) + 0.5 * wave
-    lower = np.minimum(zeta * np.minimum(a_near, a_far), z) - 0.5 * wave
-    dof = upper - lower
-    if a_arr.ndim == 0:
-        z, upper, lower, dof = float(z), float(upper), float(lower), float(dof)
-    none = None
-    return SliceGeometry(float(a_arr) if a_arr.ndim == 0 else a_arr, none, none, none, none,
-                         z_um=z, z_near_um=upper, z_far_um=lower, dof_um=dof)
+    from ._slices import slice_geometry
+    _scope(camera)
+    return slice_geometry(camera, a, view_extent)
 
 
 def refocus_parameter_z(camera, z_um) -> np.ndarray | float:

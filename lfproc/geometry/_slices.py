@@ -1,7 +1,11 @@
 """Where each refocused slice is focused: distance and depth of field (Eqs. 13–31), and the inverse.
 
 Pure, vectorised functions of a :class:`~lfproc.camera.Camera` and the refocus parameter ``a``; no
-images. Every distance is measured from the sensor, in millimetres.
+images. The ray pairs below are followed to the micro lens array; where they meet in object space is
+the camera's main optics' business (:attr:`Camera.main_optics`, one interface for a main lens and a
+microscope objective, :mod:`lfproc.camera._main_optics`), reported in its unit and from its origin
+(:attr:`Camera.object_space`): millimetres from the sensor for a main lens, the closed forms below;
+micrometres from the native object plane for a microscope (:mod:`._microscope`).
 
 Closed forms
 ------------
@@ -64,14 +68,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import SENSOR_MM, Camera, ObjectSpace
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
 
 def _require_main_lens(camera, what: str) -> None:
-    if getattr(camera, "microscope", None) is not None:
-        camera.require_main_lens(what)
+    camera.require_main_lens(what)
 
 
 def _slope_step(camera: Camera) -> float:
@@ -79,21 +82,32 @@ def _slope_step(camera: Camera) -> float:
     return camera.sample_pitch_mm / camera.mla_focal_length_mm
 
 
-def _pair_distance(camera: Camera, shift, spread):
-    """(distance, D) where a ray pair (A, C) of the module docstring meets; D = A·p_m + N·ε has the sign of 1/x.
-
-    The distance is ``inf`` where the rays do not meet in front of the main lens (z ≤ 0 or parallel).
-    """
-    f_u = camera.main_focal_length_mm
-    eps = camera.image_distance_mm - f_u
+def _ray_gaps(camera: Camera, shift, spread):
+    """(A·p_m, N): the lateral gap at the MLA of a ray pair (A, C) of the module docstring and the difference
+    of their image-side slopes, N = δ − C·p_m·κ (exactly δ when telecentric); they meet A·p_m/N behind it."""
     pitch = camera.mla_pitch_mm
-    slope_gap = _slope_step(camera) - spread * pitch * pupil_curvature(camera)   # N; exactly δ when telecentric
-    denom = shift * pitch + slope_gap * eps
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        newton_x = f_u * f_u * slope_gap / denom
-        z = f_u + newton_x
-    z = np.where((z > 0) & np.isfinite(z), z, np.inf)
-    return camera.sensor_to_main_lens_mm + z, denom
+    return shift * pitch, _slope_step(camera) - spread * pitch * pupil_curvature(camera)
+
+
+def _pair_position(camera: Camera, shift, spread):
+    """(position, D) of the object point where a ray pair (A, C) meets, through the camera's main optics.
+
+    The position is in the optics' object-space unit (:attr:`Camera.object_space`): for a main lens the
+    distance from the sensor, ``inf`` where the rays do not meet in front of it (z ≤ 0 or parallel).
+    D = −(N·A_S + A·p_m·C_S) with S the optics' transfer: linear in (A, C) and of the sign of the object
+    vergence (for a main lens D = (A·p_m + N·ε)/f_U, the sign of 1/x); it changes sign where the meeting
+    point passes through infinity, which an afocal objective (C_S = 0) never does.
+    """
+    ray_gap, slope_gap = _ray_gaps(camera, shift, spread)
+    optics = camera.main_optics
+    transfer = optics.transfer()
+    vergence = -(slope_gap * transfer.A + ray_gap * transfer.C)
+    return optics.object_position(ray_gap, slope_gap, camera.mla_path_mm), vergence
+
+
+def _pair_distance(camera: Camera, shift, spread):
+    """(distance from the sensor, D) where a ray pair meets (a main lens, :func:`_pair_position`)."""
+    return _pair_position(camera, shift, spread)
 
 
 def _distance_at(camera: Camera, a) -> np.ndarray:
@@ -168,47 +182,53 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
 class SliceGeometry:
     """Geometry of refocused slices (arrays with the shape of ``a``, or floats for a scalar ``a``).
 
+    One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
+    :attr:`~lfproc.camera.Camera.object_space`): millimetres from the sensor for a main lens (Eqs. 21, 31),
+    micrometres from the native object plane, positive towards the objective, for a microscope.
+
     Attributes
     ----------
     a : refocus parameter
-    distance_mm : d_a, Eq. 21
-    near_mm, far_mm : d_a− and d_a+, Eq. 31
-    dof_mm : D_a = d_a+ − d_a−, Eq. 23 (``inf`` when the far limit is at infinity)
-    z_um, z_near_um, z_far_um, dof_um : for a microscope camera (then the ``_mm`` fields are ``None``):
-        object-space depth from the native object plane, positive towards the objective, its DOF
-        limits nearer to and farther from the objective, and the DOF (:mod:`._microscope`)
+    depth : the slice's position (d_a of Eq. 21, or z)
+    near, far : its depth-of-field limits nearer to and farther from the optics (Eq. 31)
+    dof : the depth of field |far − near| (Eq. 23; ``inf`` when a limit is at infinity)
+    space : ObjectSpace
+        Unit, origin and the contract's record keys of the four positions.
+
+    The contract's names read the same numbers: ``distance_mm``, ``near_mm``, ``far_mm``, ``dof_mm`` in
+    millimetres from the sensor, ``z_um``, ``z_near_um``, ``z_far_um``, ``dof_um`` in micrometres from the
+    native object plane; each is ``None`` where the slices are in the other space.
     """
 
     a: np.ndarray
-    distance_mm: np.ndarray | None
-    near_mm: np.ndarray | None
-    far_mm: np.ndarray | None
-    dof_mm: np.ndarray | None
-    z_um: np.ndarray | None = None
-    z_near_um: np.ndarray | None = None
-    z_far_um: np.ndarray | None = None
-    dof_um: np.ndarray | None = None
+    depth: np.ndarray
+    near: np.ndarray
+    far: np.ndarray
+    dof: np.ndarray
+    space: ObjectSpace = SENSOR_MM
 
-    @property
-    def microscope(self) -> bool:
-        """True for slices in µm of a microscope (``z_um``…), False for distances in mm from the sensor."""
-        return self.z_um is not None
+    def _in(self, unit: str, value):
+        return value if self.space.unit == unit else None
+
+    distance_mm = property(lambda self: self._in("mm", self.depth), doc="d_a in mm from the sensor (Eq. 21)")
+    near_mm = property(lambda self: self._in("mm", self.near), doc="d_a− in mm (Eq. 31)")
+    far_mm = property(lambda self: self._in("mm", self.far), doc="d_a+ in mm (Eq. 31)")
+    dof_mm = property(lambda self: self._in("mm", self.dof), doc="D_a in mm (Eq. 23)")
+    z_um = property(lambda self: self._in("um", self.depth), doc="z in µm from the native object plane")
+    z_near_um = property(lambda self: self._in("um", self.near), doc="the DOF limit nearer the objective, µm")
+    z_far_um = property(lambda self: self._in("um", self.far), doc="the DOF limit farther from the objective, µm")
+    dof_um = property(lambda self: self._in("um", self.dof), doc="the DOF in µm")
 
     def records(self) -> list[dict]:
-        """One dict per slice with the contract's JSON keys; infinity as ``math.inf``.
+        """One dict per slice with the contract's JSON keys (``space.keys``); infinity as ``math.inf``.
 
         A camera's slices: ``a, distance_mm, near_mm, far_mm, dof_mm``; a microscope's: ``a, z_um,
         z_near_um, z_far_um, dof_um``.
         """
-        if self.microscope:
-            cols = [np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in
-                    (self.a, self.z_um, self.z_near_um, self.z_far_um, self.dof_um)]
-            return [dict(a=float(a), z_um=float(z), z_near_um=float(n), z_far_um=float(f), dof_um=float(w))
-                    for a, z, n, f, w in zip(*cols)]
         cols = [np.atleast_1d(np.asarray(x, dtype=np.float64)) for x in
-                (self.a, self.distance_mm, self.near_mm, self.far_mm, self.dof_mm)]
-        return [dict(a=float(a), distance_mm=float(d), near_mm=float(n), far_mm=float(f), dof_mm=float(w))
-                for a, d, n, f, w in zip(*cols)]
+                (self.a, self.depth, self.near, self.far, self.dof)]
+        keys = ("a",) + tuple(self.space.keys)
+        return [dict(zip(keys, map(float, row))) for row in zip(*cols)]
 
 
 def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
@@ -232,16 +252,19 @@ def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
         rays that bound the beams there (see the module docstring), so the DOF never collapses.
         For a microscope camera the ``_um`` fields instead (:func:`~._microscope.microscope_slices`).
     """
-    if getattr(camera, "microscope", None) is not None:
-        from ._microscope import microscope_slices
-        return microscope_slices(camera, a, view_extent)
+    optics = camera.main_optics
+    space = camera.object_space
     a_arr = np.asarray(a, dtype=np.float64)
-    d, d_sign = _pair_distance(camera, a_arr, a_arr)
+    if view_extent is None:
+        view_extent = _lit_view_extent(camera)
+    d, d_sign = _pair_position(camera, a_arr, a_arr)
     near_pair, far_pair = _dof_pairs(camera, a_arr, view_extent)
-    limit1, sign1 = _pair_distance(camera, *near_pair)
-    limit2, sign2 = _pair_distance(camera, *far_pair)
-    near = np.minimum(np.minimum(limit1, limit2), d)
-    far = np.maximum(np.maximum(limit1, limit2), d)
+    limit1, sign1 = _pair_position(camera, *near_pair)
+    limit2, sign2 = _pair_position(camera, *far_pair)
+    nearer = np.minimum if space.from_sensor else np.maximum     # nearer the optics: less distance, more z
+    farther = np.maximum if space.from_sensor else np.minimum
+    near = nearer(nearer(limit1, limit2), d)
+    far = farther(farther(limit1, limit2), d)
     # D is linear along the border rays' path from the central pair to each limit (up to a positive
     # factor): a sign change on either path means the DOF passes through infinity
     centre_in_front = d_sign > 0
@@ -251,11 +274,22 @@ def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
     far = np.where(crosses, np.inf, far)
     in_front = np.minimum(np.where(sign1 > 0, limit1, np.inf), np.where(sign2 > 0, limit2, np.inf))
     near = np.where(crosses, np.minimum(in_front, d), near)
+    half_wave = 0.5 * optics.wave_depth_of_field()        # a microscope's wave term, split evenly (0 for a lens)
+    if half_wave:
+        toward = -1.0 if space.from_sensor else 1.0
+        near, far = near + toward * half_wave, far - toward * half_wave
     with np.errstate(invalid="ignore"):
-        dof = np.where(np.isinf(far), np.inf, far - near)
+        dof = np.where(np.isinf(far) | np.isinf(near), np.inf, np.abs(far - near))
     if a_arr.ndim == 0:
-        return SliceGeometry(float(a_arr), float(d), float(near), float(far), float(dof))
-    return SliceGeometry(a_arr, d, near, far, dof)
+        return SliceGeometry(float(a_arr), float(d), float(near), float(far), float(dof), space)
+    return SliceGeometry(a_arr, d, near, far, dof, space)
+
+
+def _lit_view_extent(camera: Camera) -> float:
+    """r of the DOF when no views are named: the views the main optics fill (the full micro image, c, for a
+    main lens: the paper's DOF; the views inside the NA for an objective, ``MainOptics.lit_view_extent``)."""
+    return camera.main_optics.lit_view_extent(camera.sample_pitch_mm, camera.mla_focal_length_mm,
+                                              camera.center_index)
 
 
 def infinity_parameter(camera: Camera) -> float:
