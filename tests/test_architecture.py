@@ -191,3 +191,42 @@ def test_modules_stay_under_400_lines():
     long = sorted(str(path.relative_to(ROOT)) for path in _modules().values()
                   if len(path.read_text(encoding="utf-8").splitlines()) > MAX_LINES)
     assert set(long) <= LONG_MODULES_BEING_REWRITTEN, f"split these modules (one concern each): {long}"
+
+
+# ---------------------------------------------------------------------------------------------- one optics model
+#: where the kind of main optics may be asked by name: the optics themselves, a microscope's own geometry
+#: (view angles, aplanatic shifts, z ranges) and the microscope renderer
+OPTICS_MODULES = {"lfproc/camera", "lfproc/geometry/_microscope.py", "lfproc/simulate/_microscope.py"}
+
+
+def _kind_branches(tree: ast.AST) -> list[tuple[int, str]]:
+    """Lines that ask a camera or a result which kind of optics it has, rather than what the optics give."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in ("microscope", "is_microscope"):
+            found.append((node.lineno, f".{node.attr}"))
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("getattr", "hasattr")
+              and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant) and node.args[1].value == "microscope"):
+            found.append((node.lineno, f'{node.func.id}(..., "microscope")'))
+    return found
+
+
+def test_nothing_outside_the_optics_branches_on_the_kind_of_optics():
+    """Issue 31: the main optics are one parameter behind one interface (``Camera.main_optics``,
+    :mod:`lfproc.camera._main_optics`). Code elsewhere names, orders and labels positions by the camera's
+    ``object_space`` (unit and origin), places views by ``views_are_orthographic`` and reads apertures through
+    ``image_aperture_sine``; it never asks ``camera.microscope`` / ``is_microscope`` / ``result.microscope``."""
+    bad = []
+    for path in _modules().values():
+        rel = str(path.relative_to(ROOT))
+        if any(rel == owner or rel.startswith(owner + "/") for owner in OPTICS_MODULES):
+            continue
+        for line, what in _kind_branches(ast.parse(path.read_text(encoding="utf-8"))):
+            bad.append(f"{rel}:{line} {what}")
+    assert not bad, "branch on the main optics' interface instead (docs/architecture.md):\n" + "\n".join(bad)
+
+
+def test_the_kind_scan_sees_each_idiom():
+    tree = ast.parse('a = camera.microscope\nb = camera.is_microscope\nc = getattr(camera, "microscope", None)\n'
+                     'd = geo.space.from_sensor\n')
+    assert [what for _, what in _kind_branches(tree)] == [".microscope", ".is_microscope", 'getattr(..., "microscope")']

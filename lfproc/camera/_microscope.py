@@ -117,7 +117,7 @@ class Microscope:
         from the native object plane)."""
         with np.errstate(divide="ignore", invalid="ignore"):
             w = np.asarray(ray_gap_mm, dtype=np.float64) / slope_gap
-        z = np.asarray(self.transfer().object_offset_mm(w), dtype=np.float64) * 1000.0
+        z = np.asarray(self.transfer().object_offset_mm(w), dtype=np.float64) * 1000.0 + 0.0   # + 0.0: never −0
         return float(z) if z.ndim == 0 else z
 
     def na_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index: int) -> int:
