@@ -23,7 +23,7 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) 
     a_lo, a_hi = (float(v) for v in np.percentile(a, [2, 98]))
     c = max(camera.center_index, 1)  # widened by half a DOF, about (1 + |a|)/(2c) in a, against estimate errors
     a_lo, a_hi = a_lo - (1 + abs(a_lo)) / (2 * c), a_hi + (1 + abs(a_hi)) / (2 * c)
-    if getattr(camera, "microscope", None) is not None:   # µm from the native plane, as --z-range
+    if not camera.object_space.from_sensor:   # signed depths (µm from the native plane), as --z-range
         zeta = geometry.z_per_a_um(camera)
         try:
             planned = geometry.plan_z_range(camera, a_lo * zeta, a_hi * zeta, max_slices=4 * max_slices)
@@ -50,7 +50,7 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) 
 def slice_intervals_a(camera, a_values, view_extent=None) -> np.ndarray:
     """``(K, 2)``: each slice's DOF as an interval of ``a`` (far limit's a, near limit's a; Eq. 31 inverted)."""
     geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)), view_extent)
-    if geo.microscope:   # z is linear in a
+    if not geo.space.from_sensor:   # signed depths (a microscope's z), linear in a
         zeta = geometry.z_per_a_um(camera)
         return np.stack([geo.z_far_um / zeta, geo.z_near_um / zeta], axis=1)
     a_inf = geometry.infinity_parameter(camera)
