@@ -40,8 +40,10 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) 
         planned = geometry.plan_depth_range(camera, near, far, max_slices=4 * max_slices, view_extent=view_extent).a
     except LfprocError:  # nothing coverable: even steps in a
         planned = np.array([])
-    if len(planned) == 0:
-        planned = np.linspace(a_lo, a_hi, int(np.clip(np.ceil((a_hi - a_lo) * c) + 1, 2, max_slices)))
+    if len(planned) == 0:   # within the real slices (infinity to the front focal plane), as focal_stack takes them
+        low, high = geometry.usable_a_range(camera)
+        a_lo, a_hi = min(max(a_lo, low), high), min(max(a_hi, low), high)
+        planned = np.unique(np.linspace(a_lo, a_hi, int(np.clip(np.ceil((a_hi - a_lo) * c) + 1, 2, max_slices))))
     if len(planned) > max_slices:
         planned = np.linspace(planned[0], planned[-1], max_slices)
     return np.asarray(planned, dtype=np.float64)
