@@ -25,7 +25,6 @@ from .. import geometry
 from ..atomic import write_json_atomic, write_text_atomic
 from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, summed_views_metadata, upscale_factor, \
     view_name
-from ..viewpoints import with_aperture
 from ._estimate import estimate_depth
 from ._images import depth_colours, image_extension, write_all
 from ._page import encode_array, render_page
@@ -79,8 +78,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     apertures = []
     for f_number, stack in stacks:
         folder = "slices" if f_number is None else f"slices/f{f_number:g}"
-        mask = with_aperture(lf, f_number).view_mask   # the views the stack sums
-        apertures.append(_aperture_record(camera, stack, mask, f_number, stem, folder, extension))
+        apertures.append(_aperture_record(camera, stack, f_number, stem, folder, extension))
         for k, record in enumerate(apertures[-1]["slices"]):
             jobs.append((os.path.join(outdir, record["image"]), lambda k=k, s=stack.images: tone(s[k])))
     slices = apertures[0]["slices"]
@@ -151,10 +149,11 @@ def page_apertures(camera) -> list:
                      if widest * k <= narrowest and geometry.aperture_views(camera, widest * k).sum() > 1]
 
 
-def _aperture_record(camera, stack, view_mask, f_number, stem: str, folder: str, extension: str) -> dict:
-    """One aperture of the page: its label, equivalent f-number, views summed (``view_mask``) and the slices of
-    ``stack`` (a :class:`lfproc.FocalStack`) with their tags: ``a`` and the object space's position, near, far
+def _aperture_record(camera, stack, f_number, stem: str, folder: str, extension: str) -> dict:
+    """One aperture of the page: its label, equivalent f-number, the views ``stack`` (a :class:`lfproc.FocalStack`)
+    sums (its ``view_mask``) and its slices with their tags: ``a`` and the object space's position, near, far
     and DOF keys (``distance_mm``… or ``z_um``…)."""
+    view_mask = stack.view_mask
     extent, _ = summed_views_metadata(camera, view_mask)
     names = slice_names(stem, stack.a)
     columns = [("a", stack.a)] + [(key, getattr(stack, key)) for key in camera.object_space.keys]
