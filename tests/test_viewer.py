@@ -434,3 +434,112 @@ def test_depth_preview_and_viewer_share_one_colour_scale():
     assert tuple(body[5, 25]) == tuple(DEPTH_COLOURS[-1])    # nearest: the last (yellow) colour
     assert tuple(body[5, 35]) == tuple(DEPTH_COLOURS[0])     # farthest: the first (dark purple)
     assert tuple(body[5, 39]) == UNKNOWN_COLOUR
+
+
+# ------------------------------------------------------------------ one path: the page is the Python API's (issue 31)
+SLICE_TAGS = {"a", "distance_mm", "near_mm", "far_mm", "dof_mm", "z_um", "z_near_um", "z_far_um", "dof_um"}
+
+
+def _tag_equal(got, want) -> bool:
+    """A page number (JSON: null for infinity) against the API's (``inf``), to 1e-9."""
+    if got is None:
+        return want == np.inf
+    return got == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+def _pixels(path, shape):
+    with Image.open(path) as image:
+        return np.asarray(image).reshape(shape)
+
+
+def assert_page_is_the_api(page_dir, lf):
+    """Every slice of every aperture of the page is lfproc.focal_stack's (tags to 1e-9, pixels those of the
+    API's float32 slices through the page's tone map), every view lfproc.view_stack's (the lit views inside
+    the aperture, their tags and pixels)."""
+    import lfproc
+
+    data = json.loads((page_dir / "geometry.json").read_text())
+    tone = ToneMap(data["display"]["tone_map"]["black"], data["display"]["tone_map"]["white"])
+    a_values = [s["a"] for s in data["slices"]]
+    for aperture in data["apertures"]:
+        fs = lfproc.focal_stack(lf, a=a_values, aperture=aperture["f_number"])   # the commands' defaults
+        assert aperture["views_summed"] == fs.views_summed
+        assert aperture["aperture_f_number"] == (None if fs.aperture_f_number is None else
+                                                 pytest.approx(fs.aperture_f_number, rel=1e-9))
+        assert len(aperture["slices"]) == len(fs) == len(a_values)
+        for k, (got, want) in enumerate(zip(aperture["slices"], fs.records())):
+            tags = SLICE_TAGS & set(want)
+            assert set(got) == tags | {"image"}, (set(got), tags)
+            assert all(_tag_equal(got[key], want[key]) for key in tags), (got, want)
+            expected = tone(fs.images[k])
+            assert np.array_equal(_pixels(page_dir / got["image"], expected.shape), expected), got["image"]
+    vs = lfproc.view_stack(lf, inside_aperture=True)
+    items = data["views"]["items"]
+    assert [item["view"] for item in items] == vs.view.tolist() and len(items) > 0
+    for k, (item, record) in enumerate(zip(items, vs.records())):
+        for key, value in record.items():
+            if key not in ("source", "provenance"):
+                assert np.allclose(item[key], value, rtol=1e-9, atol=1e-12), (key, item[key], value)
+        expected = tone(vs.images[k])
+        assert np.array_equal(_pixels(page_dir / item["image"], expected.shape), expected), item["image"]
+
+
+def test_page_slices_and_views_are_the_python_apis(page, scene):
+    """A camera's page (three synthetic apertures, a decoded view mask): one path with lfproc refocus/views."""
+    import lfproc
+
+    folder = scene["folder"]
+    lf = lfproc.read_light_field(str(folder / "capture.png"), str(folder / "camera.toml"),
+                                 grid=str(folder / "grid.json"))
+    data = json.loads((page / "geometry.json").read_text())
+    assert len(data["apertures"]) >= 2 and len(data["slices"]) >= 2
+    assert_page_is_the_api(page, lf)
+
+
+def test_microscope_page_slices_and_views_are_the_python_apis(tmp_path):
+    """A tiny microscope render refocused with the sine condition's per-view shifts: the page's µm tags,
+    slices and views are lfproc.focal_stack's and lfproc.view_stack's."""
+    import lfproc
+    from scopefile import write_tiny_lfm
+
+    folder = write_tiny_lfm(tmp_path)
+    (folder / "lfm.toml").write_text((folder / "lfm.toml").read_text() + "aplanatic = true\n")  # [microscope]
+    assert lfproc.Camera.from_toml(folder / "lfm.toml").main_optics.aplanatic is True
+    proc = run_cli("calibrate", folder / "white.tif", "--camera", folder / "lfm.toml", "-o", folder / "grid.json")
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "viewer"
+    proc = run_cli("viewer", folder / "capture.tif", "--camera", folder / "lfm.toml", "--calib", folder / "grid.json",
+                   "--a=-0.4,0,0.45", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads((out / "geometry.json").read_text())
+    assert data["unit"] == "um" and [s["a"] for s in data["slices"]] == pytest.approx([-0.4, 0.0, 0.45])
+    assert ["refocusing", "aplanatic (sine condition)"] in data["camera"]
+    lf = lfproc.read_light_field(str(folder / "capture.tif"), str(folder / "lfm.toml"), grid=str(folder / "grid.json"))
+    assert_page_is_the_api(out, lf)
+    # the sine condition's shifts are not the paraxial ones: the page shows the former
+    (folder / "paraxial.toml").write_text((folder / "lfm.toml").read_text().replace("aplanatic = true", "aplanatic = false"))
+    paraxial = lfproc.read_light_field(str(folder / "capture.tif"), str(folder / "paraxial.toml"),
+                                       grid=str(folder / "grid.json"))
+    tone = ToneMap(data["display"]["tone_map"]["black"], data["display"]["tone_map"]["white"])
+    other = tone(lfproc.focal_stack(paraxial, a=[0.45]).images[0])
+    assert not np.array_equal(_pixels(out / data["slices"][-1]["image"], other.shape), other)
+
+
+def test_fallback_plan_stays_within_the_slices_focal_stack_takes(monkeypatch):
+    """Where nothing can be covered (plan_depth_range refuses), the even steps in a start at infinity, not
+    beyond it (focal_stack refuses slices beyond infinity)."""
+    from lfproc.errors import LfprocError
+    from lfproc.viewer import FocusDepth, scene_slices
+
+    cam = scene_camera()
+    a_inf = geometry.infinity_parameter(cam)
+
+    def refuse(*args, **kwargs):
+        raise LfprocError("nothing coverable")
+
+    monkeypatch.setattr(geometry, "plan_depth_range", refuse)
+    a = np.linspace(a_inf - 0.5, a_inf + 1.0, 400).reshape(20, 20)
+    focus = FocusDepth(a, a, np.ones_like(a), np.linspace(a_inf - 0.5, a_inf + 1.0, 16))
+    planned = scene_slices(cam, focus)
+    assert planned[0] == pytest.approx(a_inf) and np.all(np.diff(planned) > 0) and len(planned) >= 2
+    geometry.check_usable_a(cam, planned)   # every slice real

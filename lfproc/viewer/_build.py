@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,6 @@ from .. import geometry
 from ..atomic import write_json_atomic, write_text_atomic
 from ..outputs import MIN_LONG_SIDE_PX, ToneMap, metres, slice_names, summed_views_metadata, upscale_factor, \
     view_name
-from ..viewpoints import with_aperture
 from ._estimate import estimate_depth
 from ._images import depth_colours, image_extension, write_all
 from ._page import encode_array, render_page
@@ -43,6 +43,9 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
                index_href: str | None = None, options: PageOptions = PageOptions(), depth_map=None) -> str:
     """Write a viewer page for ``lf`` into ``outdir``; returns the path of its ``index.html``.
 
+    The slices and views are those of the Python API (:func:`lfproc.focal_stack`, :func:`lfproc.view_stack`):
+    the commands' interpolation, the light field's view mask, a microscope's per-view shifts, and their tags.
+
     Parameters
     ----------
     lf : LightField
@@ -60,33 +63,29 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     depth_map : lfproc.depth.DepthMap, optional
         A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth`) otherwise.
     """
-    from ..api import DEFAULT_INTERPOLATION
     from ..provenance import provenance
-    from ..refocus import refocus
 
     camera = lf.camera
+    space = camera.object_space
     focus = estimate_depth(lf, a_values, depth_map)
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
         np.asarray(a_values, dtype=np.float64)
-    stack = refocus(lf, a_values, interpolation=DEFAULT_INTERPOLATION)     # the commands' default
-    tone = ToneMap.for_images(stack)
+    stacks = [(f_number, _focal_stack(lf, a_values, f_number)) for f_number in page_apertures(camera)]
+    tone = ToneMap.for_images(stacks[0][1].images)
     extension = image_extension(lf.lens_shape)
     jobs = []
     apertures = []
-    for f_number in page_apertures(camera):
-        summed = with_aperture(lf, f_number)
-        aperture_stack = stack if f_number is None else refocus(summed, a_values,
-                                                                          interpolation=DEFAULT_INTERPOLATION)
+    for f_number, stack in stacks:
         folder = "slices" if f_number is None else f"slices/f{f_number:g}"
-        apertures.append(_aperture_record(camera, summed.view_mask, f_number, a_values, stem, folder, extension))
+        apertures.append(_aperture_record(camera, stack, f_number, stem, folder, extension))
         for k, record in enumerate(apertures[-1]["slices"]):
-            jobs.append((os.path.join(outdir, record["image"]), lambda k=k, s=aperture_stack: tone(s[k])))
+            jobs.append((os.path.join(outdir, record["image"]), lambda k=k, s=stack.images: tone(s[k])))
     slices = apertures[0]["slices"]
-    views = _view_records(camera, stem, extension, getattr(lf, "view_mask", None), getattr(lf, "view_centre", None))
-    for item in views["items"]:
-        ky, kx = item["view"]
-        jobs.append((os.path.join(outdir, item["image"]), lambda ky=ky, kx=kx: tone(lf.views[ky, kx])))
+    view_set = _view_stack(lf)
+    views = _view_records(camera, view_set, stem, extension)
+    for k, item in enumerate(views["items"]):
+        jobs.append((os.path.join(outdir, item["image"]), lambda k=k: tone(view_set.images[k])))
     intervals = slice_intervals_a(camera, a_values, extent)
     a_far, a_near = float(intervals.min()), float(intervals.max())
     jobs.append((os.path.join(outdir, "depth.png"),
@@ -105,18 +104,38 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         "views": views,
         "depth": _depth_record(camera, focus, a_far, a_near),
         "camera": camera_summary(camera),
-        "unit": "um" if camera.is_microscope else "mm",
+        "unit": space.unit,
         "calibration": calibration or {},
         "index_href": index_href,
         "provenance": provenance(lf.inputs),
     }
     write_json_atomic(os.path.join(outdir, "geometry.json"), data)
     maps = {"slice_index": encode_array(slice_index),
-            ("z_um" if camera.is_microscope else "distance_mm"): encode_array(focus.distance_mm),
+            space.position_key: encode_array(focus.distance_mm),
             "confidence": encode_array(np.round(focus.confidence * 255).astype(np.uint8))}
     page = os.path.join(outdir, "index.html")
     write_text_atomic(page, render_page(data, maps))
     return page
+
+
+def _focal_stack(lf, a_values, f_number):
+    """:func:`lfproc.focal_stack` of the page's slices through aperture ``f_number`` (``None``: every view with
+    light). Its coverage warning is the command's to give (``lfproc viewer`` checks the slices it is asked for);
+    the page itself says nothing."""
+    from ..api import focal_stack
+    from ..errors import LfprocWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LfprocWarning)
+        return focal_stack(lf, a=[float(a) for a in a_values], aperture=f_number)
+
+
+def _view_stack(lf):
+    """:func:`lfproc.view_stack` of the views with light inside the aperture (every lit view where the camera
+    file gives no aperture: the main lens's f-number, an objective's NA)."""
+    from ..api import view_stack
+
+    return view_stack(lf, inside_aperture=lf.camera.main_optics.image_aperture_sine is not None)
 
 
 def page_apertures(camera) -> list:
@@ -130,68 +149,67 @@ def page_apertures(camera) -> list:
                      if widest * k <= narrowest and geometry.aperture_views(camera, widest * k).sum() > 1]
 
 
-def _aperture_record(camera, view_mask, f_number, a_values, stem: str, folder: str, extension: str) -> dict:
-    """One aperture of the page: its label, equivalent f-number, views summed and slices with their DOF."""
-    extent, extra = summed_views_metadata(camera, view_mask)
-    names = slice_names(stem, a_values)
-    slices = [dict(record, image=f"{folder}/{names[k]}{extension}")
-              for k, record in enumerate(geometry.slice_geometry(camera, a_values, extent).records())]
-    n_views = extra.get("views_summed", camera.m_hat ** 2)
-    equivalent = extra.get("aperture_f_number", geometry.equivalent_f_number(camera))
+def _aperture_record(camera, stack, f_number, stem: str, folder: str, extension: str) -> dict:
+    """One aperture of the page: its label, equivalent f-number, the views ``stack`` (a :class:`lfproc.FocalStack`)
+    sums (its ``view_mask``) and its slices with their tags: ``a`` and the object space's position, near, far
+    and DOF keys (``distance_mm``… or ``z_um``…)."""
+    view_mask = stack.view_mask
+    extent, _ = summed_views_metadata(camera, view_mask)
+    names = slice_names(stem, stack.a)
+    columns = [("a", stack.a)] + [(key, getattr(stack, key)) for key in camera.object_space.keys]
+    slices = [dict({key: float(values[k]) for key, values in columns}, image=f"{folder}/{names[k]}{extension}")
+              for k in range(len(stack))]
+    n_views = stack.views_summed
     label = ("all views" if f_number is None else f"f/{f_number:g}") + \
         f" ({n_views} view{'' if n_views == 1 else 's'}, {geometry.aperture_text(camera, extent)})"
     summed = np.argwhere(np.ones((camera.m_hat,) * 2, bool) if view_mask is None else view_mask).tolist()
-    return {"f_number": f_number, "aperture_f_number": equivalent, "views_summed": n_views, "label": label,
-            "summed_views": summed, "slices": slices}
+    return {"f_number": f_number, "aperture_f_number": stack.aperture_f_number, "views_summed": n_views,
+            "label": label, "summed_views": summed, "slices": slices}
 
 
-def _view_records(camera, stem: str, extension: str, view_mask=None, view_centre=None) -> dict:
-    """The views inside the aperture (and, with ``view_mask``, carrying light) with their virtual cameras
-    (Eqs. 17, 33, 34) and image paths.
+def _view_records(camera, view_set, stem: str, extension: str) -> dict:
+    """The views of ``view_set`` (a :class:`lfproc.ViewStack`: those inside the aperture that carry light) with
+    their virtual cameras (Eqs. 17, 33, 34, as ``lfproc views`` tags them) and image paths.
 
     ``marker_mm`` (y, x) is where the page's aperture diagram draws each view: its virtual camera,
     ``position_mm``, seen in the orientation of the pictures. The main lens inverts the image, so the
     pictures show the scene turned by 180° and a virtual camera at +x in object space sits at −x in
     them: a view whose near objects shift left (the camera moved right, as the picture shows it) is
-    drawn to the right.
+    drawn to the right. Orthographic views (an objective's) have no position: they are drawn at their
+    object-space angle, ``tilt_deg``, turned likewise (objective + tube lens invert too).
     """
-    from ..viewpoints import viewpoint_geometry
-
-    keep = geometry.views_inside_aperture(camera)
-    if view_mask is not None:
-        keep = keep & np.asarray(view_mask, dtype=bool)
-    def marker(meta):   # the pictures are turned by 180° (objective + tube lens invert too: angles flip)
-        y, x = meta["angle_deg"] if camera.is_microscope else meta["position_mm"]
-        return [-y + 0.0, -x + 0.0]
-
-    items = [dict(meta, image=f"views/{view_name(stem, *vg.view)}{extension}", marker_mm=marker(meta))
-             for row in viewpoint_geometry(camera, view_centre) for vg in row if keep[vg.view]
-             for meta in (vg.metadata(),)]
-    if camera.is_microscope:   # orthographic views, placed by their object-space angles
-        scope = camera.microscope
+    optics = camera.main_optics
+    places = view_set.tilt_deg if optics.views_are_orthographic else view_set.position_mm
+    items = [dict({key: value for key, value in record.items() if key not in ("source", "provenance")},
+                  image=f"views/{view_name(stem, *view_set.view[k])}{extension}",
+                  marker_mm=[-float(places[k][0]) + 0.0, -float(places[k][1]) + 0.0])
+             for k, record in enumerate(view_set.records())]
+    c = camera.center_index
+    if optics.views_are_orthographic:   # an objective's views: placed by their angles inside its NA
         angles = geometry.microscope_views(camera).angle_deg
-        c = camera.center_index
         return {"m_hat": camera.m_hat, "center": c, "lateral_sampling_um": geometry.lateral_sampling_um(camera),
-                "aperture_radius_deg": math.degrees(math.asin(scope.numerical_aperture / scope.immersion_index)),
+                "aperture_radius_deg": math.degrees(math.asin(optics.numerical_aperture / optics.immersion_index)),
                 "angle_step_deg": abs(float(angles[c + 1] - angles[c])) if c else 1.0, "items": items}
-    return {"m_hat": camera.m_hat, "center": camera.center_index, "baseline_mm": geometry.baseline_mm(camera, 1),
+    return {"m_hat": camera.m_hat, "center": c, "baseline_mm": geometry.baseline_mm(camera, 1),
             "aperture_radius_mm": (camera.main_focal_length_mm / (2 * camera.f_number)) if camera.f_number else None,
             "items": items}
 
 
 def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
-    """The depth map's image, method and colour legend (ticks in metres at their place on the scale)."""
+    """The depth map's image, method and colour legend (ticks in metres, or a microscope's µm, at their place
+    on the scale)."""
     from ..colours import DEPTH_COLOURS
 
+    space = camera.object_space
     ticks = []
     for t in np.linspace(0.0, 1.0, 5):
         a = a_far + t * (a_near - a_far)
-        if camera.is_microscope:
+        if not space.from_sensor:   # signed depths, linear in a
             z = float(a * geometry.z_per_a_um(camera))
-            ticks.append({"t": float(t), "z_um": z, "label": f"{z:.3g} um"})
+            ticks.append({"t": float(t), space.position_key: z, "label": f"{z:.3g} {space.unit}"})
             continue
         distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
-        ticks.append({"t": float(t), "distance_mm": distance, "label": metres(distance)})
+        ticks.append({"t": float(t), space.position_key: distance, "label": metres(distance)})
     searched = f" over {len(focus.sweep_a)} slices (a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})" \
         if len(focus.sweep_a) else ""
     return {"image": "depth.png", "method": focus.method + searched,
@@ -200,9 +218,10 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
 
 
 def camera_summary(camera) -> list[list[str]]:
-    """(label, value) rows describing the camera for people."""
-    if camera.is_microscope:
-        return _microscope_summary(camera)
+    """(label, value) rows describing the camera for people: its main lens, or its objective's own numbers
+    (magnification, NA, immersion, tube lens: an objective is what makes the views orthographic)."""
+    if camera.main_optics.views_are_orthographic:
+        return _objective_summary(camera)
     focus_mm = geometry.slice_distance_mm(camera, 0.0)
     rows = [
         ("camera", camera.name or "(unnamed)"),
@@ -215,17 +234,17 @@ def camera_summary(camera) -> list[list[str]]:
                    f"resampling to {camera.m_hat} x {camera.m_hat} views)"),
         ("baseline of adjacent views", f"{geometry.baseline_mm(camera, 1):.3f} mm"),
     ]
-    exit_pupil = getattr(camera, "exit_pupil_distance_mm", math.inf)
+    exit_pupil = camera.main_optics.exit_pupil_distance_mm
     rows.append(("exit pupil", "telecentric (at infinity)" if not math.isfinite(exit_pupil) else f"{exit_pupil:g} mm"))
     return [list(r) for r in rows]
 
 
-def _microscope_summary(camera) -> list[list[str]]:
-    scope = camera.microscope
+def _objective_summary(camera) -> list[list[str]]:
+    objective = camera.main_optics
     rows = [
         ("camera", camera.name or "(unnamed)"),
-        ("objective", f"{scope.objective_magnification:g}x / NA {scope.numerical_aperture:g}, immersion n = "
-                      f"{scope.immersion_index:g}, tube lens {scope.tube_lens_focal_length_mm:g} mm"),
+        ("objective", f"{objective.objective_magnification:g}x / NA {objective.numerical_aperture:g}, immersion n = "
+                      f"{objective.immersion_index:g}, tube lens {objective.tube_lens_focal_length_mm:g} mm"),
         ("focused at (a = 0)", "the native object plane (z = 0 µm)"),
         ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, "
                          f"f = {camera.mla_focal_length_mm:g} mm"),
