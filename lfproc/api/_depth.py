@@ -15,8 +15,9 @@ from ..errors import speaking_python
 class DepthResult:
     """A depth map of one light field with its tags.
 
-    Every attribute of :class:`lfproc.depth.DepthMap` is one of this too (``distance_mm``, ``confidence``,
-    ``near_mm``, ``far_mm``, ``a``, ``allfocus``, ``z_um`` …), and so is every tag of the sidecars
+    Every attribute of :class:`lfproc.depth.DepthMap` is one of this too (``depth``, ``near``, ``far`` and
+    their ``space``; the contract's ``distance_mm``, ``near_mm``, ``far_mm`` or ``z_um``, ``z_near_um``,
+    ``z_far_um``; ``confidence``, ``a``, ``allfocus`` …), and so is every tag of the sidecars
     ``lfproc depth`` writes (``method``, ``a_searched``, ``a_step``, ``view_step``, ``min_confidence``,
     ``lens_grid``, ``aperture_f_number``; ``unit``: "mm", or "um" for a microscope).
 
@@ -47,7 +48,7 @@ class DepthResult:
 
     @property
     def unit(self) -> str:
-        return "um" if self.depth_map.microscope else "mm"
+        return self.depth_map.space.unit
 
     def tags(self) -> dict:
         """The fields every sidecar of ``lfproc depth`` shares (source, camera, method, the searched range …,
@@ -127,7 +128,7 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
         if z_range_um is not None:
             if depth_range_mm is not None:
                 raise LfprocError("give depth_range_mm= (cameras) or z_range_um= (microscopes), not both")
-            if not camera.is_microscope:
+            if camera.object_space.unit != "um":
                 raise LfprocError("z_range_um= (micrometres) needs a microscope camera; give depth_range_mm=")
             z0, z1 = (float(v) for v in z_range_um)
             if not (math.isfinite(z0) and math.isfinite(z1)) or z0 == z1:

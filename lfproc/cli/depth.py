@@ -65,7 +65,7 @@ def z_sweep(args, camera) -> dict:
     from ..errors import LfprocError
     if args.z_range is None:
         return {}
-    if not camera.is_microscope:
+    if camera.object_space.unit != "um":
         raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
                           f"([microscope]); use --depth-range NEAR_MM:FAR_MM")
     try:

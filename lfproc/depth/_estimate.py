@@ -10,7 +10,7 @@ Steps (each in its own module):
    its basin;
 4. :mod:`._confidence` — the basin against the slice's DOF, checked by the sharpest-slice (defocus)
    cue; unknown (NaN) where the confidence is below :data:`MIN_CONFIDENCE`;
-5. :mod:`._metric` — ``a`` to millimetres and bounds (Eqs. 13–31);
+5. :mod:`._metric` — ``a`` to positions in the camera's object space (mm; a microscope's µm) and bounds;
 6. :mod:`._allfocus` — the all-in-focus image.
 """
 
@@ -21,8 +21,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..camera import SENSOR_MM, ObjectSpace
 from ..errors import LfprocError
 from ._confidence import MIN_CONFIDENCE
+from ._metric import ContractNames
 
 #: the method name written into the outputs' metadata
 METHOD = "plane sweep over the refocus parameter a: variance across the views (correspondence) " \
@@ -38,18 +40,23 @@ COARSE_PASS_CONFIDENCE = 0.2
 
 
 @dataclass(frozen=True, eq=False)
-class DepthMap:
+class DepthMap(ContractNames):
     """Depth of every lens of a light field, on the refocused slices' lens grid.
+
+    One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
+    :attr:`~lfproc.camera.Camera.object_space`): millimetres from the sensor for a main lens (Eq. 21),
+    micrometres from the native object plane, positive towards the objective, for a microscope.
 
     Attributes
     ----------
-    distance_mm : ndarray (Ny, Nx) float32, or None for a microscope
-        Distance from the sensor (Eq. 21) of the surface seen at each lens; NaN = unknown, ``inf`` =
-        at infinity.
+    depth : ndarray (Ny, Nx) float32
+        Position of the surface seen at each lens (the image written to ``STEM_depth.tif``); NaN = unknown,
+        ``inf`` = at infinity (distances from the sensor only).
     confidence : ndarray (Ny, Nx) float32
         0 (nothing known) … 1.
-    near_mm, far_mm : ndarray (Ny, Nx) float32
-        Bounds of the distance: the slice's DOF (Eqs. 23–31) widened by the cost's basin; NaN = unknown.
+    near, far : ndarray (Ny, Nx) float32
+        Bounds of the depth nearer to and farther from the optics: the slice's DOF (Eqs. 23–31) widened by
+        the cost's basin; NaN = unknown.
     a : ndarray (Ny, Nx) float32
         The refocus parameter of the sharpest slice (sub-slice); NaN = unknown.
     allfocus : ndarray (Ny, Nx, C) float32
@@ -59,15 +66,18 @@ class DepthMap:
         The refocus parameters of the sweep.
     timings_s : dict
         Seconds spent per step.
-    z_um, z_near_um, z_far_um : ndarray (Ny, Nx) float32, or None
-        A microscope's depth from the native object plane (positive towards the objective) and its
-        bounds, in µm; NaN = unknown. Then ``distance_mm``, ``near_mm`` and ``far_mm`` are ``None``.
+    space : ObjectSpace
+        Unit, origin and record keys of ``depth``, ``near`` and ``far``.
+
+    The contract's names read the same arrays: ``distance_mm``, ``near_mm``, ``far_mm`` (mm from the sensor)
+    and ``z_um``, ``z_near_um``, ``z_far_um`` (µm from the native object plane); each is ``None`` where the
+    depth map is in the other space.
     """
 
-    distance_mm: np.ndarray | None
+    depth: np.ndarray
     confidence: np.ndarray
-    near_mm: np.ndarray | None
-    far_mm: np.ndarray | None
+    near: np.ndarray
+    far: np.ndarray
     a: np.ndarray
     allfocus: np.ndarray
     method: str = METHOD
@@ -76,19 +86,7 @@ class DepthMap:
     view_reach: int = 0
     timings_s: dict = field(default_factory=dict)
     aperture_f_number: float | None = None
-    z_um: np.ndarray | None = None
-    z_near_um: np.ndarray | None = None
-    z_far_um: np.ndarray | None = None
-
-    @property
-    def microscope(self) -> bool:
-        """True for a microscope's depth map (µm from the native object plane)."""
-        return self.z_um is not None
-
-    @property
-    def depth(self) -> np.ndarray:
-        """The depth image written to ``STEM_depth.tif``: ``z_um`` for a microscope, else ``distance_mm``."""
-        return self.z_um if self.microscope else self.distance_mm
+    space: ObjectSpace = SENSOR_MM
 
     def metadata(self) -> dict:
         """Fields shared by every output of this depth map."""
@@ -302,7 +300,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         raise LfprocError(f"view_step must be an integer from 1 to {reach}, got {view_step}")
     mask = getattr(lf, "view_mask", None)
     weight = delivered_views(views) if mask is None else np.array(mask, dtype=bool)
-    if camera.f_number is not None or camera.is_microscope:   # a microscope's aperture: its NA
+    if camera.main_optics.image_aperture_sine is not None:   # the optics' aperture: a lens's f-number, an NA
         weight &= geometry.views_inside_aperture(camera)
     if not weight[c, c]:
         raise LfprocError("the central view of this light field is dark (0 everywhere): nothing to estimate "
@@ -310,8 +308,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["plan"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    # a microscope that refocuses by the sine condition sweeps with the same per-view shifts (exact z_um)
-    slopes = geometry.refocus_slopes(camera, centre=getattr(lf, "view_centre", None)) if camera.is_microscope else None
+    # optics that refocus by the sine condition sweep with the same per-view shifts (exact z); None: a·(c − k)
+    slopes = geometry.refocus_slopes(camera, centre=getattr(lf, "view_centre", None))
     sweep = sweep_luminance(views, view_step, reach, weight, slopes)
     timings["luminance of the views"] = time.perf_counter() - t0
 
@@ -359,10 +357,11 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     sharp = allfocus(views, minimum.a, c, interpolation, slopes, view_mask=weight)
     timings["all-in-focus"] = time.perf_counter() - t0
 
-    f32 = lambda x: None if x is None else np.asarray(x, dtype=np.float32)
-    return DepthMap(distance_mm=f32(metric.distance_mm), confidence=f32(conf), near_mm=f32(metric.near_mm),
-                    far_mm=f32(metric.far_mm), a=f32(a_known), allfocus=sharp, a_searched=a_values,
-                    view_step=view_step, view_reach=reach, timings_s=timings,
-                    aperture_f_number=None if mask is None or camera.is_microscope else geometry.equivalent_f_number(
-                        camera, geometry.summed_view_extent(mask)),
-                    z_um=f32(metric.z_um), z_near_um=f32(metric.z_near_um), z_far_um=f32(metric.z_far_um))
+    f32 = lambda x: np.asarray(x, dtype=np.float32)
+    # views at positions on a lens have an equivalent f-number; orthographic views (an objective's) an NA instead
+    positional = not camera.main_optics.views_are_orthographic
+    return DepthMap(depth=f32(metric.depth), confidence=f32(conf), near=f32(metric.near), far=f32(metric.far),
+                    a=f32(a_known), allfocus=sharp, a_searched=a_values, view_step=view_step, view_reach=reach,
+                    timings_s=timings, space=metric.space,
+                    aperture_f_number=geometry.equivalent_f_number(camera, geometry.summed_view_extent(mask))
+                    if mask is not None and positional else None)

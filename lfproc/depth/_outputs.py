@@ -1,10 +1,11 @@
 """The files of ``lfproc depth`` for one capture (contract, ARCHITECTURE.md), each with its sidecar.
 
-* ``STEM_depth.tif`` — float32, one channel, mm from the sensor, NaN = unknown (``inf`` = infinity);
+* ``STEM_depth.tif`` — float32, one channel, in the camera's object space (:attr:`DepthMap.space`): mm from
+  the sensor (``inf`` = infinity), or µm from a microscope's native object plane; NaN = unknown;
 * ``STEM_depth_confidence.tif`` — float32, 0–1;
 * ``STEM_allfocus.tif`` — float32 linear, the light field's channels;
-* ``STEM_depth_preview.png`` — colour-mapped depth with a legend in metres;
-* ``STEM_depth_points.ply`` — the point cloud (optional).
+* ``STEM_depth_preview.png`` — colour-mapped depth with a legend in metres (µm for a microscope);
+* ``STEM_depth_points.ply`` — the point cloud (optional; distances from the sensor only).
 
 Every image embeds the same metadata as its sidecar ``NAME.json`` (``source``, ``unit``, ``method``,
 the searched range …). Everything is written atomically; a failure leaves no partial file.
@@ -19,6 +20,17 @@ import numpy as np
 #: output name suffixes
 DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence.tif", "_allfocus.tif",
                                                 "_depth_preview.png", "_depth_points.ply")
+
+#: what ``STEM_depth.tif`` holds, by the unit of the depth map's object space (:class:`lfproc.camera.ObjectSpace`)
+DEPTH_CONTENT = {"mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
+                 "um": "depth from the native object plane, positive towards the objective (z_um of the sharpest "
+                       "slice); NaN = unknown"}
+
+#: the preview's legend unit and its sidecar's ``content``, by the unit of the depth map's object space
+PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown), legend in "
+                              "metres"),
+                  "um": ("um", "colour-mapped depth (viridis: yellow nearest the objective, dark purple farthest, grey "
+                               "unknown), legend in um")}
 
 
 def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
@@ -69,15 +81,13 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
         common["depth_range_mm"] = [float(v) for v in depth_range_mm]
     if provenance is not None:
         common["provenance"] = provenance
+    space = depth_map.space
     known = ~np.isnan(depth_map.depth)
     paths = {}
-    if depth_map.microscope:
-        meta = dict(common, unit="um", content="depth from the native object plane, positive towards the objective "
-                    "(z_um of the sharpest slice); NaN = unknown", known_fraction=float(known.mean()) if known.size
-                    else 0.0, lateral_sampling_um=_lateral_sampling_um(camera))
-    else:
-        meta = dict(common, unit="mm", content="distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
-                    known_fraction=float(known.mean()) if known.size else 0.0)
+    meta = dict(common, unit=space.unit, content=DEPTH_CONTENT[space.unit],
+                known_fraction=float(known.mean()) if known.size else 0.0)
+    if space.unit == "um":   # the lenses' spacing in the object: one lateral sampling for every z
+        meta["lateral_sampling_um"] = _lateral_sampling_um(camera)
     paths["depth"] = _write_float(os.path.join(outdir, stem + DEPTH), depth_map.depth, meta)
     meta = dict(common, unit="1", content="confidence of the depth, 0 (nothing known) to 1")
     paths["confidence"] = _write_float(os.path.join(outdir, stem + CONFIDENCE), depth_map.confidence, meta)
@@ -86,16 +96,14 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     write_image(path, depth_map.allfocus, meta, "tiff")
     write_sidecar(path, meta)
     paths["allfocus"] = path
-    meta = dict(common, unit="um" if depth_map.microscope else "m",
-                content=("colour-mapped depth (viridis: yellow nearest the objective, dark purple farthest, grey "
-                         "unknown), legend in um" if depth_map.microscope else
-                         "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown), legend in metres"))
+    unit, content = PREVIEW_LEGEND[space.unit]
+    meta = dict(common, unit=unit, content=content)
     path = os.path.join(outdir, stem + PREVIEW)
     write_preview(path, depth_map.distance_mm, depth_map.z_um)
     write_sidecar(path, meta)
     paths["preview"] = path
-    if point_cloud and camera is not None and not depth_map.microscope:
-        points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.distance_mm, depth_map.allfocus)
+    if point_cloud and camera is not None and space.from_sensor:   # x, y from each lens's chief ray; z from the sensor
+        points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.depth, depth_map.allfocus)
         path = os.path.join(outdir, stem + POINTS)
         meta = dict(common, unit="mm", content="x, y: object-space position from the optical axis; z: distance from "
                     "the sensor (central view's chief ray through each lens, Eqs. 13-21)", points=len(points))
@@ -114,14 +122,14 @@ def _lateral_sampling_um(camera) -> float | None:
 def summary_line(depth_map) -> str:
     """One line for a terminal: how much is known and the range of the known distances (metres; µm for a
     microscope)."""
-    if depth_map.microscope:
-        z = depth_map.z_um
+    if not depth_map.space.from_sensor:   # signed z, linear: no infinity
+        z = depth_map.depth
         text = f"depth known at {np.isfinite(z).mean():.0%} of {z.size} lenses"
         if np.isfinite(z).any():
             lo, hi = (float(v) for v in np.percentile(z[np.isfinite(z)], [1, 99]))
             text += f", z {lo:.4g} to {hi:.4g} um from the native object plane (1st to 99th percentile)"
         return text
-    distance = depth_map.distance_mm
+    distance = depth_map.depth
     known = ~np.isnan(distance)
     text = f"depth known at {known.mean():.0%} of {distance.size} lenses"
     finite = distance[np.isfinite(distance)]

@@ -54,11 +54,12 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise LfprocError(f"range of a {a_range!r} must be two finite numbers LOW < HIGH")
         return lo, hi
-    microscope = camera is not None and getattr(camera, "microscope", None) is not None
-    if depth_range_mm is not None and microscope:
+    # depths from the native object plane (an afocal objective: no slice at infinity to start from)
+    native_plane = camera is not None and not camera.object_space.from_sensor
+    if depth_range_mm is not None and native_plane:
         raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native object "
                           f"plane; give a z range (--z-range Z0:Z1) instead of a depth range in mm")
-    if microscope:   # Levoy et al. 2006: the N_u resolvable depths span |a| <= 1
+    if native_plane:   # Levoy et al. 2006: the N_u resolvable depths span |a| <= 1
         return MICROSCOPE_A_RANGE
     if depth_range_mm is not None:
         from .. import geometry
