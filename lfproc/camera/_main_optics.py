@@ -95,10 +95,11 @@ class MainOptics(Protocol):
     def transfer(self) -> RayTransfer:
         """The paraxial transfer from the object-side reference plane to the MLA (reduced angles)."""
 
-    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float):
-        """Where two rays meet in object space, in :attr:`object_space` units: rays ``ray_gap_mm`` apart at the
-        MLA whose image-side slopes differ by ``slope_gap`` meet w = ray_gap / slope_gap behind it, and the
-        object point is that image point's conjugate (``mla_path_mm`` = f_s + H1s–H2s, sensor to H1s)."""
+    def object_position(self, shift, pitch_mm: float, slope_gap, mla_path_mm: float):
+        """Where two rays meet in object space, in :attr:`object_space` units: rays ``shift`` lens pitches
+        (``pitch_mm``) apart at the MLA whose image-side slopes differ by ``slope_gap`` meet
+        w = shift·pitch / slope_gap behind it, and the object point is that image point's conjugate
+        (``mla_path_mm`` = f_s + H1s–H2s, the sensor to the MLA's H1s)."""
 
     def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
         """r, the half-extent in view steps of the views the optics fill: the DOF's views when none are named."""
@@ -152,17 +153,17 @@ class MainLens:
             return prescription_transfer(self.prescription, self.image_distance_mm)
         return gap(self.image_distance_mm) @ lens(self.focal_length_mm)
 
-    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float):
+    def object_position(self, shift, pitch_mm: float, slope_gap, mla_path_mm: float):
         """Distance from the sensor where two rays meet in front of the lens (Eqs. 18–21).
 
-        Rays g = ``ray_gap_mm`` apart at the MLA with image-side slopes differing by N = ``slope_gap`` meet
-        w = g/N behind the MLA; in Newton's form its conjugate is x = f_U²·N/(g + N·ε) from the front focal
+        Rays g = ``shift``·``pitch_mm`` apart at the MLA with image-side slopes differing by N = ``slope_gap``
+        meet w = g/N behind the MLA; in Newton's form its conjugate is x = f_U²·N/(g + N·ε) from the front focal
         plane (ε = b_U − f_U), so d = L + f_U + x with L = f_s + H1sH2s + b_U + H1UH2U: the transfer's
         s = n·(B + w·D)/(A + w·C) without cancellation at infinity (the tests check they agree).
         ``inf`` where the conjugate lies behind H1U or at infinity; never negative, never NaN.
         """
         f_u = self.focal_length_mm
-        g = np.asarray(ray_gap_mm, dtype=np.float64)
+        g = np.asarray(shift, dtype=np.float64) * pitch_mm
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             z = f_u + f_u * f_u * slope_gap / (g + slope_gap * (self.image_distance_mm - f_u))
         z = np.where((z > 0) & np.isfinite(z), z, np.inf)

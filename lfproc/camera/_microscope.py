@@ -111,13 +111,15 @@ class Microscope:
         s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
         return RayTransfer(s.A, s.B, s.C, s.D, float(self.immersion_index))
 
-    def object_position(self, ray_gap_mm, slope_gap, mla_path_mm: float = 0.0):
-        """z in µm where two rays meet: the image point w = ``ray_gap_mm`` / ``slope_gap`` behind the MLA maps to
-        n·w/M² through :meth:`transfer`, positive towards the objective (``mla_path_mm`` does not enter: z is
-        from the native object plane)."""
+    def object_position(self, shift, pitch_mm: float, slope_gap, mla_path_mm: float = 0.0):
+        """z in µm where two rays meet: the image point w = ``shift``·``pitch_mm`` / ``slope_gap`` behind the MLA
+        maps to n·w/M² through :meth:`transfer`, positive towards the objective (``mla_path_mm`` does not
+        enter: z is from the native object plane). Linear in ``shift``: z = shift · z(1), exactly, so that
+        z → a → z round-trips as z / z(1) · z(1)."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            w = np.asarray(ray_gap_mm, dtype=np.float64) / slope_gap
-        z = np.asarray(self.transfer().object_offset_mm(w), dtype=np.float64) * 1000.0 + 0.0   # + 0.0: never −0
+            per_shift = np.asarray(self.transfer().object_offset_mm(pitch_mm / np.asarray(slope_gap)),
+                                   dtype=np.float64) * 1000.0
+        z = np.asarray(shift, dtype=np.float64) * per_shift + 0.0   # + 0.0: never −0
         return float(z) if z.ndim == 0 else z
 
     def na_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index: int) -> int:

@@ -82,11 +82,10 @@ def _slope_step(camera: Camera) -> float:
     return camera.sample_pitch_mm / camera.mla_focal_length_mm
 
 
-def _ray_gaps(camera: Camera, shift, spread):
-    """(A·p_m, N): the lateral gap at the MLA of a ray pair (A, C) of the module docstring and the difference
-    of their image-side slopes, N = δ − C·p_m·κ (exactly δ when telecentric); they meet A·p_m/N behind it."""
-    pitch = camera.mla_pitch_mm
-    return shift * pitch, _slope_step(camera) - spread * pitch * pupil_curvature(camera)
+def _slope_gap(camera: Camera, spread):
+    """N = δ − C·p_m·κ: the difference of the image-side slopes of a ray pair (A, C) of the module docstring
+    (exactly δ when telecentric); the pair, A·p_m apart at the MLA, meets A·p_m/N behind it."""
+    return _slope_step(camera) - spread * camera.mla_pitch_mm * pupil_curvature(camera)
 
 
 def _pair_position(camera: Camera, shift, spread):
@@ -98,11 +97,11 @@ def _pair_position(camera: Camera, shift, spread):
     vergence (for a main lens D = (A·p_m + N·ε)/f_U, the sign of 1/x); it changes sign where the meeting
     point passes through infinity, which an afocal objective (C_S = 0) never does.
     """
-    ray_gap, slope_gap = _ray_gaps(camera, shift, spread)
+    slope_gap, pitch = _slope_gap(camera, spread), camera.mla_pitch_mm
     optics = camera.main_optics
     transfer = optics.transfer()
-    vergence = -(slope_gap * transfer.A + ray_gap * transfer.C)
-    return optics.object_position(ray_gap, slope_gap, camera.mla_path_mm), vergence
+    vergence = -(slope_gap * transfer.A + shift * pitch * transfer.C)
+    return optics.object_position(shift, pitch, slope_gap, camera.mla_path_mm), vergence
 
 
 def _pair_distance(camera: Camera, shift, spread):
