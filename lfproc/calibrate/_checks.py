@@ -181,13 +181,23 @@ def implied_exit_pupil(pitch_px: float, pitch_sigma_px: float, camera) -> ExitPu
     expected = micro_image_scale(camera)
     sigma = pitch_sigma_px / lens_pitch_px
     allowance = 3.0 * sigma + NOMINAL_PITCH_TOLERANCE * expected
-    if getattr(camera, "microscope", None) is not None:     # telecentric by construction: no exit pupil to imply
+    if _afocal(camera):     # telecentric by construction: no exit pupil to imply
         return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=math.inf, range_mm=(math.inf, math.inf),
                                  expected_scale=expected)
     distance = exit_pupil_from_scale(scale, camera) if scale - allowance > 1.0 else math.inf
     span = (exit_pupil_from_scale(scale + allowance, camera), exit_pupil_from_scale(scale - allowance, camera))
     return ExitPupilEstimate(scale=scale, scale_sigma=sigma, distance_mm=distance, range_mm=span,
                              expected_scale=expected)
+
+
+def _afocal(camera) -> bool:
+    """Whether ``camera`` (or a bare exit pupil distance) has doubly telecentric main optics: orthographic views
+    (object-side telecentric) through a stop at infinity on the image side, as an objective + tube lens. Their
+    micro images sit under their lenslets whatever the camera file says, so a pitch off the file's is the pixel
+    size at the lenslets, not an exit pupil."""
+    optics = getattr(camera, "main_optics", None)
+    return (optics is not None and bool(optics.views_are_orthographic)
+            and math.isinf(optics.exit_pupil_distance_mm))
 
 
 def microscope_pitch_warning(source: str, estimate: ExitPupilEstimate, camera) -> str | None:
@@ -208,7 +218,7 @@ def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance
     """The exit pupil the pitch implies, when it contradicts the camera file. ``camera_distance_mm`` is the
     camera file's exit pupil distance, or the camera itself: a microscope camera gets
     :func:`microscope_pitch_warning` (no exit pupil to blame)."""
-    if getattr(camera_distance_mm, "microscope", None) is not None:
+    if _afocal(camera_distance_mm):
         return microscope_pitch_warning(source, estimate, camera_distance_mm)
     camera_distance_mm = getattr(camera_distance_mm, "exit_pupil_distance_mm", camera_distance_mm)
     if not estimate.contradicts_camera:

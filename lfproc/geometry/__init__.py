@@ -1,8 +1,14 @@
 """The paper's paraxial ray model: where each refocused slice is focused, where each view looks from.
 
 Pure, vectorised functions of a :class:`~lfproc.camera.Camera`; no images, numpy only (``lfproc
-geometry`` stays light). Every distance is measured from the sensor, in millimetres. The 2014
-paper's image-side telecentric model, extended to a finite exit pupil (Hahne et al., IJCV 2018).
+geometry`` stays light). The 2014 paper's image-side telecentric model, extended to a finite exit pupil
+(Hahne et al., IJCV 2018), with the optics in front of the micro lens array as one parameter
+(:attr:`Camera.main_optics <lfproc.camera.Camera.main_optics>`, a main lens or an objective + tube lens):
+the functions ask the optics' interface (:class:`lfproc.camera.MainOptics`: where rays meet, the object
+space's unit and origin, whether views are orthographic, the aperture as a sine at the MLA), not which
+kind they are. Positions are in the camera's object space (:attr:`Camera.object_space
+<lfproc.camera.Camera.object_space>`): millimetres from the sensor for a main lens, micrometres from the
+native object plane for a microscope; functions named ``_mm`` take and give millimetres from the sensor.
 
 Private modules: ``_slices`` (distance, DOF and inverse, Eqs. 13–31), ``_planning`` (slice planning,
 uncovered depths, integer gaps), ``_views`` (virtual cameras, Eqs. 17, 33, 34), ``_triangulation``

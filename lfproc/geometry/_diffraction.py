@@ -58,7 +58,8 @@ def working_f_number(camera: Camera) -> float | None:
 
     The Airy disk on the micro lenses (Eq. 22) follows the cone that converges there, whose f-number is
     N · b_U / f_U, not the object-side N (they agree only when focused at infinity, b_U = f_U).
-    ``None`` without an f-number.
+    ``None`` without an f-number, and so for a microscope (``camera.f_number`` is None: its aperture is the
+    objective's NA, whose cone at the MLA this check does not report).
     """
     if camera.f_number is None:
         return None

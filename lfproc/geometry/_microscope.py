@@ -39,13 +39,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ..camera import main_optics_transfer
+from ..camera import Microscope, main_optics_transfer
 
 UM_PER_MM = 1000.0
 
 
-def _scope(camera):
-    scope = getattr(camera, "microscope", None)
+def _microscope_of(camera) -> Microscope | None:
+    """The camera's main optics where they are an objective + tube lens (this module's own model), else None."""
+    optics = getattr(camera, "main_optics", None)
+    return optics if isinstance(optics, Microscope) else None
+
+
+def _scope(camera) -> Microscope:
+    scope = _microscope_of(camera)
     if scope is None:
         raise LfprocError(f"{getattr(camera, 'source', '') or 'camera'}: micrometre depths need a microscope camera "
                           f"([microscope] table); this camera has a main lens")
@@ -79,6 +85,14 @@ def pupil_positions_mm(camera, centre: float = 0.0) -> np.ndarray:
     sample at n·sin θ crosses it at f_obj·n·sin θ (f_obj = f_tube / M), which is −f_tube times the view's
     image-side sine; the sign follows the view's object-space angle. ``centre``: see :func:`image_sines`."""
     return -_scope(camera).tube_lens_focal_length_mm * image_sines(camera, centre) + 0.0
+
+
+def object_numerical_aperture(camera, image_f_number: float) -> float:
+    """The object-side NA of an image-side cone f/``image_f_number`` at the MLA: M/(2·N) by the Abbe sine
+    condition (paraxial, NA_image = 1/(2·N)), at most the objective's NA (views outside it carry no light)."""
+    scope = _scope(camera)
+    na = scope.objective_magnification / (2.0 * image_f_number)
+    return float(min(na, scope.numerical_aperture))
 
 
 def na_views(camera) -> int:
@@ -162,7 +176,7 @@ def refocus_slopes(camera, aplanatic: bool | None = None, centre=None):
     sits at u = (k − c + centre)·p_p and its shift is that of u less that of the central view, so that
     the central view stays put and z(a) is unchanged (paraxially the table is still c − k).
     """
-    if getattr(camera, "microscope", None) is None:
+    if _microscope_of(camera) is None:
         return None
     if not (uses_aplanatic(camera) if aplanatic is None else aplanatic):
         return None
@@ -234,9 +248,8 @@ def _a_for_lower_limit(camera, lower_um: float) -> float:
     The far border-ray pair is A = (2ac − 1)/(2c + 1) where A ≥ 0 and (2ac − 1)/(2c − 1) below
     (c = c_NA, :func:`._slices._dof_pairs`), and z_far = z(A) − λn/(2NA²).
     """
-    scope = _scope(camera)
     c = max(na_views(camera), 1)
-    wave = scope.wavelength_mm * UM_PER_MM * scope.immersion_index / scope.numerical_aperture ** 2
+    wave = _scope(camera).wave_depth_of_field()
     big_a = (lower_um + 0.5 * wave) / z_per_a_um(camera)
     return (big_a * (2 * c + 1) + 1.0) / (2 * c) if big_a >= 0 else (big_a * (2 * c - 1) + 1.0) / (2 * c)
 

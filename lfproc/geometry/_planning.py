@@ -195,9 +195,14 @@ def plan_depth_range(camera: Camera, near_mm: float, far_mm: float, *, max_gap_m
 
 def uncovered_depths(camera: Camera, a_values, near_mm: float, far_mm: float,
                      view_extent=None) -> list[tuple[float, float]]:
-    """Depth intervals inside [near_mm, far_mm] that no slice's [near, far] DOF interval covers."""
+    """Depth intervals inside [near_mm, far_mm] that no slice's [near, far] DOF interval covers.
+
+    Positions are in the camera's object space (:attr:`~lfproc.camera.Camera.object_space`): mm from the
+    sensor, or for a microscope µm from the native object plane, the range then given low to high.
+    """
     geo = slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)), view_extent)
-    intervals = sorted(zip(np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm)))
+    low, high = _low_high(geo)
+    intervals = sorted(zip(np.atleast_1d(low), np.atleast_1d(high)))
     gaps, covered_to = [], near_mm
     for lo, hi in intervals:
         if lo > covered_to and covered_to < far_mm:
@@ -222,15 +227,24 @@ def integer_slice_gaps(camera: Camera, a_values, view_extent=None) -> list[tuple
     -------
     list of (a, gap_near_mm, gap_far_mm)
         For each consecutive pair (a, a + 1) whose intervals do not touch, the uncovered depths
-        between d_(a+1)+ and d_a−.
+        between d_(a+1)+ and d_a−, in the camera's object space (for a microscope µm, the gap's
+        end nearer the objective first).
     """
     a_sorted = np.unique(np.asarray(a_values, dtype=np.float64))
     geo = slice_geometry(camera, a_sorted, view_extent)
+    # slice a + 1 is nearer the optics: a smaller distance from the sensor, a larger signed depth
+    apart = np.less if geo.space.from_sensor else np.greater
     gaps = []
     for k in range(len(a_sorted) - 1):
         if a_sorted[k + 1] != a_sorted[k] + 1:  # only neighbouring integer slices bound a gap between them
             continue
-        nearer_far, farther_near = geo.far_mm[k + 1], geo.near_mm[k]
-        if nearer_far < farther_near:
+        nearer_far, farther_near = np.atleast_1d(geo.far)[k + 1], np.atleast_1d(geo.near)[k]
+        if apart(nearer_far, farther_near):
             gaps.append((float(a_sorted[k]), float(nearer_far), float(farther_near)))
     return gaps
+
+
+def _low_high(geo):
+    """(low, high): each slice's DOF interval as numbers low to high (near first from the sensor, far first
+    for signed depths, where the limit nearer the optics is the larger number)."""
+    return (geo.near, geo.far) if geo.space.from_sensor else (geo.far, geo.near)

@@ -10,7 +10,8 @@ telecentric main lens; with a finite exit pupil (κ = 1/d_A > 0) at a = δ/(p_m�
 step N = δ − a·p_m·κ of Eq. 16's pair vanishes. So the usable slices are a_∞ ≤ a < a_ffp, distances
 from infinity down to the front focal plane.
 
-A microscope's slices are depths in µm around the native object plane, any sign: no such limit.
+Main optics whose object space is signed depths about a native object plane (an afocal objective,
+:attr:`~lfproc.camera.ObjectSpace.from_sensor` False) image every depth, of either sign: no such limit.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import numpy as np
 
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
-from ._slices import infinity_parameter, slice_distance_mm
+from ._slices import _pair_position, infinity_parameter, slice_distance_mm
 
 #: relative tolerance on the bounds (a typed from a printed bound, or a_∞ recomputed by another formula)
 _TOLERANCE = 1e-9
@@ -36,10 +37,10 @@ def usable_a_range(camera) -> tuple[float, float]:
     """(a_low, a_high): the refocus parameters of real slices, a_∞ (at infinity) to the front focal plane.
 
     ``a_high`` is ``inf`` for a telecentric main lens (the front focal plane is reached only in the
-    limit) and δ/(p_m·κ) with a finite exit pupil in front of the MLA (module docstring). A microscope
-    camera has no such bounds: ``(-inf, inf)``.
+    limit) and δ/(p_m·κ) with a finite exit pupil in front of the MLA (module docstring). Optics that report
+    signed depths (a microscope) have no such bounds: ``(-inf, inf)``.
     """
-    if getattr(camera, "microscope", None) is not None:
+    if not camera.object_space.from_sensor:   # an afocal objective has no slice at infinity, no front focal plane
         return -math.inf, math.inf
     low = float(infinity_parameter(camera))
     kappa = pupil_curvature(camera)
@@ -61,14 +62,15 @@ def format_a(value: float, inward: int = 0) -> str:
 
 
 def _where(camera, a: float) -> str:
-    """Where slice ``a`` focuses, for a message: ``"206.7 mm"``, ``"infinity"``, a microscope's ``"z = +1.5 um"``."""
-    if getattr(camera, "microscope", None) is not None:
-        from ._microscope import microscope_slices
-        return f"z = {float(microscope_slices(camera, a).z_um):+.4g} um"
-    if math.isinf(a):
+    """Where slice ``a`` focuses, for a message, in the camera's object space: ``"206.7 mm"``, ``"infinity"``
+    (from the sensor), a signed depth ``"z = +1.5 um"`` (from a microscope's native object plane)."""
+    space = camera.object_space
+    if space.from_sensor and math.isinf(a):
         return f"approaching the front focal plane at {front_focal_plane_mm(camera):.1f} mm"
-    d = float(slice_distance_mm(camera, a))
-    return "infinity" if math.isinf(d) else f"{d:.1f} mm"
+    position = float(_pair_position(camera, a, a)[0])       # the slice's centre, as slice_geometry's depth
+    if not space.from_sensor:
+        return f"z = {position:+.4g} {space.unit}"
+    return "infinity" if math.isinf(position) else f"{position:.1f} {space.unit}"
 
 
 def usable_range_text(camera, a_low: float | None = None, a_high: float | None = None) -> str:
@@ -84,7 +86,7 @@ def usable_range_text(camera, a_low: float | None = None, a_high: float | None =
     if a_high is not None:
         high = min(high, float(a_high))
     lo_text, hi_text = format_a(low, +1), format_a(high, -1)
-    far = ("infinity" if at_infinity and getattr(camera, "microscope", None) is None
+    far = ("infinity" if at_infinity and camera.object_space.from_sensor   # signed depths have no infinity
            else _where(camera, float(lo_text)))
     return (f"a from {lo_text} ({far}) to "
             f"{hi_text} ({_where(camera, float(hi_text) if math.isfinite(high) else high)})")

@@ -50,7 +50,7 @@ from ._slices import _slope_step, _view_extent, slice_geometry
 
 
 def _require_prescription(camera: Camera):
-    lens = getattr(camera, "main_lens_prescription", None)
+    lens = getattr(camera.main_optics, "prescription", None)     # main optics given by their surfaces
     if lens is None:
         raise LfprocError(f"{camera.source or 'camera'}: real rays need the main lens's surfaces; give "
                           f"main_lens.prescription (a .zmx file) or [[main_lens.surfaces]] in the camera file")

@@ -23,6 +23,7 @@ from ..camera import Camera
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 from ._slices import _distance_at, _slope_step
+from ._views import _virtual_cameras
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,7 +77,13 @@ def triangulate(camera: Camera, disparity_px, gap=1, a=0.0) -> Triangulation:
     -------
     Triangulation
         Broadcast over the inputs.
+
+    Raises
+    ------
+    LfprocError
+        For orthographic views (a microscope's), which have no virtual cameras, baselines or tilts.
     """
+    _virtual_cameras(camera)
     dx = np.asarray(disparity_px, dtype=np.float64)
     g = np.asarray(gap, dtype=np.float64)
     a = np.asarray(a, dtype=np.float64)

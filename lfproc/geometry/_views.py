@@ -12,8 +12,8 @@ from ._slices import _slope_step
 
 
 def _virtual_cameras(camera: Camera) -> None:
-    """Refuse a microscope: its views are orthographic, with object-space angles instead of virtual cameras."""
-    if getattr(camera, "microscope", None) is not None:
+    """Refuse orthographic views (a microscope's): they have object-space angles instead of virtual cameras."""
+    if camera.main_optics.views_are_orthographic:   # object-side telecentric: every view is a direction, no pinhole
         camera.require_main_lens("virtual camera positions, tilts and baselines (a microscope's views are "
                                  "orthographic: see their object-space angles, lfproc.geometry.microscope_views)")
 
@@ -90,17 +90,20 @@ def view_geometry(camera: Camera) -> ViewGeometry:
 def views_inside_aperture(camera: Camera) -> np.ndarray:
     """Boolean mask ``(m̂, m̂)`` of views whose virtual centre lies inside the main lens aperture.
 
-    For a microscope: the views inside the objective's NA (:func:`~._microscope.views_inside_na`).
-
     The virtual centre of view (ky, kx) sits at (F_iy, F_ix) in the entrance pupil (the front focal
     plane for an image-side telecentric main lens), whose diameter is f_U / N. Views outside it see
     no light (the dark corners of every micro image). Without ``f_number`` every view is kept.
+
+    Orthographic views (a microscope's) are directions, not positions in a pupil: those whose image-side
+    ray sine is within the optics' :attr:`~lfproc.camera.MainOptics.image_aperture_sine`, NA/M
+    (:func:`~._microscope.views_inside_na`).
     """
     m = camera.m_hat
-    if getattr(camera, "microscope", None) is not None:    # the aperture of a microscope is its NA
+    optics = camera.main_optics
+    if optics.views_are_orthographic:    # views are directions: the stop bounds their sine (Abbe), not a position
         from ._microscope import views_inside_na
         return views_inside_na(camera)
-    if camera.f_number is None:
+    if optics.image_aperture_sine is None:
         return np.ones((m, m), dtype=bool)
     pos = view_positions_mm(camera)
     radius = camera.main_focal_length_mm / (2.0 * camera.f_number)

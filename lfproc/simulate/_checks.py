@@ -63,7 +63,9 @@ def _check_levels(low, high) -> None:
 
 
 def _require_f_number(camera: Camera) -> None:
-    if getattr(camera, "microscope", None) is not None:
+    # the tracer places a main lens's stop and principal planes at distances from the sensor: only optics whose
+    # object space is measured from the sensor have them (a microscope has its own renderer, _microscope.py)
+    if not camera.object_space.from_sensor:
         camera.require_main_lens("this renderer (a main lens with its stop and planes at distances from the sensor)")
     if camera.f_number is None:
         raise LfprocError(f"{camera.source or 'camera'}: rendering needs the aperture stop; add "

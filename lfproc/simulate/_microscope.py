@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import Camera, Microscope
 from ..errors import LfprocError
 from ._setup import aperture_offsets_mm, pixel_offsets
 
@@ -105,10 +105,12 @@ def _finite(obj, names, positive=()) -> None:
             raise LfprocError(f"{kind}: {name} must be positive, got {value!r}")
 
 
-def _scope(camera: Camera):
-    if not isinstance(camera, Camera) or camera.microscope is None:
+def _scope(camera: Camera) -> Microscope:
+    """The objective + tube lens this renderer traces (the camera's main optics), or a one-line refusal."""
+    optics = camera.main_optics if isinstance(camera, Camera) else None
+    if not isinstance(optics, Microscope):
         raise LfprocError("a microscope render needs a microscope camera (a [microscope] table)")
-    return camera.microscope
+    return optics
 
 
 def object_rays(camera: Camera, t_mm: np.ndarray, u_tan: np.ndarray, na_offset=(0.0, 0.0)):
