@@ -173,11 +173,11 @@ def test_object_position_is_the_transfers_conjugate(name):
     else:                                     # every depth, either side of the native object plane
         w_values = [-40.0, -3.0, -0.2, 0.0, 0.05, 2.5, 31.0]
     for w in w_values:
-        got = optics.object_position(w * slope_gap, slope_gap, mla_path)
+        got = optics.object_position(w * slope_gap, 1.0, slope_gap, mla_path)
         assert float(got) == pytest.approx(_transfer_position(optics, w, mla_path), rel=1e-9, abs=1e-9), w
     # vectorised alike
     w = np.array(w_values)
-    np.testing.assert_allclose(optics.object_position(w * slope_gap, slope_gap, mla_path),
+    np.testing.assert_allclose(optics.object_position(w * slope_gap, 1.0, slope_gap, mla_path),
                                [_transfer_position(optics, v, mla_path) for v in w], rtol=1e-9, atol=1e-9)
 
 
@@ -189,7 +189,7 @@ def test_slice_geometry_asks_the_optics_where_the_rays_meet(name):
     a = np.array([0.25, 0.5, 1.0, 2.0, 3.5])
     slope_gap = camera.sample_pitch_mm / camera.mla_focal_length_mm - a * camera.mla_pitch_mm * g.pupil_curvature(
         camera)
-    expected = optics.object_position(a * camera.mla_pitch_mm, slope_gap, camera.mla_path_mm)
+    expected = optics.object_position(a, camera.mla_pitch_mm, slope_gap, camera.mla_path_mm)
     geo = g.slice_geometry(camera, a)
     np.testing.assert_array_equal(geo.depth, expected)
     assert geo.space == camera.object_space

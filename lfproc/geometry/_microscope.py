@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ..camera import Microscope, main_optics_transfer
+from ..camera import Microscope
 
 UM_PER_MM = 1000.0
 
@@ -60,9 +60,10 @@ def _scope(camera) -> Microscope:
 
 def z_per_a_um(camera) -> float:
     """dz/da = m̂·f_s·n/M² in µm, through the microscope's ray transfer (exact for the paraxial map)."""
-    _scope(camera)
-    w_per_a = camera.mla_pitch_mm * camera.mla_focal_length_mm / camera.sample_pitch_mm   # = m̂·f_s
-    return float(main_optics_transfer(camera).object_offset_mm(w_per_a)) * UM_PER_MM
+    # slice a's ray pair: a lenses apart, slopes one view step δ = p_p/f_s apart (w = a·m̂·f_s); the optics'
+    # own object_position, so that slice_geometry's z is exactly a · z_per_a_um
+    return float(_scope(camera).object_position(1.0, camera.mla_pitch_mm,
+                                                camera.sample_pitch_mm / camera.mla_focal_length_mm))
 
 
 def lateral_sampling_um(camera) -> float:
