@@ -77,10 +77,10 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
 class ViewpointGeometry:
     """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x].
 
-    Orthographic views (a microscope's, ``MainOptics.views_are_orthographic``): ``position_mm`` is where each crosses the objective's pupil
-    (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg`` its object-space angle
-    (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it lies inside the
-    NA; it has no baselines (``None``).
+    Orthographic views (a microscope's, ``MainOptics.views_are_orthographic``): ``position_mm`` is where each
+    crosses the objective's pupil (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg``
+    its object-space angle (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it
+    lies inside the NA; it has no baselines (``None``).
     """
 
     view: tuple            # (ky, kx)

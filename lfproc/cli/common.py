@@ -183,8 +183,8 @@ def aperture_extent(camera, f_number) -> float | None:
 def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm: float = 0.0,
                     integer: bool = False, max_slices: int = DEFAULT_MAX_SLICES, view_mask=None) -> None:
     """One line per slice (a, distance, [near, far] in mm; in the camera's object space, so a microscope's
-    z in µm) and the depths no slice covers, with the reason, on stdout. The planning options are those the slices were planned with; the DOF is that
-    of the views ``view_mask`` marks (all when ``None``)."""
+    z in µm) and the depths no slice covers, with the reason, on stdout. The planning options are those the
+    slices were planned with; the DOF is that of the views ``view_mask`` marks (all when ``None``)."""
     import numpy as np
 
     from .. import geometry

@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
-from ._optics_tags import object_space
+from ._optics_tags import signed_depths
 
 #: output format -> file extension
 FORMATS = {"tiff": ".tif", "png16": ".png", "jpeg": ".jpg", "exr": ".exr"}
@@ -50,11 +50,10 @@ def _labels(values: list[float], camera) -> list[str]:
         raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
                           "remove the duplicate from the list")
     z, unit = None, None
-    space = object_space(camera)
-    if camera is not None and not space.from_sensor:   # signed depths (µm): named by z, which sorts like a
+    if signed_depths(camera):   # a microscope's z in µm: named by z, which sorts like a
         from ..geometry import slice_geometry
 
-        z, unit = [float(v) for v in (slice_geometry(camera, values).depth if values else [])], space.unit
+        z, unit = [float(v) for v in (slice_geometry(camera, values).depth if values else [])], camera.object_space.unit
     for decimals in range(3, 13):
         if z is None:
             labels = [f"a{a + 0.0:+.{decimals}f}" for a in values]

@@ -5,7 +5,7 @@ The outputs never ask which kind of main optics a camera has (:class:`lfproc.cam
 
 * how slice positions are named, ordered and labelled: the camera's object space
   (:attr:`lfproc.camera.Camera.object_space`: millimetres from the sensor, or micrometres from the native
-  object plane), :func:`object_space`;
+  object plane), :func:`signed_depths`;
 * how the views are placed: by position in the entrance pupil (Eq. 17, a camera's virtual cameras, with a
   baseline, Eq. 34), or by angle (``views_are_orthographic``: an object-side telecentric objective, whose
   views all see one lateral scale, the lenses' object-space pitch), :func:`views_have_angles`. With angles
@@ -18,14 +18,12 @@ from __future__ import annotations
 import numpy as np
 
 from .. import geometry
-from ..camera import SENSOR_MM
 
 
-def object_space(camera):
-    """The unit and origin of the camera's slice positions (:class:`lfproc.camera.ObjectSpace`); without a
-    camera (``None``) or main optics, millimetres from the sensor."""
-    optics = None if camera is None else camera.main_optics
-    return SENSOR_MM if optics is None else optics.object_space
+def signed_depths(camera) -> bool:
+    """True where the camera's object space is signed depths (a microscope's µm from the native object plane,
+    no infinity), so slices are named and labelled by z; False for distances from the sensor, or no camera."""
+    return camera is not None and not camera.object_space.from_sensor
 
 
 def views_have_angles(camera) -> bool:

@@ -200,8 +200,8 @@ def _view_mask(lf, views: np.ndarray):
 
         n_lit, n = int(np.count_nonzero(lit)), int(lit.size)
         warnings.warn(f"refocus: {n - n_lit} of {n} views of this array are dark (0 everywhere, or at most "
-                      f"{DARK_VIEW_FRACTION:.0%} of the brightest view's mean level) and an array's mean runs over every "
-                      f"view, so its slices are about {n_lit / n:.2f}x as bright as those of a light field whose "
+                      f"{DARK_VIEW_FRACTION:.0%} of the brightest view's mean level) and an array's mean runs over "
+                      f"every view, so its slices are about {n_lit / n:.2f}x as bright as those of a light field whose "
                       f"view_mask leaves the dark views out; pass the LightField (lf, not lf.views), or "
                       f"lfproc.LightField.from_views(views, camera, view_mask=...) with the {n_lit} views that "
                       f"carry light", LfprocWarning, stacklevel=_caller_level())
