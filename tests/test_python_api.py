@@ -182,7 +182,8 @@ def test_save_writes_what_refocus_writes(sample_api, sample_cli, tmp_path):
     written = sample_api["fs"].save(tmp_path, stem="capture", stack="imagej")
     assert len(written) == 4 and all(Path(p).exists() for p in written)
     assert_same_files(tmp_path, sample_cli / "refocus")
-    info = tifffile.TiffFile(tmp_path / "capture_stack.tif").imagej_metadata["Info"]
+    with tifffile.TiffFile(tmp_path / "capture_stack.tif") as tif:
+        info = tif.imagej_metadata["Info"]
     assert all("provenance" in s for s in json.loads(info)["slices"])
 
 
