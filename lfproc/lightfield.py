@@ -153,10 +153,10 @@ class LightField:
     def refocus_slopes(self):
         """Per-view shift table (σ_y, σ_x) for :func:`lfproc.refocus`, or ``None`` for Eq. 9's a·(c − k).
 
-        Only a microscope camera whose refocusing follows the sine condition has one
-        (:func:`lfproc.geometry.refocus_slopes`); its m̂ must match the views.
+        Only a camera whose refocusing follows the sine condition (a high-NA microscope) has one
+        (:func:`lfproc.geometry.refocus_slopes`, ``None`` for every other camera); its m̂ must match the views.
         """
-        if self.camera is None or self.camera.microscope is None or self.camera.m_hat != self.m_hat:
+        if self.camera is None or self.camera.m_hat != self.m_hat:
             return None
         from .geometry import refocus_slopes     # numpy only: stays light
         return refocus_slopes(self.camera, centre=self.view_centre)

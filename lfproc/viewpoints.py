@@ -77,10 +77,10 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
 class ViewpointGeometry:
     """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x].
 
-    A microscope's views are orthographic: ``position_mm`` is where each crosses the objective's pupil
-    (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg`` its object-space angle
-    (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it lies inside the
-    NA; it has no baselines (``None``).
+    Orthographic views (a microscope's, ``MainOptics.views_are_orthographic``): ``position_mm`` is where each
+    crosses the objective's pupil (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg``
+    its object-space angle (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it
+    lies inside the NA; it has no baselines (``None``).
     """
 
     view: tuple            # (ky, kx)
@@ -112,7 +112,7 @@ def viewpoint_geometry(camera, centre=None) -> list[list[ViewpointGeometry]]:
     """
     offsets = geometry.view_offsets(camera)
     cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
-    if getattr(camera, "microscope", None) is not None:
+    if camera.main_optics.views_are_orthographic:   # views are directions: angles, positions in the pupil
         angles_y = geometry.microscope_views(camera, cy).angle_deg
         angles_x = geometry.microscope_views(camera, cx).angle_deg
         inside = geometry.views_inside_na(camera)

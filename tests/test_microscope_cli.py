@@ -96,8 +96,10 @@ def test_refocus_decode_and_batch_tag_slices_in_micrometres(lfm):
     assert sorted(t["z_um"] for t in tags) == pytest.approx([-8, -4, 0, 4, 8])
     # issue 32: named by z, and `ls` (lexical order) lists them from low to high z
     assert [t["z_um"] for t in tags] == sorted(t["z_um"] for t in tags)
-    assert [p.stem for p in sidecars] == [f"capture_{k:02d}_z{t['z_um']:+.3f}um" for k, t in enumerate(tags)]
-    embedded = tifffile.TiffFile(str(sidecars[0].with_suffix(".tif"))).pages[0].description
+    # names write -0 as +0 (the slice at the native plane may be tagged z = -0.0)
+    assert [p.stem for p in sidecars] == [f"capture_{k:02d}_z{t['z_um'] + 0.0:+.3f}um" for k, t in enumerate(tags)]
+    with tifffile.TiffFile(str(sidecars[0].with_suffix(".tif"))) as tif:   # closed: no ResourceWarning later
+        embedded = tif.pages[0].description
     assert json.loads(embedded)["z_um"] == pytest.approx(json.loads(sidecars[0].read_text())["z_um"])
     proc = run_cli("decode", *_inputs(lfm), "-o", lfm / "decoded.lfp.npz")
     assert proc.returncode == 0, proc.stderr

@@ -152,6 +152,26 @@ def test_focal_stack_tags_are_the_sidecars(sample_api, sample_cli):
     assert fs.z_um is None and fs.images.dtype == np.float32 and fs.images.shape == (3, 53, 75, 3)
 
 
+def test_focal_stack_holds_one_set_of_tags_in_its_cameras_object_space(sample_api):
+    """Issue 31: one set of fields (depth, near, far, dof) and their space; the contract's names read them."""
+    import dataclasses
+
+    from lfproc.camera import SENSOR_MM
+
+    fs = sample_api["fs"]
+    assert fs.space == SENSOR_MM == sample_api["lf"].camera.object_space
+    for name, field in zip(SENSOR_MM.keys, ("depth", "near", "far", "dof")):
+        assert getattr(fs, name) is getattr(fs, field)
+        assert [r[name] for r in fs.records()] == getattr(fs, field).tolist()
+    assert all(getattr(fs, name) is None for name in ("z_um", "z_near_um", "z_far_um", "dof_um"))
+    assert np.all(fs.near <= fs.depth) and np.all(fs.depth <= fs.far)      # mm from the sensor: near is less
+    with pytest.raises(AttributeError):
+        fs.distance_mm = fs.depth
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        fs.depth = fs.near
+    assert "mm from the sensor" in repr(fs)
+
+
 def test_focal_stack_images_are_the_tiffs(sample_api, sample_cli):
     for image, path in zip(sample_api["fs"].images, slice_files(sample_cli / "refocus", A_VALUES, ext=".tif")):
         tiff = tifffile.imread(path)
@@ -162,7 +182,8 @@ def test_save_writes_what_refocus_writes(sample_api, sample_cli, tmp_path):
     written = sample_api["fs"].save(tmp_path, stem="capture", stack="imagej")
     assert len(written) == 4 and all(Path(p).exists() for p in written)
     assert_same_files(tmp_path, sample_cli / "refocus")
-    info = tifffile.TiffFile(tmp_path / "capture_stack.tif").imagej_metadata["Info"]
+    with tifffile.TiffFile(tmp_path / "capture_stack.tif") as tif:
+        info = tif.imagej_metadata["Info"]
     assert all("provenance" in s for s in json.loads(info)["slices"])
 
 
@@ -301,6 +322,11 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
         by_depth = lfproc.focal_stack(lf, z_um=fs.z_um)
     assert run["printed"] == "" and list((tmp_path / "home").iterdir()) == []
     assert fs.distance_mm is None and fs.aperture_f_number is None
+    from lfproc.camera import NATIVE_PLANE_UM
+    assert fs.space == NATIVE_PLANE_UM and fs.z_um is fs.depth and fs.dof_um is fs.dof
+    assert all(getattr(fs, name) is None for name in ("distance_mm", "near_mm", "far_mm", "dof_mm"))
+    assert np.all(fs.z_near_um >= fs.z_um) and np.all(fs.z_far_um <= fs.z_um)   # signed z: near is more
+    assert " um," in repr(fs) and "from the sensor" not in repr(fs)
     np.testing.assert_allclose(by_depth.a, a_values, rtol=1e-9, atol=1e-12)
     for i, name in enumerate(p.stem for p in slice_files(tmp_path / "cli", a_values, lf.camera)):
         sidecar = read_json(tmp_path / "cli" / f"{name}.json")

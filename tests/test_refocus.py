@@ -504,3 +504,60 @@ def test_the_view_mask_survives_the_light_field_file(tmp_path):
     loaded = LightField.load(tmp_path / "x.lfp.npz")
     np.testing.assert_array_equal(loaded.view_mask, mask)
     close(lfproc.refocus(loaded, 1.0), reference(views, 1.0, mask=mask))
+
+
+def _dark_outside_a_disc(faint: float, m: int = 5, ny: int = 9, nx: int = 11):
+    """Views whose 9 central ones (a disc, like an aperture) carry light everywhere (0.2 … 1) and whose 16
+    others are ``faint`` times as bright: 0, as the decoder delivers views without light, or a faint rest."""
+    views = random_views(m, ny, nx, 2, seed=11) * np.float32(0.8) + np.float32(0.2)
+    yy, xx = np.mgrid[:m, :m] - (m - 1) / 2
+    lit = yy ** 2 + xx ** 2 <= 2.5
+    views[~lit] *= np.float32(faint)
+    return views, lit
+
+
+@pytest.mark.parametrize("faint", [0.0, 1e-3])
+def test_an_array_with_dark_views_keeps_the_contracts_mean_and_says_what_to_pass(faint):
+    """Issue 31: an array has no view mask, so its mean runs over every view (the contract's formula, as it
+    stands) and is darker than the LightField's; one LfprocWarning, at the caller, says why and what to pass."""
+    from lfproc import LfprocWarning
+
+    views, lit = _dark_outside_a_disc(faint)
+    a_values = [0.0, 1.0, -1.7]
+    for call in (lfproc.refocus, importlib.import_module("lfproc.refocus").refocus):
+        with pytest.warns(LfprocWarning) as said:
+            out = call(views, a_values)
+        assert len(said) == 1 and said[0].filename == __file__   # the caller's line, not lfproc's
+    text = str(said[0].message)
+    assert "16 of 25 views of this array are dark" in text and "about 0.36x as bright" in text
+    assert "pass the LightField (lf, not lf.views)" in text
+    assert "lfproc.LightField.from_views(views, camera, view_mask=...) with the 9 views" in text
+    for k, a in enumerate(a_values):   # the contract's mean over all views, the dark ones included
+        close(out[k], reference(views, a))
+    masked = lfproc.refocus(LightField.from_views(views, view_mask=lit), a_values)
+    for k, a in enumerate(a_values):
+        close(masked[k], reference(views, a, mask=lit))
+    # at a = 0 every pixel averages every view: the array's slice is 9/25 of the LightField's, plus the faint rest
+    expected = 9 / 25 * (1 + views[~lit].astype(np.float64).sum() / views[lit].astype(np.float64).sum())
+    assert float(out[0].mean() / masked[0].mean()) == pytest.approx(expected, rel=1e-5)
+
+
+def test_an_array_whose_every_view_carries_light_is_refocused_without_a_warning(recwarn):
+    """No warning where no view is dark: a dim (vignetted) view at 5 %, black rows, a view dark in every row
+    the cheap first look samples but lit in the others, and an array that is 0 everywhere."""
+    m, ny = 5, 32
+    views = random_views(m, ny, 7, 1, seed=3)
+    views[0, 0] *= np.float32(0.05)               # dim, not dark: 5 % of the others
+    views[1, 1, 5:9] = 0.0                        # black rows inside a view
+    views[2, 3, ::2] = 0.0                        # the first look reads every second row: it looks dark there
+    a_values = [0.0, 1.0]
+    out = lfproc.refocus(views, a_values)
+    for k, a in enumerate(a_values):
+        close(out[k], reference(views, a))
+    lfproc.refocus(np.zeros((3, 3, 4, 4, 1), np.float32), 1.0)
+    assert not [w for w in recwarn if issubclass(w.category, lfproc.LfprocWarning)]
+    from lfproc.refocus._refocus import lit_views
+    assert lit_views(views) is None
+    views[4, 4] *= np.float32(0.009)              # under 1 % of the brightest view: dark
+    lit = lit_views(views)
+    assert lit is not None and not lit[4, 4] and lit.sum() == m * m - 1

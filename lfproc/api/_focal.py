@@ -13,16 +13,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import LfprocError
+from ..camera import ObjectSpace
+from ..errors import LfprocError, speaking_python
 from ._defaults import DEFAULT_INTERPOLATION
-from ..errors import speaking_python
 
-_SLICE_FIELDS = ("distance_mm", "near_mm", "far_mm", "dof_mm", "z_um", "z_near_um", "z_far_um", "dof_um")
+#: what each way of naming slices refuses in the other object space (keyed by the argument given)
+_OTHER_SPACE = {"z_um": "z_um= (micrometres from the native object plane) needs a microscope camera; give "
+                        "distance_mm= or a=",
+                "distance_mm": "a microscope's depths are micrometres from the native object plane; give z_um= "
+                               "instead of distance_mm="}
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class FocalStack:
     """Refocused slices of one light field and their geometry.
+
+    One set of tags for any main optics, in the unit and from the origin of ``space`` (the camera's
+    :attr:`~lfproc.camera.Camera.object_space`), as :class:`lfproc.geometry.SliceGeometry` holds them.
 
     Attributes
     ----------
@@ -30,16 +37,21 @@ class FocalStack:
         The slices (linear), in the order of ``a``.
     a : ndarray, shape (K,)
         Refocus parameters (Eq. 9).
+    depth, near, far, dof : ndarray (K,)
+        Where each slice focuses (Eq. 21), its DOF limits nearer to and farther from the optics and its
+        depth of field (Eqs. 23, 31), of the views summed, in ``space``'s unit; ``inf`` where infinite.
+    space : ObjectSpace
+        Unit, origin and record keys of those positions: millimetres from the sensor for a camera,
+        micrometres from the native object plane, positive towards the objective, for a microscope.
     distance_mm, near_mm, far_mm, dof_mm : ndarray (K,) or None
-        Distance from the sensor each slice focuses at (Eq. 21), its DOF limits and depth (Eqs. 23, 31);
-        ``inf`` where infinite. ``None`` for a microscope.
+        The contract's names of ``depth``, ``near``, ``far``, ``dof`` in mm from the sensor; ``None`` for a
+        microscope.
     z_um, z_near_um, z_far_um, dof_um : ndarray (K,) or None
-        A microscope's: depth from the native object plane (positive towards the objective), its DOF
-        limits and depth in µm. ``None`` for a photographic camera.
+        The same in µm from the native object plane (a microscope's); ``None`` for a photographic camera.
     views_summed : int
         How many views each slice averages (those that carry light, inside ``aperture``).
     aperture_f_number : float or None
-        The equivalent f-number of the views summed (``None`` for a microscope).
+        The equivalent f-number of the views summed (``None`` for a microscope: its aperture is an NA).
     interpolation : str
     upsample : int
     camera : Camera
@@ -51,14 +63,11 @@ class FocalStack:
 
     images: np.ndarray
     a: np.ndarray
-    distance_mm: np.ndarray | None
-    near_mm: np.ndarray | None
-    far_mm: np.ndarray | None
-    dof_mm: np.ndarray | None
-    z_um: np.ndarray | None
-    z_near_um: np.ndarray | None
-    z_far_um: np.ndarray | None
-    dof_um: np.ndarray | None
+    depth: np.ndarray
+    near: np.ndarray
+    far: np.ndarray
+    dof: np.ndarray
+    space: ObjectSpace
     views_summed: int
     aperture_f_number: float | None
     interpolation: str
@@ -68,6 +77,18 @@ class FocalStack:
     provenance: dict
     view_mask: np.ndarray | None
     _records: tuple
+
+    def _in(self, unit: str, value):
+        return value if self.space.unit == unit else None
+
+    distance_mm = property(lambda self: self._in("mm", self.depth), doc="d_a in mm from the sensor (Eq. 21)")
+    near_mm = property(lambda self: self._in("mm", self.near), doc="d_a− in mm (Eq. 31)")
+    far_mm = property(lambda self: self._in("mm", self.far), doc="d_a+ in mm (Eq. 31)")
+    dof_mm = property(lambda self: self._in("mm", self.dof), doc="D_a in mm (Eq. 23)")
+    z_um = property(lambda self: self._in("um", self.depth), doc="z in µm from the native object plane")
+    z_near_um = property(lambda self: self._in("um", self.near), doc="the DOF limit nearer the objective, µm")
+    z_far_um = property(lambda self: self._in("um", self.far), doc="the DOF limit farther from the objective, µm")
+    dof_um = property(lambda self: self._in("um", self.dof), doc="the DOF in µm")
 
     def records(self) -> list[dict]:
         """One dict per slice: the keys and values of ``lfproc refocus``'s sidecar (``inf`` for JSON's null)."""
@@ -106,10 +127,8 @@ class FocalStack:
         except ImportError:
             raise LfprocError("to_xarray needs the xarray package; install it (pip install xarray)") from None
         coords = {"a": ("slice", self.a)}
-        for name in _SLICE_FIELDS:
-            value = getattr(self, name)
-            if value is not None:
-                coords[name] = ("slice", value)
+        for name, value in zip(self.space.keys, (self.depth, self.near, self.far, self.dof)):
+            coords[name] = ("slice", value)
         import json
         attrs = {"views_summed": self.views_summed, "interpolation": self.interpolation, "upsample": self.upsample,
                  "source": self.source or "", "provenance": json.dumps(self.provenance)}
@@ -122,10 +141,10 @@ class FocalStack:
 
     def __repr__(self) -> str:
         k, ny, nx, c = self.images.shape
-        if self.z_um is not None:
-            where = f"z {_span(self.z_um)} um"
+        if self.space.from_sensor:
+            where = f"{_span(self.depth)} {self.space.unit} {self.space.origin}"
         else:
-            where = f"{_span(self.distance_mm)} mm from the sensor"
+            where = f"z {_span(self.depth)} {self.space.unit}"
         return (f"<FocalStack of {k} slice(s) {ny}x{nx}x{c}, a {_span(self.a)}, {where}, "
                 f"{self.views_summed} views summed>")
 
@@ -167,9 +186,8 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     LfprocWarning
         Slices where fewer than half the pixels average every view.
     """
-    from .. import geometry
     from ..lightfield import LightField
-    from ..outputs import slice_metadata
+    from ..outputs import slice_metadata, stack_f_number
     from ..provenance import provenance
     from ..refocus import refocus
     from ..viewpoints import with_aperture
@@ -181,7 +199,7 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
                               "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
         camera = lf.camera
         a_values = _parameters(camera, a, distance_mm, z_um)
-        if not camera.is_microscope:
+        if camera.object_space.from_sensor:   # no slice nearer than the front focal plane (signed z has none)
             check_slice_meaning(camera, a_values, "a" if a is not None else "distance_mm")
         if int(upsample) != upsample or upsample < 1:
             raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
@@ -191,14 +209,11 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
         images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
         prov = provenance(lf.inputs)
         records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)
-        columns = {name: (np.array([r[name] for r in records], dtype=np.float64) if name in records[0] else None)
-                   for name in _SLICE_FIELDS}
+        space = camera.object_space
+        columns = [np.array([r[key] for r in records], dtype=np.float64) for key in ("a",) + tuple(space.keys)]
         summed = records[0].get("views_summed", lf.m_hat ** 2)
-        f_number = records[0].get("aperture_f_number")
-        if f_number is None and not camera.is_microscope:
-            f_number = float(geometry.equivalent_f_number(camera))
-        return FocalStack(images, np.array([r["a"] for r in records], dtype=np.float64), **columns,
-                          views_summed=int(summed), aperture_f_number=f_number, interpolation=interpolation,
+        return FocalStack(images, *columns, space, views_summed=int(summed),
+                          aperture_f_number=stack_f_number(camera, records[0]), interpolation=interpolation,
                           upsample=int(upsample), camera=camera, source=source, provenance=prov,
                           view_mask=lf.view_mask, _records=tuple(records))
 
@@ -214,15 +229,11 @@ def _parameters(camera, a, distance_mm, z_um) -> list[float]:
     values = np.atleast_1d(np.asarray({"a": a, "distance_mm": distance_mm, "z_um": z_um}[name], dtype=np.float64))
     if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values) | (name == "distance_mm")):
         raise LfprocError(f"{name}= must be one number or a non-empty sequence of finite numbers")
+    if name != "a" and name != camera.object_space.position_key:   # positions in the other object space
+        raise LfprocError(_OTHER_SPACE[name])
     if name == "z_um":
-        if not camera.is_microscope:
-            raise LfprocError("z_um= (micrometres from the native object plane) needs a microscope camera; "
-                              "give distance_mm= or a=")
         values = np.atleast_1d(geometry.refocus_parameter_z(camera, values))
     elif name == "distance_mm":
-        if camera.is_microscope:
-            raise LfprocError("a microscope's depths are micrometres from the native object plane; give z_um= "
-                              "instead of distance_mm=")
         values = np.atleast_1d(geometry.refocus_parameter(camera, values))
     if len(set(values.tolist())) != len(values):
         raise LfprocError(f"{name}= asks for the same slice twice; give each once")

@@ -121,8 +121,8 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     from .. import geometry
     from ..outputs import slice_names
 
-    microscope = getattr(camera, "microscope", None) is not None
-    if microscope and (depth_range is not None or at_mm is not None):
+    from_sensor = camera.object_space.from_sensor   # mm from the sensor; else a microscope's signed z in µm
+    if not from_sensor and (depth_range is not None or at_mm is not None):
         raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native "
                           f"object plane; use --z-range Z0:Z1[:STEP] instead of --depth-range/--at")
     if a_list is not None:
@@ -146,7 +146,7 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     else:
         geometry.check_usable_distances(camera, at_mm, "--at")
         values = [float(geometry.refocus_parameter(camera, at_mm))]
-    if not microscope:   # a microscope's object space has no front focal plane to pass (z in µm, any sign)
+    if from_sensor:   # signed depths (a microscope's z in µm) have no front focal plane to pass
         check_slice_meaning(camera, values, what if a_list is not None else "--depth-range" if depth_range
                             else "--at")
     if len(values) > max_slices:
@@ -182,9 +182,9 @@ def aperture_extent(camera, f_number) -> float | None:
 
 def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm: float = 0.0,
                     integer: bool = False, max_slices: int = DEFAULT_MAX_SLICES, view_mask=None) -> None:
-    """One line per slice (a, distance, [near, far] in mm) and the depths no slice covers, with the
-    reason, on stdout. The planning options are those the slices were planned with; the DOF is that
-    of the views ``view_mask`` marks (all when ``None``)."""
+    """One line per slice (a, distance, [near, far] in mm; in the camera's object space, so a microscope's
+    z in µm) and the depths no slice covers, with the reason, on stdout. The planning options are those the
+    slices were planned with; the DOF is that of the views ``view_mask`` marks (all when ``None``)."""
     import numpy as np
 
     from .. import geometry
@@ -196,12 +196,13 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
         print(f"{int(np.count_nonzero(view_mask))} views summed ({geometry.aperture_text(camera, extent)}); the DOF "
               f"follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
-    if geo.microscope:
-        for r in geo.records():
-            low, high = sorted((r['z_far_um'], r['z_near_um']))
-            print(f"  a={r['a']:+.4f}  z = {r['z_um']:+.2f} um  in focus [{low:+.2f}, {high:+.2f}] um", file=out)
+    if not geo.space.from_sensor:   # signed depths (µm from the native object plane): in focus low to high
+        unit = geo.space.unit
+        for a, z, near, far in zip(*(np.atleast_1d(x).tolist() for x in (geo.a, geo.depth, geo.near, geo.far))):
+            low, high = sorted((far, near))
+            print(f"  a={a:+.4f}  z = {z:+.2f} {unit}  in focus [{low:+.2f}, {high:+.2f}] {unit}", file=out)
         return
-    for a, d, lo, hi in zip(geo.a, geo.distance_mm, geo.near_mm, geo.far_mm):
+    for a, d, lo, hi in zip(geo.a, geo.depth, geo.near, geo.far):
         print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
     if depth_range is None:
         return

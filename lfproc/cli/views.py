@@ -35,7 +35,7 @@ def add_view_options(p) -> None:
 def check_view_options(args, camera) -> None:
     from ..errors import LfprocError
 
-    if args.inside_aperture and camera.f_number is None and not camera.is_microscope:   # a microscope: its NA
+    if args.inside_aperture and camera.main_optics.image_aperture_sine is None:   # no f-number (nor NA)
         raise LfprocError(f"{camera.source or 'camera'}: --inside-aperture needs main_lens.f_number in the camera "
                           f"file")
 

@@ -6,7 +6,8 @@ with the same fields embedded in the image (:func:`write_slices`, :func:`write_v
 previews, the viewer's images — tone-mapped with one documented exposure (:class:`ToneMap`),
 enlarged to at least 512 px on the long side (:func:`upscale`) and labelled in metres.
 
-Modules: ``_names`` (file names), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
+Modules: ``_names`` (file names), ``_optics_tags`` (what the camera's main optics say about the tags: object
+space, views at positions or angles, aperture tags), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
 and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
 ``_view_set`` (what ``lfproc views`` writes), ``_stack`` (a focal
 stack as one ImageJ or OME-TIFF file with its physical spacing), ``_lytro_pictures`` (``lfproc export``: a processed
@@ -20,6 +21,7 @@ from ..io import write_gif_frames, write_png_preview
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
 from ._lytro_pictures import export_picture
 from ._names import FORMATS, output_stem, slice_name, slice_names, unique_stems, view_name
+from ._optics_tags import aperture_tags, signed_depths, stack_f_number, views_have_angles
 from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
                         write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
 from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
@@ -34,4 +36,5 @@ __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "output_stem", "
            "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
            "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
            "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
-           "mosaic_of_shown", "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture"]
+           "mosaic_of_shown", "aperture_tags", "signed_depths", "stack_f_number", "views_have_angles",
+           "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture"]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
+from ._optics_tags import signed_depths
 
 #: output format -> file extension
 FORMATS = {"tiff": ".tif", "png16": ".png", "jpeg": ".jpg", "exr": ".exr"}
@@ -43,20 +44,21 @@ def slice_names(stem: str, a_values, camera=None) -> list[str]:
 
 
 def _labels(values: list[float], camera) -> list[str]:
-    """``a+1.500`` (or a microscope's ``z-12.500um``) for each slice, with decimals enough to tell them apart."""
+    """``a+1.500`` (or, in signed depths from the native object plane, a microscope's ``z-12.500um``) for each
+    slice, with decimals enough to tell them apart."""
     if len({round(a, 12) for a in values}) != len(values):
         raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
                           "remove the duplicate from the list")
-    z = None
-    if camera is not None and getattr(camera, "microscope", None) is not None:
+    z, unit = None, None
+    if signed_depths(camera):   # a microscope's z in µm: named by z, which sorts like a
         from ..geometry import slice_geometry
 
-        z = [float(v) for v in (slice_geometry(camera, values).z_um if values else [])]
+        z, unit = [float(v) for v in (slice_geometry(camera, values).depth if values else [])], camera.object_space.unit
     for decimals in range(3, 13):
         if z is None:
             labels = [f"a{a + 0.0:+.{decimals}f}" for a in values]
         else:
-            labels = [f"z{v + 0.0:+.{decimals}f}um" for v in z]
+            labels = [f"z{v + 0.0:+.{decimals}f}{unit}" for v in z]
         if len(set(labels)) == len(labels):
             return labels
     return labels

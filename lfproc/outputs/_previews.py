@@ -18,6 +18,7 @@ from ..io import write_gif_frames, write_png_preview
 from ..viewpoints import circular_walk
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._names import slice_names, view_name
+from ._optics_tags import lens_spacing_tag, views_have_angles
 from ._products import mosaic_of_shown, shown_block
 from ._tone import ToneMap
 
@@ -53,11 +54,12 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     views ``view_mask`` marks (all without it)."""
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
-    if geo.microscope:   # µm from the native object plane, positive towards the objective
-        return [f"z {r['z_um']:+.1f} um | DOF {min(r['z_far_um'], r['z_near_um']):+.1f} to "
-                f"{max(r['z_far_um'], r['z_near_um']):+.1f} um" for r in geo.records()]   # low to high
-    return [slice_label(d, lo, hi) for d, lo, hi in zip(np.atleast_1d(geo.distance_mm),
-                                                       np.atleast_1d(geo.near_mm), np.atleast_1d(geo.far_mm))]
+    depth, near, far = (np.atleast_1d(x) for x in (geo.depth, geo.near, geo.far))
+    if geo.space.from_sensor:   # metres from the sensor
+        return [slice_label(d, lo, hi) for d, lo, hi in zip(depth, near, far)]
+    unit = geo.space.unit       # signed depths (µm from the native object plane): the DOF low to high
+    return [f"z {z:+.1f} {unit} | DOF {min(lo, hi):+.1f} to {max(lo, hi):+.1f} {unit}"
+            for z, lo, hi in zip(depth.tolist(), near.tolist(), far.tolist())]
 
 
 def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_values, fmt: str = "png", *,
@@ -86,11 +88,11 @@ def write_slice_previews(outdir: str, stem: str, images: np.ndarray, camera, a_v
 
 
 def view_label(camera, ky: int, kx: int, centre=None) -> str:
-    """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17); a
-    microscope's view: its angle in the object (sine condition). ``centre``: where the central view was
-    read (``LightField.view_centre``), as in the views' tags."""
+    """``"view [5, 7] | 0.72 mm from the centre"``: the view and its virtual camera's offset (Eq. 17); an
+    orthographic view (a microscope's): its angle in the object (sine condition). ``centre``: where the
+    central view was read (``LightField.view_centre``), as in the views' tags."""
     cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
-    if camera.is_microscope:
+    if views_have_angles(camera):
         ay = geometry.microscope_views(camera, cy).angle_deg[ky]
         ax = geometry.microscope_views(camera, cx).angle_deg[kx]
         return f"view [{ky}, {kx}] | {np.hypot(ay, ax):.1f} deg in the object"
@@ -166,10 +168,10 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
     tiled, _ = mosaic_of_shown(views, keep, gap=1)
     shown = m * m if keep is None else int(np.count_nonzero(keep))
     label = f"{shown} of {m}x{m} views" + ("" if shown == m * m else " (black: no light or outside the aperture)")
-    if camera is not None and camera.is_microscope:
-        label += f" | {geometry.lateral_sampling_um(camera):.3g} um per lens"
-    elif camera is not None:
-        label += f" | baseline {float(geometry.baseline_mm(camera, 1)):.3g} mm"
+    if camera is not None:
+        key, spacing = lens_spacing_tag(camera)
+        label += (f" | {spacing:.3g} um per lens" if key == "lateral_sampling_um" else
+                  f" | baseline {float(spacing):.3g} mm")
     factor = upscale_factor(tiled.shape, min_long_side)
     if factor > 1 and method != "nearest":   # each view enlarged alone: none bleeds into its neighbours or gaps
         from ..viewpoints import mosaic

@@ -13,28 +13,26 @@ import numpy as np
 from .. import geometry
 from ..viewpoints import mosaic, viewpoint_geometry
 from ._names import FORMATS, slice_names, view_name
+from ._optics_tags import aperture_tags, aperture_words, lens_spacing_tag, slice_shift_tags
 
 
 def summed_views_metadata(camera, view_mask=None) -> tuple[float | None, dict]:
     """(view_extent, extra tags) of slices averaging the views ``view_mask`` marks (all when ``None``).
 
     With a mask, the DOF follows the views summed (:func:`lfproc.geometry.summed_view_extent`) and the
-    tags carry ``aperture_f_number`` (their equivalent f-number) and ``views_summed``.
+    tags carry ``views_summed`` and, for a camera's views, ``aperture_f_number`` (their equivalent
+    f-number; :func:`~._optics_tags.aperture_tags`).
     """
-    if view_mask is None or np.all(view_mask):
-        return None, {}
-    extent = geometry.summed_view_extent(view_mask)
-    if getattr(camera, "microscope", None) is not None:   # no main lens f-number: the views summed say it
-        return extent, {"views_summed": int(np.count_nonzero(view_mask))}
-    return extent, {"aperture_f_number": geometry.equivalent_f_number(camera, extent),
-                    "views_summed": int(np.count_nonzero(view_mask))}
+    return aperture_tags(camera, view_mask)
 
 
 def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int = 1,
                    provenance: dict | None = None) -> list[dict]:
-    """The contract's sidecar fields of each slice: source, a, distance_mm, near_mm, far_mm, dof_mm; a
-    microscope's: source, a, z_um, z_near_um, z_far_um, dof_um and ``refocus_shifts`` ("aplanatic" where
-    :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial").
+    """The contract's sidecar fields of each slice: source, a and the four keys of the camera's object space
+    (:attr:`lfproc.camera.ObjectSpace.keys`: distance_mm, near_mm, far_mm, dof_mm; a microscope's z_um,
+    z_near_um, z_far_um, dof_um), and for orthographic views ``refocus_shifts`` ("aplanatic" where
+    :func:`lfproc.refocus` follows the sine condition for this camera, else "paraxial";
+    :func:`~._optics_tags.slice_shift_tags`).
 
     The DOF is that of the views ``view_mask`` marks (the light field's, e.g. after
     :func:`lfproc.with_aperture`), which also adds ``aperture_f_number`` and ``views_summed``. Slices refocused
@@ -44,8 +42,7 @@ def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int 
     extent, extra = summed_views_metadata(camera, view_mask)
     if int(upsample) != 1:
         extra["upsample"] = int(upsample)
-    if getattr(camera, "microscope", None) is not None:
-        extra["refocus_shifts"] = "aplanatic" if geometry.uses_aplanatic(camera) else "paraxial"
+    extra.update(slice_shift_tags(camera))
     records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
     if getattr(camera, "main_lens_prescription", None) is not None:   # a real lens: its rays beside the model's
         real = geometry.real_ray_slices(camera, np.asarray(a_values, dtype=np.float64).ravel(), extent).records()
@@ -182,14 +179,10 @@ def write_view_mosaic(outdir: str, stem: str, source: str, camera, views: np.nda
               if keep is None or keep[vg.view[0], vg.view[1]]]
     meta = {"source": source, "layout": "block (by, bx) holds view [ky0 + by, kx0 + bx]",
             "first_view": [ky0, kx0], "views_per_side": int(views.shape[0]), "views_shown": len(listed), **tone_meta}
-    if camera.is_microscope:
-        meta["lateral_sampling_um"] = geometry.lateral_sampling_um(camera)
-    else:
-        meta["baseline_mm"] = geometry.baseline_mm(camera, 1)
+    key, spacing = lens_spacing_tag(camera)
+    meta[key] = spacing
     if keep is not None and not np.all(keep):
-        meta["blacked_out"] = ("views without light (or outside the objective's NA) are 0 and not listed"
-                               if camera.is_microscope else
-                               "views without light (or outside the aperture) are 0 and not listed")
+        meta["blacked_out"] = f"views without light (or outside {aperture_words(camera)}) are 0 and not listed"
     if provenance is not None:
         meta["provenance"] = provenance
     path = os.path.join(outdir, f"{stem}_views_mosaic{FORMATS[fmt]}")

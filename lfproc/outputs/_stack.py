@@ -35,12 +35,13 @@ EVEN_TOLERANCE = 1e-6
 
 
 def lateral_um_per_lens(camera) -> float | None:
-    """Object-space size of one lens in µm for a microscope (:func:`lfproc.geometry.lateral_sampling_um`,
-    pitch / M), ``None`` for a photographic camera."""
-    if getattr(camera, "microscope", None) is None:
-        return None
+    """Object-space size of one lens in µm where the views are orthographic and so share one lateral scale (a
+    microscope: :func:`lfproc.geometry.lateral_sampling_um`, pitch / M), ``None`` for a photographic camera
+    (its scale changes with depth)."""
     from .. import geometry
-    return geometry.lateral_sampling_um(camera)
+    from ._optics_tags import views_have_angles
+
+    return geometry.lateral_sampling_um(camera) if views_have_angles(camera) else None
 
 
 def stack_path(outdir: str, stem: str, kind: str) -> str:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
+import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
@@ -44,8 +46,8 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
         A :class:`~lfproc.lightfield.LightField`, or an array shaped ``(m̂, m̂, Ny, Nx, C)`` with m̂ odd
         (float32, float64, unsigned or signed integers; see the module docstring for precision). An array
         carries neither the view mask nor a microscope's per-view shifts: its mean runs over every view
-        (views that are 0 everywhere are warned about, :class:`~lfproc.errors.LfprocWarning`) with Eq. 9's
-        shifts; pass the LightField to refocus as it does.
+        (dark views, 0 everywhere or far below the brightest, :func:`lit_views`, are warned about with an
+        :class:`~lfproc.errors.LfprocWarning`) with Eq. 9's shifts; pass the LightField to refocus as it does.
     a : float or sequence of float
         Refocus parameter(s): the shift in lenses per view step (Eq. 9). Any finite real; positive a
         focuses nearer than a = 0. A sequence is rendered in one pass over the data.
@@ -182,9 +184,10 @@ def _shift_table(lf, view_shifts, m: int):
 
 def _view_mask(lf, views: np.ndarray):
     """The views the mean runs over: a LightField's ``view_mask`` (None: all). A bare array has no mask: the
-    contract's mean runs over all its views, and where some are 0 everywhere (as a decoder delivers the
-    views without light) an :class:`~lfproc.errors.LfprocWarning` says the slices are darker than the
-    LightField's and what to pass instead (:func:`lit_views`)."""
+    contract's mean runs over all its views (Eq. 9 as it stands), and where some are dark (:func:`lit_views`:
+    0 everywhere, as a decoder delivers the views without light, or far below the brightest) an
+    :class:`~lfproc.errors.LfprocWarning` says the slices are darker than the LightField's and what to pass
+    instead. An array whose every view carries light is refocused without a word."""
     m = views.shape[0]
     if hasattr(lf, "views"):
         mask = getattr(lf, "view_mask", None)
@@ -195,28 +198,56 @@ def _view_mask(lf, views: np.ndarray):
 
         from ..errors import LfprocWarning
 
-        dark = int(lit.size - np.count_nonzero(lit))
-        warnings.warn(f"refocus: {dark} of {lit.size} views of this array are 0 everywhere and are averaged as "
-                      f"views of zero, so slices are {np.count_nonzero(lit) / lit.size:.2f}x as bright as those of "
-                      f"a light field whose view_mask leaves them out; pass the LightField (lf, not lf.views), "
-                      f"or LightField.from_views(views, camera, view_mask=...)", LfprocWarning, stacklevel=3)
+        n_lit, n = int(np.count_nonzero(lit)), int(lit.size)
+        warnings.warn(f"refocus: {n - n_lit} of {n} views of this array are dark (0 everywhere, or at most "
+                      f"{DARK_VIEW_FRACTION:.0%} of the brightest view's mean level) and an array's mean runs over "
+                      f"every view, so its slices are about {n_lit / n:.2f}x as bright as those of a light field whose "
+                      f"view_mask leaves the dark views out; pass the LightField (lf, not lf.views), or "
+                      f"lfproc.LightField.from_views(views, camera, view_mask=...) with the {n_lit} views that "
+                      f"carry light", LfprocWarning, stacklevel=_caller_level())
     return None
 
 
-def lit_views(views: np.ndarray) -> np.ndarray | None:
-    """``(m̂, m̂)`` booleans marking the views of an array that hold any nonzero value, or None when all do
-    (or none does). The decoder delivers views without light as exact zeros (``LightField.view_mask``).
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first frame outside this package, for a warning raised here: the caller of
+    :func:`refocus`, whether it called the function or the callable package (``lfproc.refocus``)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.dirname(os.path.abspath(frame.f_code.co_filename)) == here:
+        frame, level = frame.f_back, level + 1
+    return level
 
-    Cheap: 16 evenly spread lens rows of every view tell which views may be dark, and only those are read
-    in full."""
+
+#: a view whose mean magnitude is at most this fraction of the brightest view's is dark (:func:`lit_views`)
+DARK_VIEW_FRACTION = 0.01
+
+
+def lit_views(views: np.ndarray) -> np.ndarray | None:
+    """``(m̂, m̂)`` booleans marking the views of an array that carry light, or None when all do (or none does).
+
+    A view is dark where its mean magnitude (over its lenses and channels) is at most
+    :data:`DARK_VIEW_FRACTION` of the brightest view's: 0 everywhere, as the decoder delivers the views
+    without light (``LightField.view_mask``), or a faint remainder (a black-level residue, stray light) that
+    darkens an all-view mean as a view of zeros does. Views with non-finite values are never dark.
+
+    Cheap: 16 evenly spread lens rows of every view give each view's level, and only the views that may be
+    dark are read in full."""
+    axes = tuple(range(2, views.ndim))
     sample = views[:, :, ::max(1, views.shape[2] // 16)]
-    candidates = ~np.any(sample != 0, axis=tuple(range(2, views.ndim)))
-    if not candidates.any() or candidates.all():
+    level = np.abs(sample).mean(axis=axes, dtype=np.float64)
+    finite = np.isfinite(level)
+    if not finite.any():
         return None
-    lit = ~candidates
-    for ky, kx in zip(*np.nonzero(candidates)):
-        lit[ky, kx] = bool(np.any(views[ky, kx] != 0))
-    return None if lit.all() else lit
+    top = float(level[finite].max())
+    if top <= 0.0:                     # no view carries any light: nothing to tell apart
+        return None
+    limit = DARK_VIEW_FRACTION * top
+    dark = finite & (level <= limit)
+    if not dark.any():
+        return None
+    for ky, kx in zip(*np.nonzero(dark)):
+        dark[ky, kx] = bool(np.abs(views[ky, kx]).mean(dtype=np.float64) <= limit)
+    return None if not dark.any() else ~dark
 
 
 def _check_finite(out: np.ndarray, slopes, views: np.ndarray) -> None:
