@@ -2,7 +2,7 @@
 ``aperture=2.8``) is reworded here, where a command reports it, with the flags its user typed (``--white
 WHITE``, ``--aperture 2.8``).
 
-The library names an argument as ``name=`` in three forms, each with its command-line reading:
+The library names an argument as ``name=`` in four forms, each with its command-line reading:
 
 =====================  ==========================  ===========================================
 library (Python)       command                     e.g.
