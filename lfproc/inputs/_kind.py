@@ -298,4 +298,5 @@ def check_capture_is_not_white(source: str, views: np.ndarray, view_mask=None) -
     if flatness < WHITE_FLATNESS:
         raise LfprocError(f"{source}: this looks like a white image, not a capture: decoded, its lenses show a smooth "
                           f"field with no scene ({100 * flatness:.2f} % lens-to-lens variation, captures show "
-                          f">= {100 * WHITE_FLATNESS:.1f} %); pass the capture as capture= and the white image as white=")
+                          f">= {100 * WHITE_FLATNESS:.1f} %); pass the capture as capture= and the white image as "
+                          f"white=")
