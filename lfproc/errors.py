@@ -1,14 +1,12 @@
-"""The one exception type a user of lfproc needs to catch, its warning, and errors in Python words.
+"""The one exception type a user of lfproc needs to catch, and its warning.
 
-A library call's message names its arguments (``white=``), never the flags of the commands (``--white
-WHITE``), which share the checks that raise them: the Python API and the public functions that share
-checks with the commands wrap their work in :func:`speaking_python`; the commands run inside
-:func:`command_words`, where messages keep their flags.
+The library words its messages for a Python caller: an argument is named as in a call, ``white=`` (the
+argument), ``white=...`` (a value of it), ``aperture=2.8`` (this value) or ``white_is_white=True`` (a
+switch), never as a command's flag. The commands reword what they report with their flags
+(:mod:`lfproc.cli.words`, one table).
 """
 
 import contextlib
-import contextvars
-import re
 
 
 class LfprocError(Exception):
@@ -32,72 +30,8 @@ class LfprocWarning(UserWarning):
     """
 
 
-#: command-line flag -> the Python argument of the API that means the same
-FLAG_ARGUMENTS = {
-    "--white-dir": "white_dir", "--white": "white", "--calib": "grid", "--dark": "dark", "--camera": "camera",
-    "--aperture": "aperture", "--z-range": "z_um", "--depth-range": "depth_range_mm", "--a": "a",
-    "--at": "distance_mm", "--decode-interpolation": "decode_interpolation", "--demosaic": "demosaic",
-    "--interpolation": "interpolation", "--upsample": "upsample", "--min-confidence": "min_confidence",
-}
-
-_FLAG = re.compile(r"(?<![\w-])(--[a-z][a-z-]*)(?:[ =]([A-Z][A-Z0-9_]*(?:[:.][A-Za-z0-9_]+)*(?:\[[^\]]*\])?(?![\w])"
-                   r"|-?[0-9][0-9.eE+-]*(?::[0-9.eE+-]+)*))?")
-
-
-#: a bare metavar where a message says what to pass -> the Python argument
-_METAVARS = re.compile(r"\b(as|pass|give) (WHITE|CAM|DARK|GRID\.json)\b")
-_METAVAR_ARGUMENTS = {"WHITE": "white=", "CAM": "camera=", "DARK": "dark=", "GRID.json": "grid="}
-
-
-def python_words(message: str) -> str:
-    """``message`` with each command-line flag (and its metavar) replaced by the Python argument
-    (``--white WHITE`` → ``white=``, ``--aperture 2`` → ``aperture=2``); quoted commands stay as they are."""
-    parts = re.split(r"('[^']*')", message)
-    for i in range(0, len(parts), 2):
-        parts[i] = _FLAG.sub(_argument, parts[i])
-        parts[i] = _METAVARS.sub(lambda m: f"{m.group(1)} {_METAVAR_ARGUMENTS[m.group(2)]}", parts[i])
-    return "".join(parts)
-
-
-def _argument(match) -> str:
-    flag, value = match.group(1), match.group(2)
-    name = FLAG_ARGUMENTS.get(flag)
-    if name is None:
-        return match.group(0)
-    if value is None or value[0].isalpha():
-        return f"{name}="
-    return f"{name}={value}"
-
-
-#: True while a command runs the API: its errors keep the flags the command's user typed
-_COMMAND = contextvars.ContextVar("lfproc_command_words", default=False)
-
-
-@contextlib.contextmanager
-def command_words():
-    """Inside, the API's errors keep the commands' flags (the commands run on the API: their users typed
-    ``--white``, not ``white=``)."""
-    token = _COMMAND.set(True)
-    try:
-        yield
-    finally:
-        _COMMAND.reset(token)
-
-
 @contextlib.contextmanager
 def speaking_python():
-    """Re-raise an :class:`LfprocError` from inside with its message in Python words (not inside
-    :func:`command_words`)."""
-    try:
-        yield
-    except LfprocError as exc:
-        if _COMMAND.get():
-            raise
-        words = python_words(str(exc))
-        if words == str(exc):
-            raise
-        try:
-            replacement = type(exc)(words)
-        except TypeError:
-            replacement = LfprocError(words)
-        raise replacement from None
+    """Nothing now (the library's messages are worded for Python callers): kept until the wrappers around the
+    API's functions (``lfproc.api``) are removed."""
+    yield

@@ -1,11 +1,11 @@
 """From files to light fields: the steps every command shares (camera, lens grid, white image, decoder).
 
-``--white WHITE`` calibrates the grid from the white image and devignettes with it; ``--calib GRID.json``
-reads a grid written by ``lfproc calibrate`` and devignettes with the white image recorded in it (if
-that file still exists); both together use the given grid and the given white image. Without any
-white image the captures are decoded without devignetting, and a warning says so. ``--dark DARK`` is
-subtracted from the white image and every capture; a grid calibrated with one records it, and ``--calib``
-subtracts it again (`lfproc.inputs`, docs/inputs.md).
+``white`` (a white image) calibrates the grid and devignettes; ``grid`` (a GRID.json written by ``lfproc
+calibrate``, the commands' ``--calib``) is used as it is and devignettes with the white image recorded in it
+(if that file still exists); both together use the given grid and the given white image. Without any
+white image the captures are decoded without devignetting, and a warning says so. ``dark`` (a dark frame) is
+subtracted from the white image and every capture; a grid calibrated with one records it, and reading that
+grid subtracts it again (`lfproc.inputs`, docs/inputs.md).
 
 Before anything is read in full, camera, grid, white image, dark frame and captures are checked against
 each other (lattice kind, micro image pitch, sensor size, Bayer pattern) and every input's header is
@@ -14,6 +14,9 @@ read; a capture given as the white image and a white image given as the capture 
 Lytro captures: ``white_dir`` picks the white image of the first capture's camera with the nearest zoom
 and focus steps (named in ``DecodeSetup.white_note``; this module prints nothing); a Lytro white image
 of another camera or zoom is refused. The camera from metadata: `lfproc.cli.lytro_defaults`.
+
+Messages name the Python arguments (``white=``, ``grid=``, ``dark=``, ``white_dir=``); the commands word
+them with their flags (`lfproc.cli.words`).
 """
 
 from __future__ import annotations
@@ -105,7 +108,7 @@ class DecodeSetup:
         if not np.asarray(decoder.views_delivered).any():
             where = self.white_path or (self.white.source if self.white is not None else "the grid")
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
-                              f"image where the grid puts one); pass the white image of this camera as --white")
+                              f"image where the grid puts one); pass the white image of this camera as white=")
         return decoder
 
     def _read_white(self):
@@ -183,7 +186,8 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
                      grid: LensGrid | None = None, white_dir: str | None = None,
                      captures: tuple | list = (), dark: str | None = None, cache: bool = True,
                      white_is_white: bool = False) -> DecodeSetup:
-    """Resolve ``--calib``/``--white``/``--white-dir``/``--dark`` into a :class:`DecodeSetup` (module docstring).
+    """Resolve ``calib`` (a GRID.json; named ``grid=`` in messages, as in :func:`lfproc.read_light_field`),
+    ``white``, ``white_dir`` and ``dark`` into a :class:`DecodeSetup` (module docstring).
 
     ``grid``, when given, is the grid these files were already calibrated to (by another process):
     it is used as is, and the white image is only read for devignetting. ``captures`` are the inputs
@@ -198,17 +202,17 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
     headers of the white image, the dark frame and the captures are read and checked against each other
     and the grid's record; only then is the white image read and calibrated. Without ``[decode] micro_image_px``
     in the camera file, m̂ comes from the grid's measured pitch (`lfproc.inputs.measured_m_hat`; the setup's
-    ``camera`` carries it and ``m_hat_note`` says why). ``white_is_white`` (``--white-is-white``)
+    ``camera`` carries it and ``m_hat_note`` says why). ``white_is_white``
     skips the check that the white image is not a capture of a scene (`lfproc.inputs.check_white_is_white`).
     """
     from .inputs import check_grid_fits_camera, check_same_sensor, probe_image, read_grid_record, reference_facts
     from .io import read_capture
 
     if white is not None and white_dir is not None:
-        raise LfprocError("give --white WHITE or --white-dir DIR, not both")
+        raise LfprocError("give white=... or white_dir=..., not both")
     if calib is None and white is None and white_dir is None:
-        raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
-                          "--calib GRID.json (from lfproc calibrate)")
+        raise LfprocError("give white=... (a white image), white_dir=... (a Lytro calibration folder) or "
+                          "grid=... (from lfproc calibrate)")
     first = lytro_metadata_of(captures[0]) if captures else None
     white_note = None
     if white_dir is not None:
@@ -245,7 +249,7 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
         record = calibrate_white(white_capture, camera, record=True, dark=dark_capture, white_is_white=white_is_white)
     elif white_path is None:
         warnings.warn(f"{calib}: no white image available (recorded: {record.white_image}); decoding without "
-                      f"devignetting — pass --white WHITE to correct vignetting", LfprocWarning, stacklevel=2)
+                      f"devignetting — pass white=... to correct vignetting", LfprocWarning, stacklevel=2)
     from .provenance import file_inputs
 
     inputs = file_inputs(camera=camera_file(camera), grid=calib, white=white_path, dark=dark_path)
@@ -294,26 +298,26 @@ def _recorded_white(record) -> str | None:
     if not same_file_content(record.white_image, recorded_hash):
         raise LfprocError(f"{record.white_image}: this white image, recorded in {record.path}, has changed since the "
                           f"grid was calibrated from it (its content hash differs); calibrate again, or pass "
-                          f"--white WHITE to devignette with it anyway")
+                          f"white=... to devignette with it anyway")
     return record.white_image
 
 
 def _dark_for(dark: str | None, record) -> str | None:
-    """``--dark`` as given, or the dark frame the grid file recorded; a different one is refused (one line)."""
+    """``dark`` as given, or the dark frame the grid file recorded; a different one is refused (one line)."""
     from .inputs import file_hash, same_file_content
 
     recorded = record.dark_facts if record is not None else None
     if dark is not None:
         if recorded and recorded.get("hash") and os.path.isfile(dark) and file_hash(dark) != recorded["hash"]:
             raise LfprocError(f"{dark}: this dark frame differs from the one {record.path} was calibrated with "
-                              f"({recorded.get('path')}); pass that one, or calibrate again with --dark {dark}")
+                              f"({recorded.get('path')}); pass that one, or calibrate again with dark={dark}")
         return dark
     if not recorded:
         return None
     path = recorded.get("path")
     if not path or not same_file_content(path, recorded.get("hash")):
         raise LfprocError(f"{record.path}: was calibrated with the dark frame {path}, which is missing or has "
-                          f"changed since; pass the same dark frame with --dark DARK, or calibrate again")
+                          f"changed since; pass the same dark frame with dark=..., or calibrate again")
     return path
 
 
@@ -353,8 +357,8 @@ def white_from_folder(folder: str, capture_metadata, capture_path) -> tuple[str,
     from .io import pick_white_image
 
     if capture_metadata is None:
-        raise LfprocError(f"--white-dir {folder}: picks a white image by the metadata of Lytro captures, but "
-                          f"{capture_path or 'no capture'} is not a Lytro file; pass --white WHITE instead")
+        raise LfprocError(f"white_dir={folder}: picks a white image by the metadata of Lytro captures, but "
+                          f"{capture_path or 'no capture'} is not a Lytro file; pass white=... instead")
     choice = pick_white_image(capture_metadata, folder)
     return choice.path, choice.reason
 

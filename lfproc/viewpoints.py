@@ -39,7 +39,7 @@ def viewpoints(lf: LightField, *, inside_aperture: bool = False) -> np.ndarray:
 def aperture_mask(lf: LightField) -> np.ndarray:
     """``(m̂, m̂)`` booleans: views inside the main lens aperture (all true without an f-number)."""
     if lf.camera is None:
-        raise LfprocError("the aperture of the views needs the light field's camera; decode with --camera")
+        raise LfprocError("the aperture of the views needs the light field's camera; decode with camera=")
     return geometry.views_inside_aperture(lf.camera)
 
 
@@ -59,17 +59,14 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
     """
     if f_number is None:
         return lf
-    from .errors import speaking_python
-
-    with speaking_python():   # the commands' checks, worded for the caller (``aperture=`` or ``--aperture``)
-        if lf.camera is None:
-            raise LfprocError("a synthetic aperture needs the light field's camera; decode with --camera")
-        keep = geometry.aperture_views(lf.camera, f_number)
-        if lf.view_mask is not None:
-            keep = keep & lf.view_mask
-        if not keep.any():
-            raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider "
-                              f"--aperture")
+    if lf.camera is None:
+        raise LfprocError("a synthetic aperture needs the light field's camera; decode with camera=")
+    keep = geometry.aperture_views(lf.camera, f_number)
+    if lf.view_mask is not None:
+        keep = keep & lf.view_mask
+    if not keep.any():
+        raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider "
+                          f"aperture=")
     return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre, lf.inputs)
 
 

@@ -116,7 +116,8 @@ def test_low_texture_captures_given_as_white_images_are_warned_about_and_no_whit
             assert max(lattice_texture(capture, "RGGB", grid)) < 0.04, name     # the micro images do not tell
             with pytest.warns(UserWarning, match=r"^capture\.png: may be a capture of a scene, not a white image: "
                                                  r"the brightness of its micro images varies from lens to lens "
-                                                 r"\(lens-to-lens contrast [0-9.]+ % beyond noise.*--white-is-white"):
+                                                 r"\(lens-to-lens contrast [0-9.]+ % beyond noise"
+                                                 r".*white_is_white=True$"):
                 evidence = check_white_is_white("capture.png", capture, "RGGB", grid)
             assert evidence.contrast > 0.006 and not evidence.is_scene, name
             assert _silently(check_white_is_white, "capture.png", capture, "RGGB", grid, white_is_white=True) is None

@@ -333,7 +333,7 @@ def test_server_binds_the_loopback_interface_only(tmp_path):
     try:
         host, port = server.server_address[:2]
         assert host == "127.0.0.1" and port > 0
-        with pytest.raises(LfprocError, match="another --port"):
+        with pytest.raises(LfprocError, match="another port="):
             make_server(str(tmp_path), port)   # taken: a one-line error naming the fix
     finally:
         server.server_close()

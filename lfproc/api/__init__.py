@@ -25,11 +25,8 @@ from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
 from ._read import calibrate_white, read_light_field
 from ._views import ViewStack, view_stack
-from ..errors import command_words, python_words
 
 __all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
            "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
            # the checks the commands share (worded with their flags there)
-           "check_refocused_area", "check_slice_meaning", "check_view_coverage", "lowest_meaningful_a",
-           # the commands run the API inside command_words() (their errors keep the flags)
-           "command_words", "python_words"]
+           "check_refocused_area", "check_slice_meaning", "check_view_coverage", "lowest_meaningful_a"]

@@ -70,7 +70,7 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     """
     import warnings
 
-    from ..api import command_words, focal_stack, view_stack
+    from ..api import focal_stack, view_stack
     from ..atomic import all_or_nothing
     from ..errors import LfprocWarning
     from ..lightfield import LightField, is_lightfield_file
@@ -78,12 +78,12 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
 
     start = time.perf_counter()
     try:
-        with all_or_nothing(before_commit, checkpoint), warnings.catch_warnings(), command_words():
+        with all_or_nothing(before_commit, checkpoint), warnings.catch_warnings():
             warnings.simplefilter("ignore", LfprocWarning)   # the batch reports per capture, not per slice
             lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
                 load_lightfield(job.source, decode_setup(job))
             if lf.camera is None:
-                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with --camera")
+                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
             outputs = []
             if job.refocus_a:
                 stack = focal_stack(lf, a=list(job.refocus_a), aperture=job.aperture,

@@ -40,7 +40,7 @@ KNOWN_KEYS = {
 
 def read_camera_file(path: str | os.PathLike) -> dict:
     """The parsed TOML tables of the camera file at ``path`` (errors name the file)."""
-    return read_toml(os.fspath(path), "camera file", "an existing TOML file to --camera")
+    return read_toml(os.fspath(path), "camera file", "an existing TOML file to camera=")
 
 
 def parse_camera_text(text: str, source: str) -> dict:

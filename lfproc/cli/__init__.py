@@ -2,7 +2,8 @@
 
 Subcommand modules import numba, OpenCV and OpenImageIO only inside their ``run`` function, so
 ``lfproc geometry`` starts in a fraction of a second. An `LfprocError` becomes one line on stderr and
-exit status 2; anything else is a bug and exits with status 1 and a traceback.
+exit status 2, its Python argument names reworded as the commands' flags (:mod:`.words`); anything
+else is a bug and exits with status 1 and a traceback.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import warnings
 from importlib import import_module
 
 from ..errors import LfprocError
+from .words import command_words
 
 #: subcommand modules in the order ``lfproc --help`` lists them
 COMMANDS = ("geometry", "info", "camera", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer",
@@ -49,12 +51,10 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_values(list(sys.argv[1:] if argv is None else argv)))
     try:
-        from ..api import command_words
-
-        with _plain_warnings(args.command), command_words():
+        with _plain_warnings(args.command):
             status = args.func(args)
     except LfprocError as exc:
-        print(f"lfproc {args.command}: error: {exc}", file=sys.stderr)
+        print(f"lfproc {args.command}: error: {command_words(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # `lfproc geometry | head`: the reader left, which is not an error
         import os
@@ -69,9 +69,10 @@ def main(argv=None) -> int:
 
 @contextlib.contextmanager
 def _plain_warnings(command: str):
-    """Warnings reach the user as one plain line on stderr, like errors (no Python source line)."""
+    """Warnings reach the user as one plain line on stderr, like errors (no Python source line), in the
+    commands' words."""
     def show(message, category, filename, lineno, file=None, line=None):
-        print(f"lfproc {command}: warning: {message}", file=sys.stderr)
+        print(f"lfproc {command}: warning: {command_words(str(message))}", file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.simplefilter("default")

@@ -15,6 +15,7 @@ from .capture_loop import add_decode_options, add_output_folder_option, require_
 from .common import add_aperture_option, add_slice_options, check_slice_options, describe_slices
 from .refocus import add_render_options, check_render_options
 from .views import add_view_options, check_view_options
+from .words import command_words
 
 
 def register(sub) -> None:
@@ -214,6 +215,8 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
+                if result.error:   # worded for Python by the library: the manifest and stderr use the flags
+                    result = dataclasses.replace(result, error=command_words(result.error))
                 counts[result.status] += 1
                 manifest.record(job, result, fingerprints[job.source])
                 manifest.save_soon()

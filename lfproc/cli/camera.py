@@ -86,7 +86,7 @@ def _napari(path: str, args) -> int:
         write_text_atomic(args.output, "".join(f"# {note}\n" for note in notes) + camera.to_toml())
     except OSError as exc:
         raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
-    scope = camera.microscope
+    scope = camera.main_optics      # the objective and tube lens (lfproc.camera.Microscope)
     print(f"{args.output}: light-field microscope, {scope.objective_magnification:g}x/{scope.numerical_aperture:g} "
           f"(n {scope.immersion_index:g}), {camera.pitch_px:.3f} px rectangular lenses (m = {camera.m_hat}), f_s "
           f"{camera.mla_focal_length_mm:g} mm; every number's source in [provenance]", file=sys.stdout)

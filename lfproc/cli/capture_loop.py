@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from ..errors import LfprocError
 from ..lightfield import is_lightfield_file
+from .words import command_words
 
 
 def add_decode_options(p) -> None:
@@ -211,7 +212,7 @@ def for_each_capture(command: str, paths: list[str], work, total_steps: int | No
                 done += 1
             except LfprocError as exc:
                 failed.append(path)
-                progress.write(f"lfproc {command}: error: {exc}", file=sys.stderr)
+                progress.write(f"lfproc {command}: error: {command_words(str(exc))}", file=sys.stderr)
     if len(paths) > 1:
         elapsed = time.perf_counter() - start
         summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"

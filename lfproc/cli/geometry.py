@@ -58,7 +58,7 @@ def run(args) -> int:
         raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
     aperture = synthetic_aperture(camera, args.aperture)
-    if camera.is_microscope:
+    if not camera.object_space.from_sensor:   # an objective: slices in um from the native plane, views by angle
         if getattr(args, "real_rays", False):
             raise LfprocError(f"{args.camera}: --real-rays traces a main lens prescription; a microscope camera has "
                               f"none")
@@ -119,7 +119,8 @@ def aperture_line(aperture: dict, camera=None) -> str:
     if aperture["f_number"] is None:
         return ""
     equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
-    if camera is not None and camera.is_microscope and tags:   # microscopists read NA (issue 32)
+    if camera is not None and camera.f_number is None and camera.main_optics.image_aperture_sine is not None and tags:
+        # an aperture known only as a sine (an objective's NA/M): microscopists read NA (issue 32)
         from .. import geometry
         equivalent = f" ({geometry.aperture_text(camera, aperture['extent'])})"
     summed = f"{tags['views_summed']} views summed{equivalent}" if tags else "all views summed"
@@ -145,9 +146,9 @@ def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
 
 
 def microscope_summary(camera) -> dict:
-    """The derived numbers of a microscope camera (JSON-ready)."""
+    """The derived numbers of a microscope camera (JSON-ready), read off its main optics (objective + tube lens)."""
     from .. import geometry
-    scope = camera.microscope
+    scope = camera.main_optics
     return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
                 pitch_px=camera.pitch_px, telecentric=True, objective_magnification=scope.objective_magnification,
                 numerical_aperture=scope.numerical_aperture, immersion_index=scope.immersion_index,
@@ -191,7 +192,7 @@ def z_range_parameters(camera, text: str):
     """The ``a`` of ``--z-range Z0:Z1[:STEP]`` (µm): the fewest covering slices, or an evenly spaced stack."""
     from .. import geometry
     from ..errors import LfprocError
-    if not camera.is_microscope:
+    if camera.object_space.from_sensor:   # distances in mm from the sensor: no native object plane
         raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
                           f"([microscope]); use --depth-range NEAR_MM:FAR_MM for a camera")
     parts = text.split(":")

@@ -58,14 +58,14 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
     native_plane = camera is not None and not camera.object_space.from_sensor
     if depth_range_mm is not None and native_plane:
         raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native object "
-                          f"plane; give a z range (--z-range Z0:Z1) instead of a depth range in mm")
+                          f"plane; give a z range (z_range_um=...) instead of a depth range in mm")
     if native_plane:   # Levoy et al. 2006: the N_u resolvable depths span |a| <= 1
         return MICROSCOPE_A_RANGE
     if depth_range_mm is not None:
         from .. import geometry
 
         if camera is None:
-            raise LfprocError("a depth range in mm needs the light field's camera; decode with --camera")
+            raise LfprocError("a depth range in mm needs the light field's camera; decode with camera=")
         near, far = (float(v) for v in depth_range_mm)
         if not (near > 0 and far >= near) or math.isnan(far):
             raise LfprocError(f"depth range {near}:{far} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")

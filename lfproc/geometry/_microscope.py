@@ -266,14 +266,14 @@ def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = Non
     """
     lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
     if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise LfprocError(f"--z-range {z0_um}:{z1_um} must be finite micrometres, e.g. -50:50")
+        raise LfprocError(f"z_range_um={z0_um}:{z1_um} must be finite micrometres, e.g. -50:50")
     zeta = z_per_a_um(camera)
     if step_um is not None:
         if not (math.isfinite(step_um) and step_um > 0):
-            raise LfprocError(f"--z-range step must be a positive number of micrometres, got {step_um}")
+            raise LfprocError(f"z_range_um= step must be a positive number of micrometres, got {step_um}")
         count = int(math.floor((hi - lo) / step_um + 1e-9)) + 1
         if count > max_slices:
-            raise LfprocError(f"--z-range {z0_um}:{z1_um}:{step_um} asks for {count} slices, more than {max_slices}; "
+            raise LfprocError(f"z_range_um={z0_um}:{z1_um}:{step_um} asks for {count} slices, more than {max_slices}; "
                               f"use a larger STEP")
         return (lo + step_um * np.arange(count)) / zeta
     slices, edge = [], lo
@@ -284,7 +284,7 @@ def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = Non
         if edge >= hi:
             return np.array(slices)
         if len(slices) >= max_slices:
-            raise LfprocError(f"--z-range {z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")
+            raise LfprocError(f"z_range_um={z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")
 
 
 #: a z step finer than the depth of field by more than this factor earns a warning (``z_step_advice``)

@@ -66,7 +66,7 @@ def _check_request(camera: Camera, near_mm: float, far_mm: float, max_gap_mm: fl
         raise LfprocError("depth-range planning needs micro images of 3 px or more (micro_image_px >= 3)")
     if _view_extent(camera, view_extent) == 0:
         raise LfprocError("depth-range planning needs more than the central view summed (one view does not "
-                          "refocus); give a wider --aperture")
+                          "refocus); give a wider aperture=")
     if not (near_mm > 0 and far_mm >= near_mm) or math.isnan(far_mm):
         raise LfprocError(f"depth range {near_mm}:{far_mm} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")
     if not (max_gap_mm >= 0 and math.isfinite(max_gap_mm)):

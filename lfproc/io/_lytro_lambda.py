@@ -126,7 +126,7 @@ def camera_lambda_map(camera, source: str) -> LambdaMap:
     LfprocError
         A microscope camera, or one without ``f_number``.
     """
-    if camera.is_microscope or camera.main_focal_length_mm is None:
+    if not camera.object_space.from_sensor or camera.main_focal_length_mm is None:   # an objective, no main lens
         raise LfprocError(f"{source}: describes a microscope, not a Lytro camera; pass a camera file with a "
                           f"[main_lens] (e.g. from 'lfproc camera' on a Lytro file of the same camera)")
     if camera.f_number is None or camera.f_number <= 0:

@@ -91,7 +91,7 @@ def napari_camera(path: str):
                        relay_magnification=1.0, wavelength_nm=values["microscope.wavelength_nm"])
     scope.validate(path)
     camera = Camera(pixel_pitch_mm=values["sensor.pixel_pitch_mm"], mla_pitch_mm=values["mla.pitch_mm"],
-                    mla_focal_length_mm=values["mla.focal_length_mm"], grid="rectangular", microscope=scope,
+                    mla_focal_length_mm=values["mla.focal_length_mm"], grid="rectangular", main_optics=scope,
                     name=_rig_name(path), source=path,
                     provenance=tuple(provenance))
     notes = [f"camera file written by 'lfproc camera' from napari-LF metadata {path}"]

@@ -65,8 +65,8 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
         mapping, camera_from = camera_lambda_map(camera, camera_path or "camera"), f"camera file {camera_path}"
     if focus_distance_mm is not None:
         if mapping is None:
-            raise LfprocError(f"{path}: --focus-distance needs the camera, and this picture's metadata does not "
-                              f"describe it ({note}); add --camera CAM.toml (e.g. from 'lfproc camera' on a Lytro "
+            raise LfprocError(f"{path}: focus_distance_mm= needs the camera, and this picture's metadata does not "
+                              f"describe it ({note}); add camera=... (e.g. from 'lfproc camera' on a Lytro "
                               f"file of the same camera)")
         mapping = refocused_map(mapping, focus_distance_mm)
     common = {"source": source, "camera_model": meta.model if meta else None}
