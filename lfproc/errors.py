@@ -6,8 +6,6 @@ switch), never as a command's flag. The commands reword what they report with th
 (:mod:`lfproc.cli.words`, one table).
 """
 
-import contextlib
-
 
 class LfprocError(Exception):
     """An error the user caused and can fix: a bad file, an impossible camera, an `a` out of range.
@@ -28,10 +26,3 @@ class LfprocWarning(UserWarning):
     notebook can filter them (``warnings.simplefilter("ignore", lfproc.LfprocWarning)``). The commands
     print each as one line on stderr.
     """
-
-
-@contextlib.contextmanager
-def speaking_python():
-    """Nothing now (the library's messages are worded for Python callers): kept until the wrappers around the
-    API's functions (``lfproc.api``) are removed."""
-    yield

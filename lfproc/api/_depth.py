@@ -8,7 +8,6 @@ import os
 from dataclasses import dataclass
 
 from ..errors import LfprocError
-from ..errors import speaking_python
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -68,13 +67,12 @@ class DepthResult:
         from ..depth import write_depth_outputs
         from ._focal import _stem
 
-        with speaking_python():
-            paths = write_depth_outputs(os.fspath(outdir), _stem(stem, self.source), self._lf, self.depth_map,
-                                        source=self.source, camera=self._lf.camera,
-                                        depth_range_mm=self.depth_range_mm, point_cloud=point_cloud,
-                                        provenance=self.provenance)
-            paths.pop("depth_map", None)
-            return paths
+        paths = write_depth_outputs(os.fspath(outdir), _stem(stem, self.source), self._lf, self.depth_map,
+                                    source=self.source, camera=self._lf.camera,
+                                    depth_range_mm=self.depth_range_mm, point_cloud=point_cloud,
+                                    provenance=self.provenance)
+        paths.pop("depth_map", None)
+        return paths
 
     def summary(self) -> str:
         """One line: how much is known and the range of the known depths."""
@@ -115,30 +113,29 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
     from ..provenance import provenance
     from ..viewpoints import with_aperture
 
-    with speaking_python():
-        if not isinstance(lf, LightField) or lf.camera is None:
-            raise LfprocError("depth_map needs a LightField with its camera (lfproc.read_light_field)")
-        camera = lf.camera
-        if camera.center_index < 1:
-            raise LfprocError(f"{camera.source or 'camera'}: depth needs micro images of 3 px or more "
-                              f"(decode.micro_image_px >= 3)")
-        min_confidence = MIN_CONFIDENCE if min_confidence is None else float(min_confidence)
-        if not 0.0 <= min_confidence <= 1.0:
-            raise LfprocError(f"min_confidence= must be in [0, 1], got {min_confidence}")
-        if z_range_um is not None:
-            if depth_range_mm is not None:
-                raise LfprocError("give depth_range_mm= (cameras) or z_range_um= (microscopes), not both")
-            if camera.object_space.unit != "um":
-                raise LfprocError("z_range_um= (micrometres) needs a microscope camera; give depth_range_mm=")
-            z0, z1 = (float(v) for v in z_range_um)
-            if not (math.isfinite(z0) and math.isfinite(z1)) or z0 == z1:
-                raise LfprocError(f"z_range_um= must be two different finite depths in um, got {z_range_um!r}")
-            zeta = geometry.z_per_a_um(camera)
-            options["a_range"] = (min(z0, z1) / zeta, max(z0, z1) / zeta)
-            if z_step_um is not None:
-                options["step"] = float(z_step_um) / zeta
-        lf = with_aperture(lf, aperture)
-        dm = depth(lf, depth_range_mm=depth_range_mm, camera=camera, min_confidence=min_confidence, **options)
-        source = None if lf.source is None else os.path.abspath(lf.source)
-        return DepthResult(dm, source, provenance(lf.inputs),
-                           None if depth_range_mm is None else tuple(float(v) for v in depth_range_mm), lf)
+    if not isinstance(lf, LightField) or lf.camera is None:
+        raise LfprocError("depth_map needs a LightField with its camera (lfproc.read_light_field)")
+    camera = lf.camera
+    if camera.center_index < 1:
+        raise LfprocError(f"{camera.source or 'camera'}: depth needs micro images of 3 px or more "
+                          f"(decode.micro_image_px >= 3)")
+    min_confidence = MIN_CONFIDENCE if min_confidence is None else float(min_confidence)
+    if not 0.0 <= min_confidence <= 1.0:
+        raise LfprocError(f"min_confidence= must be in [0, 1], got {min_confidence}")
+    if z_range_um is not None:
+        if depth_range_mm is not None:
+            raise LfprocError("give depth_range_mm= (cameras) or z_range_um= (microscopes), not both")
+        if camera.object_space.unit != "um":
+            raise LfprocError("z_range_um= (micrometres) needs a microscope camera; give depth_range_mm=")
+        z0, z1 = (float(v) for v in z_range_um)
+        if not (math.isfinite(z0) and math.isfinite(z1)) or z0 == z1:
+            raise LfprocError(f"z_range_um= must be two different finite depths in um, got {z_range_um!r}")
+        zeta = geometry.z_per_a_um(camera)
+        options["a_range"] = (min(z0, z1) / zeta, max(z0, z1) / zeta)
+        if z_step_um is not None:
+            options["step"] = float(z_step_um) / zeta
+    lf = with_aperture(lf, aperture)
+    dm = depth(lf, depth_range_mm=depth_range_mm, camera=camera, min_confidence=min_confidence, **options)
+    source = None if lf.source is None else os.path.abspath(lf.source)
+    return DepthResult(dm, source, provenance(lf.inputs),
+                       None if depth_range_mm is None else tuple(float(v) for v in depth_range_mm), lf)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import ObjectSpace
-from ..errors import LfprocError, speaking_python
+from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
 
 #: what each way of naming slices refuses in the other object space (keyed by the argument given)
@@ -105,19 +105,18 @@ class FocalStack:
         """
         from ..outputs import lateral_um_per_lens, stack_path, write_focal_stack, write_slice_previews, write_slices
 
-        with speaking_python():
-            stem = _stem(stem, self.source)
-            outdir = os.fspath(outdir)
-            written = write_slices(outdir, stem, self.source, self.camera, list(self.a), self.images, format,
-                                   view_mask=self.view_mask, upsample=self.upsample, provenance=self.provenance)
-            if preview:
-                written += list(write_slice_previews(outdir, stem, self.images, self.camera, list(self.a), preview,
-                                                     view_mask=self.view_mask) or [])
-            if stack:
-                written.append(write_focal_stack(stack_path(outdir, stem, stack), self.images, self.records(),
-                                                 kind=stack, lens_um=lateral_um_per_lens(self.camera),
-                                                 upsample=self.upsample))
-            return written
+        stem = _stem(stem, self.source)
+        outdir = os.fspath(outdir)
+        written = write_slices(outdir, stem, self.source, self.camera, list(self.a), self.images, format,
+                               view_mask=self.view_mask, upsample=self.upsample, provenance=self.provenance)
+        if preview:
+            written += list(write_slice_previews(outdir, stem, self.images, self.camera, list(self.a), preview,
+                                                 view_mask=self.view_mask) or [])
+        if stack:
+            written.append(write_focal_stack(stack_path(outdir, stem, stack), self.images, self.records(),
+                                             kind=stack, lens_um=lateral_um_per_lens(self.camera),
+                                             upsample=self.upsample))
+        return written
 
     def to_xarray(self):
         """The slices as an ``xarray.DataArray`` (dims slice, y, x, channel; the tags as coordinates along
@@ -193,29 +192,28 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     from ..viewpoints import with_aperture
     from ._checks import check_slice_meaning, check_view_coverage
 
-    with speaking_python():
-        if not isinstance(lf, LightField) or lf.camera is None:
-            raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
-                              "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
-        camera = lf.camera
-        a_values = _parameters(camera, a, distance_mm, z_um)
-        if camera.object_space.from_sensor:   # no slice nearer than the front focal plane (signed z has none)
-            check_slice_meaning(camera, a_values, "a" if a is not None else "distance_mm")
-        if int(upsample) != upsample or upsample < 1:
-            raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
-        lf = with_aperture(lf, aperture)
-        source = None if lf.source is None else os.path.abspath(lf.source)
-        check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask)
-        images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
-        prov = provenance(lf.inputs)
-        records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)
-        space = camera.object_space
-        columns = [np.array([r[key] for r in records], dtype=np.float64) for key in ("a",) + tuple(space.keys)]
-        summed = records[0].get("views_summed", lf.m_hat ** 2)
-        return FocalStack(images, *columns, space, views_summed=int(summed),
-                          aperture_f_number=stack_f_number(camera, records[0]), interpolation=interpolation,
-                          upsample=int(upsample), camera=camera, source=source, provenance=prov,
-                          view_mask=lf.view_mask, _records=tuple(records))
+    if not isinstance(lf, LightField) or lf.camera is None:
+        raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
+                          "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
+    camera = lf.camera
+    a_values = _parameters(camera, a, distance_mm, z_um)
+    if camera.object_space.from_sensor:   # no slice nearer than the front focal plane (signed z has none)
+        check_slice_meaning(camera, a_values, "a" if a is not None else "distance_mm")
+    if int(upsample) != upsample or upsample < 1:
+        raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
+    lf = with_aperture(lf, aperture)
+    source = None if lf.source is None else os.path.abspath(lf.source)
+    check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask)
+    images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
+    prov = provenance(lf.inputs)
+    records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)
+    space = camera.object_space
+    columns = [np.array([r[key] for r in records], dtype=np.float64) for key in ("a",) + tuple(space.keys)]
+    summed = records[0].get("views_summed", lf.m_hat ** 2)
+    return FocalStack(images, *columns, space, views_summed=int(summed),
+                      aperture_f_number=stack_f_number(camera, records[0]), interpolation=interpolation,
+                      upsample=int(upsample), camera=camera, source=source, provenance=prov,
+                      view_mask=lf.view_mask, _records=tuple(records))
 
 
 def _parameters(camera, a, distance_mm, z_um) -> list[float]:

@@ -16,7 +16,6 @@ from ..camera import Camera
 from ..errors import LfprocError, LfprocWarning
 from ..grid import LensGrid
 from ..lightfield import LightField, is_lightfield_file
-from ..errors import speaking_python
 
 _PATH = (str, os.PathLike)
 
@@ -49,11 +48,10 @@ def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -
     from ..inputs import subtract_dark
     from ..pipeline import calibrate_white as fit
 
-    with speaking_python():
-        camera = _camera(camera)
-        dark_capture = None if dark is None else _capture(dark, camera, "dark")
-        white_capture = subtract_dark(_capture(white, camera, "white"), dark_capture, "white image")
-        return fit(white_capture, camera, white_is_white=white_is_white)
+    camera = _camera(camera)
+    dark_capture = None if dark is None else _capture(dark, camera, "dark")
+    white_capture = subtract_dark(_capture(white, camera, "white"), dark_capture, "white image")
+    return fit(white_capture, camera, white_is_white=white_is_white)
 
 
 def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, white_dir=None,
@@ -103,26 +101,25 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
     LfprocError
         Missing or mismatched inputs (one line naming the argument and the fix).
     """
-    with speaking_python():
-        if isinstance(capture, _PATH) and is_lightfield_file(capture):
-            return _saved(capture, camera)
-        if isinstance(capture, _PATH) and not os.path.isfile(capture):
-            raise LfprocError(f"{capture}: no such file; check the path")
-        camera = _camera(camera, capture)
-        if white_dir is not None:
-            white = _white_in_folder(white, white_dir, capture)
-        if isinstance(capture, _PATH) and _all_files(white, dark) and (grid is None or isinstance(grid, _PATH)
-                                                                       or white is not None):
-            from ..pipeline import load_lightfield, prepare_decoding
+    if isinstance(capture, _PATH) and is_lightfield_file(capture):
+        return _saved(capture, camera)
+    if isinstance(capture, _PATH) and not os.path.isfile(capture):
+        raise LfprocError(f"{capture}: no such file; check the path")
+    camera = _camera(camera, capture)
+    if white_dir is not None:
+        white = _white_in_folder(white, white_dir, capture)
+    if isinstance(capture, _PATH) and _all_files(white, dark) and (grid is None or isinstance(grid, _PATH)
+                                                                   or white is not None):
+        from ..pipeline import load_lightfield, prepare_decoding
 
-            _check_white_given(white, grid, None)
-            with _warnings_said_once():
-                setup = prepare_decoding(camera, _path(grid), _path(white), interpolation=decode_interpolation,
-                                         demosaic_method=demosaic, grid=grid if isinstance(grid, LensGrid) else None,
-                                         captures=[os.fspath(capture)],
-                                         dark=_path(dark), cache=cache, white_is_white=white_is_white)
-            return load_lightfield(os.fspath(capture), setup)
-        return _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache, white_is_white)
+        _check_white_given(white, grid, None)
+        with _warnings_said_once():
+            setup = prepare_decoding(camera, _path(grid), _path(white), interpolation=decode_interpolation,
+                                     demosaic_method=demosaic, grid=grid if isinstance(grid, LensGrid) else None,
+                                     captures=[os.fspath(capture)],
+                                     dark=_path(dark), cache=cache, white_is_white=white_is_white)
+        return load_lightfield(os.fspath(capture), setup)
+    return _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache, white_is_white)
 
 
 def _white_in_folder(white, folder, capture) -> str:

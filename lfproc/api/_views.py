@@ -9,7 +9,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ..errors import speaking_python
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -53,10 +52,9 @@ class ViewStack:
         from ..outputs import write_view_set
         from ._focal import _stem
 
-        with speaking_python():
-            return write_view_set(os.fspath(outdir), _stem(stem, self.source), self.source, self._lf, format,
-                                  mosaic=mosaic, gif=gif, inside_aperture=self.inside_aperture, preview=preview,
-                                  provenance=self.provenance)
+        return write_view_set(os.fspath(outdir), _stem(stem, self.source), self.source, self._lf, format,
+                              mosaic=mosaic, gif=gif, inside_aperture=self.inside_aperture, preview=preview,
+                              provenance=self.provenance)
 
     def __len__(self) -> int:
         return int(self.images.shape[0])
@@ -85,21 +83,20 @@ def view_stack(lf, *, inside_aperture: bool = False) -> ViewStack:
     from ..provenance import provenance
     from ..viewpoints import viewpoint_geometry
 
-    with speaking_python():
-        if not isinstance(lf, LightField) or lf.camera is None:
-            raise LfprocError("view_stack needs a LightField with its camera (lfproc.read_light_field) to tag the "
-                              "views")
-        if inside_aperture and lf.camera.main_optics.image_aperture_sine is None:   # no f-number (nor NA)
-            raise LfprocError(f"{lf.camera.source or 'camera'}: inside_aperture=True needs main_lens.f_number in "
-                              f"the camera file")
-        keep = shown_views(lf, inside_aperture).keep
-        source = None if lf.source is None else os.path.abspath(lf.source)
-        prov = provenance(lf.inputs)
-        table = viewpoint_geometry(lf.camera, lf.view_centre)
-        chosen = [(ky, kx) for ky in range(lf.m_hat) for kx in range(lf.m_hat) if keep[ky, kx]]
-        records = tuple(dict(source=source, **table[ky][kx].metadata(), provenance=prov) for ky, kx in chosen)
-        index = np.array(chosen, dtype=int).reshape(-1, 2)
-        images = lf.views[index[:, 0], index[:, 1]] if len(chosen) else lf.views[:0, 0]
-        return ViewStack(images, index, np.array([r["position_mm"] for r in records], dtype=np.float64),
-                         np.array([r["tilt_deg"] for r in records], dtype=np.float64), source, prov,
-                         bool(inside_aperture), lf, records)
+    if not isinstance(lf, LightField) or lf.camera is None:
+        raise LfprocError("view_stack needs a LightField with its camera (lfproc.read_light_field) to tag the "
+                          "views")
+    if inside_aperture and lf.camera.main_optics.image_aperture_sine is None:   # no f-number (nor NA)
+        raise LfprocError(f"{lf.camera.source or 'camera'}: inside_aperture=True needs main_lens.f_number in "
+                          f"the camera file")
+    keep = shown_views(lf, inside_aperture).keep
+    source = None if lf.source is None else os.path.abspath(lf.source)
+    prov = provenance(lf.inputs)
+    table = viewpoint_geometry(lf.camera, lf.view_centre)
+    chosen = [(ky, kx) for ky in range(lf.m_hat) for kx in range(lf.m_hat) if keep[ky, kx]]
+    records = tuple(dict(source=source, **table[ky][kx].metadata(), provenance=prov) for ky, kx in chosen)
+    index = np.array(chosen, dtype=int).reshape(-1, 2)
+    images = lf.views[index[:, 0], index[:, 1]] if len(chosen) else lf.views[:0, 0]
+    return ViewStack(images, index, np.array([r["position_mm"] for r in records], dtype=np.float64),
+                     np.array([r["tilt_deg"] for r in records], dtype=np.float64), source, prov,
+                     bool(inside_aperture), lf, records)

@@ -309,7 +309,7 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     LfprocError
         For a distance at or behind the main lens (d ≤ L), or NaN.
     """
-    _require_main_lens(camera, "a distance in mm (give depths of a microscope in um, --z-range)")
+    _require_main_lens(camera, "a distance in mm (give depths of a microscope in um, z_um=)")
     d = np.asarray(distance_mm, dtype=np.float64)
     inside = camera.sensor_to_main_lens_mm
     if np.any(np.isnan(d)) or np.any(d <= inside):
