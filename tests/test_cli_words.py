@@ -3,6 +3,7 @@ messages (``white=``, ``aperture=2.8``), the commands report them with their fla
 when the library wrote the flags itself."""
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -37,6 +38,7 @@ def _text(node, src):
     return None
 
 
+@functools.lru_cache(maxsize=1)
 def library_messages() -> list[tuple[str, str]]:
     """(file, text) of every error and warning the library (all but cli/) raises, and of the module-level
     strings that go into them."""
@@ -48,7 +50,8 @@ def library_messages() -> list[tuple[str, str]]:
         for node in ast.walk(ast.parse(src)):
             text = None
             if isinstance(node, ast.Call) and node.args:
-                name = ast.get_source_segment(src, node.func)
+                func = node.func   # the called name's last part (get_source_segment re-splits the file: slow)
+                name = func.id if isinstance(func, ast.Name) else getattr(func, "attr", "")
                 if name.endswith(("LfprocError", "warn")):
                     text = _text(node.args[0], src)
             elif isinstance(node, ast.Assign) and isinstance(node.value, (ast.Constant, ast.JoinedStr)):
