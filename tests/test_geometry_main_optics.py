@@ -5,16 +5,16 @@
   wave term λ·n/NA²), computed here in plain numpy;
 * every MainOptics implementation keeps the interface: its object position is its own transfer's conjugate;
 * the geometry functions that used to branch on the kind give the same answers through the interface.
+
+That nothing outside the optics asks the kind is checked for the whole package in tests/test_architecture.py.
 """
 
-import ast
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import lfproc
 from lfproc import LfprocError
 from lfproc import geometry as g
 from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM, Camera, MainLens, MainOptics, Microscope
@@ -288,31 +288,3 @@ def test_the_lens_renderer_refuses_a_microscope_and_the_microscope_renderer_a_le
         _require_f_number(SCOPES["lfm-20x"])
     with pytest.raises(LfprocError, match="needs a microscope camera"):
         render_microscope_views(_camera("paper-f100"), None, (2, 2))   # refused before the scene is read
-
-
-# ------------------------------------------------------------------ the rule: ask the optics, not their kind
-OWN = ["lfproc/geometry", "lfproc/calibrate", "lfproc/simulate", "lfproc/inputs", "lfproc/decode/_disc_centre.py"]
-# the microscope's own geometry and renderer may use the Microscope (OPTICS.md)
-ALLOWED = {"lfproc/geometry/_microscope.py", "lfproc/simulate/_microscope.py"}
-
-
-def _files():
-    for own in OWN:
-        path = ROOT / own
-        yield from ([path] if path.is_file() else sorted(path.glob("*.py")))
-
-
-def test_no_branch_on_the_optics_kind_outside_the_optics():
-    found = []
-    for path in _files():
-        rel = path.relative_to(ROOT).as_posix()
-        if rel in ALLOWED:
-            continue
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Attribute) and node.attr in ("microscope", "is_microscope"):
-                found.append(f"{rel}:{node.lineno} .{node.attr}")
-            if (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "getattr" and len(node.args) > 1
-                    and isinstance(node.args[1], ast.Constant) and node.args[1].value in ("microscope", "is_microscope")):
-                found.append(f"{rel}:{node.lineno} getattr(..., {node.args[1].value!r})")
-    assert not found, found
-    assert lfproc.geometry is g

@@ -199,11 +199,6 @@ class Camera:
         """True when the exit pupil is at infinity (the 2014 paper's model; always for a microscope)."""
         return math.isinf(self.exit_pupil_distance_mm)
 
-    @property
-    def is_microscope(self) -> bool:
-        """True for a light-field microscope (a ``[microscope]`` table instead of ``[main_lens]``)."""
-        return self.microscope is not None
-
     def require_main_lens(self, what: str) -> None:
         """Raise `LfprocError` (one line) when ``what`` needs a main lens and this camera is a microscope."""
         if self.microscope is not None:
