@@ -2,6 +2,7 @@
 local server, several captures; and the previews for people (tone mapping, enlarging, labels, mosaics)."""
 
 import json
+from pathlib import Path
 import re
 import shutil
 import subprocess
@@ -543,3 +544,28 @@ def test_fallback_plan_stays_within_the_slices_focal_stack_takes(monkeypatch):
     planned = scene_slices(cam, focus)
     assert planned[0] == pytest.approx(a_inf) and np.all(np.diff(planned) > 0) and len(planned) >= 2
     geometry.check_usable_a(cam, planned)   # every slice real
+
+
+def test_a_given_focal_stack_is_the_one_the_page_shows(page, scene, tmp_path):
+    """build_page(focal_stack=...) (the demo hands over the stack it wrote) shows that stack's slices, not a
+    second refocus of its own (here one made with other interpolation, so the two differ); a stack of other
+    slices is refused."""
+    import lfproc
+    from lfproc.viewer import build_page
+
+    folder = scene["folder"]
+    lf = lfproc.read_light_field(str(folder / "capture.png"), str(folder / "camera.toml"),
+                                 grid=str(folder / "grid.json"))
+    a_values = [float(r["a"]) for r in json.loads((page / "geometry.json").read_text())["slices"]]
+    given = lfproc.focal_stack(lf, a=a_values, interpolation="nearest")
+    assert not np.allclose(given.images, lfproc.focal_stack(lf, a=a_values).images)
+    html = build_page(lf, str(tmp_path / "given"), source="capture.png", stem="capture", a_values=a_values,
+                      focal_stack=given)
+    data = json.loads((Path(html).parent / "geometry.json").read_text())
+    tone = ToneMap(data["display"]["tone_map"]["black"], data["display"]["tone_map"]["white"])
+    for k, record in enumerate(data["apertures"][0]["slices"]):
+        expected = tone(given.images[k])
+        assert np.array_equal(_pixels(Path(html).parent / record["image"], expected.shape), expected)
+    with pytest.raises(ValueError, match="a_values"):
+        build_page(lf, str(tmp_path / "other"), source="capture.png", stem="capture", a_values=a_values,
+                   focal_stack=lfproc.focal_stack(lf, a=a_values[:1]))

@@ -40,7 +40,8 @@ class PageOptions:
 
 
 def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibration: dict | None = None,
-               index_href: str | None = None, options: PageOptions = PageOptions(), depth_map=None) -> str:
+               index_href: str | None = None, options: PageOptions = PageOptions(), depth_map=None,
+               focal_stack=None) -> str:
     """Write a viewer page for ``lf`` into ``outdir``; returns the path of its ``index.html``.
 
     The slices and views are those of the Python API (:func:`lfproc.focal_stack`, :func:`lfproc.view_stack`):
@@ -62,6 +63,9 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
         Link back to an index of several captures.
     depth_map : lfproc.depth.DepthMap, optional
         A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth`) otherwise.
+    focal_stack : lfproc.FocalStack, optional
+        ``lfproc.focal_stack(lf, a=a_values)`` already computed (every view with light, the page's first
+        aperture); refocused here otherwise. Its ``a`` must be ``a_values``.
     """
     from ..provenance import provenance
 
@@ -71,7 +75,10 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
         np.asarray(a_values, dtype=np.float64)
-    stacks = [(f_number, _focal_stack(lf, a_values, f_number)) for f_number in page_apertures(camera)]
+    if focal_stack is not None and not np.array_equal(np.asarray(focal_stack.a, dtype=np.float64), a_values):
+        raise ValueError("build_page: focal_stack.a must be the page's a_values")
+    stacks = [(f_number, focal_stack if f_number is None and focal_stack is not None
+               else _focal_stack(lf, a_values, f_number)) for f_number in page_apertures(camera)]
     tone = ToneMap.for_images(stacks[0][1].images)
     extension = image_extension(lf.lens_shape)
     jobs = []
