@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import ObjectSpace
+from ..camera import ObjectSpace, SliceNames
 from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
 
@@ -25,7 +25,7 @@ _OTHER_SPACE = {"z_um": "z_um= (micrometres from the native object plane) needs 
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class FocalStack:
+class FocalStack(SliceNames):
     """Refocused slices of one light field and their geometry.
 
     One set of tags for any main optics, in the unit and from the origin of ``space`` (the camera's
@@ -77,18 +77,6 @@ class FocalStack:
     provenance: dict
     view_mask: np.ndarray | None
     _records: tuple
-
-    def _in(self, unit: str, value):
-        return value if self.space.unit == unit else None
-
-    distance_mm = property(lambda self: self._in("mm", self.depth), doc="d_a in mm from the sensor (Eq. 21)")
-    near_mm = property(lambda self: self._in("mm", self.near), doc="d_a− in mm (Eq. 31)")
-    far_mm = property(lambda self: self._in("mm", self.far), doc="d_a+ in mm (Eq. 31)")
-    dof_mm = property(lambda self: self._in("mm", self.dof), doc="D_a in mm (Eq. 23)")
-    z_um = property(lambda self: self._in("um", self.depth), doc="z in µm from the native object plane")
-    z_near_um = property(lambda self: self._in("um", self.near), doc="the DOF limit nearer the objective, µm")
-    z_far_um = property(lambda self: self._in("um", self.far), doc="the DOF limit farther from the objective, µm")
-    dof_um = property(lambda self: self._in("um", self.dof), doc="the DOF in µm")
 
     def records(self) -> list[dict]:
         """One dict per slice: the keys and values of ``lfproc refocus``'s sidecar (``inf`` for JSON's null)."""

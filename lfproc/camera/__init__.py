@@ -10,7 +10,7 @@ lens, relay of a light-field microscope), ``_toml`` (reading and writing the con
 
 from ._camera import Camera
 from ._lens import DEFAULT_LENS_WAVELENGTH_NM, LensPrescription, Surface
-from ._main_optics import NATIVE_PLANE_UM, SENSOR_MM, MainLens, MainOptics, ObjectSpace
+from ._main_optics import NATIVE_PLANE_UM, SENSOR_MM, MainLens, MainOptics, ObjectSpace, PositionNames, SliceNames
 from ._microscope import Microscope
 from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
 from ._optics import image_distance_for_focus, largest_odd_at_most
@@ -18,6 +18,6 @@ from ._toml import KNOWN_KEYS, parse_provenance
 from ._zmx import read_zmx
 from ._validation import CFA_PATTERNS, GRIDS, TOML_KEYS
 
-__all__ = ["Camera", "MainLens", "MainOptics", "ObjectSpace", "SENSOR_MM", "NATIVE_PLANE_UM", "RayTransfer",
+__all__ = ["Camera", "MainLens", "MainOptics", "ObjectSpace", "PositionNames", "SliceNames", "SENSOR_MM", "NATIVE_PLANE_UM", "RayTransfer",
            "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
            "CFA_PATTERNS", "GRIDS", "TOML_KEYS"]

@@ -59,6 +59,32 @@ class ObjectSpace:
         return self.unit == "mm"
 
 
+def _in_space(unit: str, name: str, doc: str) -> property:
+    """A contract name that reads the field ``name`` where the result is in ``unit``, else ``None``."""
+    return property(lambda self: getattr(self, name) if self.space.unit == unit else None, doc=doc)
+
+
+class PositionNames:
+    """The contract's names of a result's one set of positions ``depth``, ``near``, ``far`` in its ``space``:
+    ``distance_mm``, ``near_mm``, ``far_mm`` (mm from the sensor) and ``z_um``, ``z_near_um``, ``z_far_um``
+    (µm from the native object plane), each ``None`` in the other space. Read-only; a mixin for the frozen
+    results (depth maps)."""
+
+    distance_mm = _in_space("mm", "depth", "distance from the sensor in mm (Eq. 21); None for a microscope")
+    near_mm = _in_space("mm", "near", "the nearer limit in mm from the sensor (Eq. 31); None for a microscope")
+    far_mm = _in_space("mm", "far", "the farther limit in mm from the sensor (Eq. 31); None for a microscope")
+    z_um = _in_space("um", "depth", "z in µm from the native object plane; None for a camera")
+    z_near_um = _in_space("um", "near", "the limit nearer the objective (larger z), µm; None for a camera")
+    z_far_um = _in_space("um", "far", "the limit farther from the objective (smaller z), µm; None for a camera")
+
+
+class SliceNames(PositionNames):
+    """:class:`PositionNames` and the depth of field ``dof`` as ``dof_mm`` / ``dof_um`` (slices, focal stacks)."""
+
+    dof_mm = _in_space("mm", "dof", "the depth of field in mm (Eq. 23); None for a microscope")
+    dof_um = _in_space("um", "dof", "the depth of field in µm; None for a camera")
+
+
 #: a photographic camera's object space: millimetres from the sensor (the paper's Eqs. 21, 31)
 SENSOR_MM = ObjectSpace("mm", "from the sensor", ("distance_mm", "near_mm", "far_mm", "dof_mm"), 1.0)
 #: a microscope's object space: micrometres from the native object plane, positive towards the objective

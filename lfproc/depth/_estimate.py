@@ -21,10 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import SENSOR_MM, ObjectSpace
+from ..camera import SENSOR_MM, ObjectSpace, PositionNames
 from ..errors import LfprocError
 from ._confidence import MIN_CONFIDENCE
-from ._metric import ContractNames
 
 #: the method name written into the outputs' metadata
 METHOD = "plane sweep over the refocus parameter a: variance across the views (correspondence) " \
@@ -40,7 +39,7 @@ COARSE_PASS_CONFIDENCE = 0.2
 
 
 @dataclass(frozen=True, eq=False)
-class DepthMap(ContractNames):
+class DepthMap(PositionNames):
     """Depth of every lens of a light field, on the refocused slices' lens grid.
 
     One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's

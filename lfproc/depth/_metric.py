@@ -22,28 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import SENSOR_MM, ObjectSpace
-
-
-def _in_space(unit: str, name: str, doc: str) -> property:
-    """A contract name that reads the field ``name`` where the result is in ``unit``, else ``None``."""
-    return property(lambda self: getattr(self, name) if self.space.unit == unit else None, doc=doc)
-
-
-class ContractNames:
-    """The contract's names of one set of fields ``depth``, ``near``, ``far`` in ``space`` (read-only; ``None``
-    in the other space), as :class:`lfproc.geometry.SliceGeometry` has them."""
-
-    distance_mm = _in_space("mm", "depth", "distance from the sensor in mm (Eq. 21); None for a microscope")
-    near_mm = _in_space("mm", "near", "the nearer bound in mm from the sensor; None for a microscope")
-    far_mm = _in_space("mm", "far", "the farther bound in mm from the sensor; None for a microscope")
-    z_um = _in_space("um", "depth", "z in µm from the native object plane; None for a camera")
-    z_near_um = _in_space("um", "near", "the bound nearer the objective (larger z), µm; None for a camera")
-    z_far_um = _in_space("um", "far", "the bound farther from the objective (smaller z), µm; None for a camera")
+from ..camera import SENSOR_MM, ObjectSpace, PositionNames
 
 
 @dataclass(frozen=True, eq=False)
-class MetricDepth(ContractNames):
+class MetricDepth(PositionNames):
     """Per lens, in the camera's object space: the position and its bounds (NaN where ``a`` is NaN).
 
     Attributes

@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import SENSOR_MM, Camera, ObjectSpace
+from ..camera import SENSOR_MM, Camera, ObjectSpace, SliceNames
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
@@ -178,7 +178,7 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
 
 
 @dataclass(frozen=True, eq=False)
-class SliceGeometry:
+class SliceGeometry(SliceNames):
     """Geometry of refocused slices (arrays with the shape of ``a``, or floats for a scalar ``a``).
 
     One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
@@ -205,18 +205,6 @@ class SliceGeometry:
     far: np.ndarray
     dof: np.ndarray
     space: ObjectSpace = SENSOR_MM
-
-    def _in(self, unit: str, value):
-        return value if self.space.unit == unit else None
-
-    distance_mm = property(lambda self: self._in("mm", self.depth), doc="d_a in mm from the sensor (Eq. 21)")
-    near_mm = property(lambda self: self._in("mm", self.near), doc="d_a− in mm (Eq. 31)")
-    far_mm = property(lambda self: self._in("mm", self.far), doc="d_a+ in mm (Eq. 31)")
-    dof_mm = property(lambda self: self._in("mm", self.dof), doc="D_a in mm (Eq. 23)")
-    z_um = property(lambda self: self._in("um", self.depth), doc="z in µm from the native object plane")
-    z_near_um = property(lambda self: self._in("um", self.near), doc="the DOF limit nearer the objective, µm")
-    z_far_um = property(lambda self: self._in("um", self.far), doc="the DOF limit farther from the objective, µm")
-    dof_um = property(lambda self: self._in("um", self.dof), doc="the DOF in µm")
 
     def records(self) -> list[dict]:
         """One dict per slice with the contract's JSON keys (``space.keys``); infinity as ``math.inf``.
