@@ -18,6 +18,7 @@ import pytest
 from lfproc import LfprocError
 from lfproc import geometry as g
 from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM, Camera, MainLens, MainOptics, Microscope
+from scopefile import microscope_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 CAMERAS = ROOT / "lfproc" / "samples" / "cameras"
@@ -28,19 +29,8 @@ def _camera(name):
 
 
 def _scope_camera(m_obj, na, n, f_tube, pitch, f_s, pixel, relay=1.0, wavelength=510.0):
-    text = f"""[sensor]
-pixel_pitch_mm = {pixel}
-[mla]
-pitch_mm = {pitch}
-focal_length_mm = {f_s}
-[microscope]
-objective_magnification = {m_obj}
-numerical_aperture = {na}
-immersion_index = {n}
-tube_lens_focal_length_mm = {f_tube}
-relay_magnification = {relay}
-wavelength_nm = {wavelength}
-"""
+    text = microscope_toml(name=None, pixel=pixel, pitch=pitch, f_s=f_s, grid=None, magnification=m_obj, na=na, n=n,
+                           f_tube=f_tube, relay=relay, wavelength=wavelength)
     return Camera.from_toml_string(text, "scope.toml")
 
 
