@@ -73,10 +73,6 @@ from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
 
-def _require_main_lens(camera, what: str) -> None:
-    camera.require_main_lens(what)
-
-
 def _slope_step(camera: Camera) -> float:
     """δ = p_p / f_s with the sample pitch p_p (Eq. 13 for Δu = 1): the micro image pitch over m̂."""
     return camera.sample_pitch_mm / camera.mla_focal_length_mm
@@ -104,15 +100,10 @@ def _pair_position(camera: Camera, shift, spread):
     return optics.object_position(shift, pitch, slope_gap, camera.mla_path_mm), vergence
 
 
-def _pair_distance(camera: Camera, shift, spread):
-    """(distance from the sensor, D) where a ray pair meets (a main lens, :func:`_pair_position`)."""
-    return _pair_position(camera, shift, spread)
-
-
 def _distance_at(camera: Camera, a) -> np.ndarray:
     """d(a) of the module docstring (A = C = a), vectorised; ``inf`` where the rays do not meet in front."""
     a = np.asarray(a, dtype=np.float64)
-    return _pair_distance(camera, a, a)[0]
+    return _pair_position(camera, a, a)[0]
 
 
 def _equivalent_parameter(camera: Camera, shift, spread):
@@ -172,7 +163,7 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
     float or ndarray
         Distance in mm; ``inf`` where the chief rays are parallel or diverge.
     """
-    _require_main_lens(camera, "a slice distance from the sensor")
+    camera.require_main_lens("a slice distance from the sensor")
     d = _distance_at(camera, a)
     return float(d) if d.ndim == 0 else d
 
@@ -281,7 +272,7 @@ def _lit_view_extent(camera: Camera) -> float:
 
 def infinity_parameter(camera: Camera) -> float:
     """a_∞ = −δ·ε/(p_m·(1 − κε)): the refocus parameter of the slice focused at infinity (0 when b_U = f_U)."""
-    _require_main_lens(camera, "the slice at infinity")
+    camera.require_main_lens("the slice at infinity")
     eps = camera.image_distance_mm - camera.main_focal_length_mm
     return -_slope_step(camera) * eps / (camera.mla_pitch_mm * (1.0 - pupil_curvature(camera) * eps))
 
@@ -297,7 +288,7 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     LfprocError
         For a distance at or behind the main lens (d ≤ L), or NaN.
     """
-    _require_main_lens(camera, "a distance in mm (give depths of a microscope in um, z_um=)")
+    camera.require_main_lens("a distance in mm (give depths of a microscope in um, z_um=)")
     d = np.asarray(distance_mm, dtype=np.float64)
     inside = camera.sensor_to_main_lens_mm
     if np.any(np.isnan(d)) or np.any(d <= inside):
