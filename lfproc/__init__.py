@@ -27,6 +27,7 @@ _LAZY = {
     "io": ("lfproc.io", None),
     "depth": ("lfproc.depth", "depth"),
     # the Python API (contract): light to import, heavy only when called
+    "read_camera": ("lfproc.io", "read_camera"),
     "read_light_field": ("lfproc.api", "read_light_field"),
     "calibrate_white": ("lfproc.api", "calibrate_white"),
     "focal_stack": ("lfproc.api", "focal_stack"),

@@ -1,7 +1,8 @@
 """Issue 30: white images as real users have them — 8-bit, dusty (a few dark specks), low level (peak ~30 DN),
 lenslets passing light unevenly — are accepted: never refused, `lfproc calibrate` exits 0 and finds the true
-lattice. Only the lens-to-lens contrast may warn (uneven lenslets look like a low-texture scene far from the
-focus), and --white-is-white silences it."""
+lattice, and none is warned about: lenslets that pass light unevenly vary the micro images' brightness lens by
+lens, a scene (however faint) like a picture, shared with the neighbouring lenses (issue 38: every real white
+image was warned about before)."""
 
 import json
 import warnings
@@ -78,12 +79,9 @@ def test_real_like_whites_are_never_refused_and_fit_the_true_lattice(whites):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             evidence = check_white_is_white(name, image, "none", estimate.grid, texture=estimate.texture)
-        assert not evidence.is_scene
-        if name in ("8-bit peak 145", "low level (peak 30 DN)", "dusty"):   # identical lenslets: no warning
-            assert not caught, (name, [str(w.message) for w in caught])
-        else:                                 # 4 % lens to lens: the contrast measure doubts, in one line
-            assert len(caught) == 1 and "lens-to-lens contrast" in str(caught[0].message), name
-            assert "\n" not in str(caught[0].message)
+        assert not evidence.is_scene and not caught, (name, [str(w.message) for w in caught])
+        if name.startswith(("uneven", "all")):   # 4 % lens to lens, each lens on its own: barely shared
+            assert evidence.correlation < 0.1, (name, evidence)
 
 
 def test_calibrate_accepts_a_dusty_low_level_uneven_8_bit_white(tmp_path, whites):
@@ -95,11 +93,11 @@ def test_calibrate_accepts_a_dusty_low_level_uneven_8_bit_white(tmp_path, whites
                                        f'focal_length_mm = 0.1\ngrid = "rectangular"\n[microscope]\n'
                                        f'objective_magnification = 20.0\nnumerical_aperture = 0.5\n'
                                        f'immersion_index = 1.33\ntube_lens_focal_length_mm = 200.0\n')
-    for extra, warned in (((), 1), (("--white-is-white",), 0)):
+    for extra in ((), ("--white-is-white",)):
         proc = run_cli("calibrate", tmp_path / "white.png", "--camera", tmp_path / "cam.toml", "-o",
                        tmp_path / "grid.json", *extra)
         assert proc.returncode == 0, proc.stderr
-        assert len([line for line in proc.stderr.splitlines() if "may be a capture of a scene" in line]) == warned
+        assert "may be a capture of a scene" not in proc.stderr, proc.stderr
         data = json.loads((tmp_path / "grid.json").read_text())
         assert abs(data["pitch_px"] - PITCH) < 0.01
 

@@ -29,7 +29,8 @@ def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -
         The white image: a file (any image or raw the commands read, a Lytro raw) or its linear sensor
         values ``(H, W)`` (a Bayer mosaic of ``camera.cfa``) or ``(H, W, C)``.
     camera : Camera, str or os.PathLike
-        The camera, or its TOML file.
+        The camera, or a file that describes it (:func:`lfproc.read_camera`: a camera TOML, napari-LF's
+        ``metadata.txt``, a Lytro file).
     dark : str, os.PathLike or ndarray, optional
         A dark frame of the same size, subtracted from the white image.
     white_is_white : bool
@@ -66,7 +67,8 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
         light field (``.lfp.npz``, which carries its camera and grid: the other arguments are not needed),
         or the linear sensor values ``(H, W)`` (a Bayer mosaic of ``camera.cfa``) or ``(H, W, C)``.
     camera : Camera, str or os.PathLike, optional
-        The camera or its TOML file; for a Lytro capture without one, the camera in its metadata (main lens
+        The camera, or a file that describes it (:func:`lfproc.read_camera`: a camera TOML, napari-LF's
+        ``metadata.txt``, a Lytro file); for a Lytro capture without one, the camera in its metadata (main lens
         focused at infinity, with a :class:`LfprocWarning`).
     white : str, os.PathLike or ndarray, optional
         The white image: corrects vignetting, and the grid is fitted to it when ``grid`` is None.
@@ -214,13 +216,17 @@ def _capture(value, camera, what: str):
 
 
 def _camera(camera, capture=None) -> Camera:
-    """``camera`` as a Camera (read from its TOML file); without one, a Lytro capture's own (warned)."""
+    """``camera`` as a Camera (read from its file by `lfproc.read_camera`); without one, a Lytro capture's own
+    (warned)."""
     if isinstance(camera, Camera):
         return camera
     if isinstance(camera, _PATH):
-        return Camera.from_toml(os.fspath(camera))
+        from ..io import read_camera
+
+        return read_camera(camera)
     if camera is not None:
-        raise LfprocError(f"camera= must be a Camera or a camera TOML path, got {type(camera).__name__}")
+        raise LfprocError(f"camera= must be a Camera or the path of a camera file (TOML, napari-LF's metadata.txt "
+                          f"or a Lytro file), got {type(camera).__name__}")
     if isinstance(capture, _PATH):
         from ..io import is_lytro_file, lytro_camera, read_lytro_metadata
 

@@ -14,8 +14,8 @@ blocks used by plots and tests. Implementation modules, one step each: ``_monoch
 lenses), ``_checks`` (warnings, exit pupil), ``_estimate`` (the pipeline). See docs/calibration.md.
 """
 
-from ._checks import (TEXTURE_LIMIT, TEXTURE_WARN, ExitPupilEstimate, exit_pupil_warning, implied_exit_pupil,
-                      lattice_texture, micro_image_scale, texture_ratio, texture_warning, white_texture)
+from ._checks import (TEXTURE_LIMIT, ExitPupilEstimate, exit_pupil_warning, implied_exit_pupil,
+                      lattice_texture, micro_image_scale, texture_ratio, white_texture)
 from ._estimate import MIN_LENSES, PITCH_TOLERANCE, GridEstimate, estimate_grid, find_grid
 from ._flatten import Flattened, candidate_centres, flatten, smooth_large
 from ._grid_extent import grid_from_fit, lattice_indices_on_sensor
@@ -26,7 +26,7 @@ from ._monochrome import repair_outlier_pixels, white_to_mono
 from ._symmetry_centres import refine_centres, symmetric_offsets
 
 __all__ = ["estimate_grid", "find_grid", "GridEstimate", "implied_exit_pupil", "exit_pupil_warning",
-           "ExitPupilEstimate", "texture_ratio", "white_texture", "texture_warning", "TEXTURE_LIMIT", "TEXTURE_WARN",
+           "ExitPupilEstimate", "texture_ratio", "white_texture", "TEXTURE_LIMIT",
            "lattice_texture", "micro_image_scale", "white_to_mono", "repair_outlier_pixels",
            "lattice_guess_from_autocorrelation", "flatten", "Flattened", "smooth_large", "candidate_centres",
            "symmetric_offsets", "refine_centres", "Similarity", "LatticeModel", "fit_similarity", "robust_fit",

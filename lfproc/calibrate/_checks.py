@@ -10,8 +10,9 @@
   ratio over calibration's windows, for diagnostics only. Measured (docs/real-data.md): real white
   images 0.0016–0.0063, simulated ones 0.0005–0.008 (0.039 for a tiny white dark beyond its 9 × 12
   lenses); real captures 0.13 (an 8-bit microscope capture of a sea urchin), 0.62 (fluorescent beads),
-  simulated ones 0.067–0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is refused as a capture; above `TEXTURE_WARN` (0.02) it is
-  reported (`lfproc.inputs.check_white_is_white`).
+  simulated ones 0.067–0.19. Above `TEXTURE_LIMIT` (0.04, six times the largest real white's) the image is
+  refused as a capture (`lfproc.inputs.check_white_is_white`); below it nothing is said (between 0.02 and 0.04
+  lie only simulated white images: dusty, 30 DN, uneven lenslets; a tiny one dark beyond its lenses).
 * **Residual**: the lattice fit's inlier RMS beyond `TRUST_RMS_PX` (or 1 % of the pitch, whichever is
   larger), or more than a quarter of the indexed centres rejected, means the micro image centres are
   not where a lattice puts them (a textured or overexposed white image, strong mechanical vignetting).
@@ -34,8 +35,6 @@ import numpy as np
 
 #: texture ratio (`white_texture`) above which a "white image" is a capture of a scene: real whites give <= 0.0063
 TEXTURE_LIMIT = 0.04
-#: texture ratio above which a white image is reported (one warning line) as possibly showing a scene
-TEXTURE_WARN = 0.02
 #: inlier RMS (px) above which the grid is reported as not trustworthy (or 1 % of the pitch if larger)
 TRUST_RMS_PX = 0.1
 #: relative tolerance of the camera file's nominal pitches (MLA and pixel) when checking the exit pupil
@@ -93,14 +92,6 @@ def white_texture(image, cfa: str, grid) -> float:
     """The texture ratio of a white image (module docstring): the largest of `lattice_texture`'s tiles, 0.0
     where no tile holds lit micro images. The one number reported under that name."""
     return float(max([0.0, *(float(t) for t in lattice_texture(image, cfa, grid))]))
-
-
-def texture_warning(source: str, ratio: float) -> str | None:
-    """One line when the texture ratio (`white_texture`) lies between `TEXTURE_WARN` and `TEXTURE_LIMIT`."""
-    if not TEXTURE_WARN < ratio <= TEXTURE_LIMIT:
-        return None
-    return (f"{source}: its micro images differ a little from their neighbours (texture ratio {ratio:.3f}; white "
-            f"images give < {TEXTURE_WARN}, captures of scenes > {TEXTURE_LIMIT}): it may be a capture of a scene")
 
 
 def trust_warning(source: str, residual_px: float, pitch_px: float, inliers: int, indexed: int) -> str | None:

@@ -287,8 +287,8 @@ class Camera:
             self.source or "camera")
         d_a = (self.exit_pupil_distance_mm if self.main_lens_prescription is None
                else self.main_lens_prescription.exit_pupil_distance_mm(b_u))
-        return replace(self, image_distance_mm=b_u, exit_pupil_distance_mm=d_a,
-                       provenance=tuple(p for p in self.provenance if p[0] not in stale))
+        return self._same_m_hat(replace(self, image_distance_mm=b_u, exit_pupil_distance_mm=d_a,
+                                        provenance=tuple(p for p in self.provenance if p[0] not in stale)))
 
     def with_main_lens(self, prescription: LensPrescription, image_distance_mm: float | None = None) -> "Camera":
         """A copy whose main lens is ``prescription``: f_U, H1U–H2U and d_A become its cardinal points.
@@ -297,10 +297,17 @@ class Camera:
         """
         self.require_main_lens("a main lens prescription")
         b_u = self.image_distance_mm if image_distance_mm is None else float(image_distance_mm)
-        return replace(self, main_focal_length_mm=prescription.focal_length_mm,
-                       main_principal_plane_gap_mm=prescription.principal_plane_gap_mm, image_distance_mm=b_u,
-                       exit_pupil_distance_mm=prescription.exit_pupil_distance_mm(b_u),
-                       main_lens_prescription=prescription)
+        return self._same_m_hat(replace(self, main_focal_length_mm=prescription.focal_length_mm,
+                                        main_principal_plane_gap_mm=prescription.principal_plane_gap_mm,
+                                        image_distance_mm=b_u,
+                                        exit_pupil_distance_mm=prescription.exit_pupil_distance_mm(b_u),
+                                        main_lens_prescription=prescription))
+
+    def _same_m_hat(self, copy: "Camera") -> "Camera":
+        """``copy`` (this camera with another main lens focus or lens) leaving m̂ to the measurement as this one
+        does: ``dataclasses.replace`` passes the derived m̂ on as if it were stated."""
+        object.__setattr__(copy, "_m_hat_from_pitch", not self.micro_image_px_given)
+        return copy
 
     # ----------------------------------------------------------------- files (see ._toml)
     @classmethod

@@ -39,8 +39,29 @@ KNOWN_KEYS = {
 
 
 def read_camera_file(path: str | os.PathLike) -> dict:
-    """The parsed TOML tables of the camera file at ``path`` (errors name the file)."""
-    return read_toml(os.fspath(path), "camera file", "an existing TOML file to camera=")
+    """The parsed TOML tables of the camera file at ``path`` (errors name the file; napari-LF's metadata and
+    Lytro files, which also describe a camera, are told apart and sent to `lfproc.read_camera`)."""
+    path = os.fspath(path)
+    other = _other_camera_format(path)
+    if other is not None:
+        raise LfprocError(f"{path}: {other}, not a camera TOML file; read it with lfproc.read_camera(path), which "
+                          f"reads camera files, napari-LF's metadata.txt and Lytro files (the command lfproc camera "
+                          f"writes a camera file from it)")
+    return read_toml(path, "camera file", "an existing TOML file to camera=")
+
+
+def _other_camera_format(path: str) -> str | None:
+    """What ``path`` is, by its first bytes, when it is one of the other files that describe a camera."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return None                # read_toml says why
+    if head.startswith(b"\x89LFP"):
+        return "a Lytro file"
+    if head.lstrip().startswith(b"{"):
+        return "a JSON file (napari-LF's metadata.txt or a Lytro raw's metadata?)"
+    return None
 
 
 def parse_camera_text(text: str, source: str) -> dict:
@@ -218,7 +239,9 @@ def parse_provenance(table, source: str) -> tuple[tuple[str, str], ...]:
 
 
 def camera_to_toml(camera, include_provenance: bool = True) -> str:
-    """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision)."""
+    """The camera as a contract TOML file (b_U written as ``image_distance_mm``; full precision). ``[decode]
+    micro_image_px`` is written where the camera states m̂ (`Camera.micro_image_px_given`); an m̂ derived from the
+    nominal pitch is left out (a comment says so), so that the file read back leaves m̂ to the measured pitch too."""
     lines = []
     if camera.name:
         lines.append(f"name = {_toml_str(camera.name)}")
@@ -242,7 +265,13 @@ def camera_to_toml(camera, include_provenance: bool = True) -> str:
         if lens is not None:      # inline, so the file stands alone (indices at the lens's wavelength)
             lines.append(f"wavelength_nm = {float(lens.wavelength_nm)!r}")
             lines += surfaces_to_toml(lens)
-    lines += ["[decode]", f"micro_image_px = {camera.m_hat}"]
+    lines.append("[decode]")
+    if camera.micro_image_px_given:
+        lines.append(f"micro_image_px = {camera.m_hat}")
+    else:     # left to the measurement: decoding with a white image or grid takes m̂ from the measured pitch
+        lines.append(f"# micro_image_px not stated: the largest odd integer not above the measured micro image pitch "
+                     f"when decoded with a white image or grid, else {camera.m_hat} from the nominal "
+                     f"{camera.pitch_px:.3f} px")
     if include_provenance and camera.provenance:
         lines.append("[provenance]")
         lines += [f"{_toml_str(key)} = {_toml_str(text)}" for key, text in camera.provenance]

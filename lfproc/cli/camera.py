@@ -52,7 +52,7 @@ def run(args) -> int:
         raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
     cam = built.camera
     defaults = [key for key, text in built.provenance if text.startswith("default")]
-    print(f"{args.output}: Lytro camera, {cam.pitch_px:.3f} px {cam.grid} lenses (m = {cam.m_hat}), f_s "
+    print(f"{args.output}: Lytro camera, {cam.pitch_px:.3f} px {cam.grid} lenses ({_m_hat_words(cam)}), f_s "
           f"{cam.mla_focal_length_mm:.4f} mm, f_U {cam.main_focal_length_mm:.3f} mm, b_U "
           f"{cam.image_distance_mm:.3f} mm; defaults (see [provenance]): {', '.join(defaults)}", file=sys.stdout)
     return 0
@@ -88,6 +88,11 @@ def _napari(path: str, args) -> int:
         raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
     scope = camera.main_optics      # the objective and tube lens (lfproc.camera.Microscope)
     print(f"{args.output}: light-field microscope, {scope.objective_magnification:g}x/{scope.numerical_aperture:g} "
-          f"(n {scope.immersion_index:g}), {camera.pitch_px:.3f} px rectangular lenses (m = {camera.m_hat}), f_s "
+          f"(n {scope.immersion_index:g}), {camera.pitch_px:.3f} px rectangular lenses ({_m_hat_words(camera)}), f_s "
           f"{camera.mla_focal_length_mm:g} mm; every number's source in [provenance]", file=sys.stdout)
     return 0
+
+
+def _m_hat_words(camera) -> str:
+    """How m̂ will be chosen: the camera file leaves it to the white image's measured micro image pitch."""
+    return f"m̂ from the white image's measured pitch; {camera.m_hat} from this nominal one"

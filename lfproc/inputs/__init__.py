@@ -13,7 +13,7 @@ See docs/inputs.md.
 from ._dark import read_dark, subtract_dark
 from ._defaults import MeasuredMHat, measured_m_hat
 from ._facts import ImageFacts, file_hash, probe_image, same_file_content
-from ._kind import (SCENE_CONTRAST_LIMIT, TEXTURE_LIMIT, TEXTURE_WARN, WHITE_FLATNESS, WhiteEvidence,
+from ._kind import (SCENE_CONTRAST_LIMIT, SCENE_CORRELATION_LIMIT, TEXTURE_LIMIT, WHITE_FLATNESS, WhiteEvidence,
                     check_capture_is_not_white, check_white_is_white, lens_flatness, lens_scene_contrast,
                     white_evidence)
 from ._match import (PITCH_MATCH_FLOOR, PITCH_TOLERANCE_WITHOUT_RECORD, camera_name, check_fits_grid_extent,
@@ -21,8 +21,8 @@ from ._match import (PITCH_MATCH_FLOOR, PITCH_TOLERANCE_WITHOUT_RECORD, camera_n
 from ._provenance import GridRecord, made_from, read_grid_record
 
 __all__ = ["GridRecord", "MeasuredMHat", "measured_m_hat", "ImageFacts", "PITCH_MATCH_FLOOR",
-           "PITCH_TOLERANCE_WITHOUT_RECORD", "SCENE_CONTRAST_LIMIT",
-           "TEXTURE_LIMIT", "TEXTURE_WARN", "WhiteEvidence", "white_evidence",
+           "PITCH_TOLERANCE_WITHOUT_RECORD", "SCENE_CONTRAST_LIMIT", "SCENE_CORRELATION_LIMIT",
+           "TEXTURE_LIMIT", "WhiteEvidence", "white_evidence",
            "WHITE_FLATNESS", "camera_name", "check_capture_is_not_white", "check_fits_grid_extent",
            "check_grid_fits_camera", "check_same_sensor", "check_white_is_white", "expected_pitch_px", "file_hash",
            "lens_flatness", "lens_scene_contrast", "made_from", "pitch_tolerance", "probe_image", "read_dark", "read_grid_record",

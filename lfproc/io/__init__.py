@@ -15,7 +15,9 @@ Reading
     `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`;
     `camera_lambda_map` from a camera file, `refocused_map` for a picture's refocused focus);
     `stack_images` decodes a picture's focus stack and `encode_jpeg` re-encodes a frame.
-    `is_napari_metadata` and `napari_camera` read napari-LF's ``metadata.txt`` as a microscope camera.
+    `is_napari_metadata` and `napari_camera` read napari-LF's ``metadata.txt`` as a microscope camera;
+    `read_camera` reads any of the three files that describe a camera (a camera TOML, napari-LF's
+    ``metadata.txt``, a Lytro file's metadata).
     `decode_picture_views` decodes a picture's H.264 perspective views; `is_container` and
     `has_container_extension` tell a Lytro container by its bytes and its name; `existing_file` checks a
     path names a readable file (one-line error).
@@ -33,6 +35,7 @@ OpenImageIO, rawpy and Pillow are imported inside the functions that use them, s
 package is cheap (numpy only).
 """
 
+from ._camera_file import read_camera
 from ._capture import Capture
 from ._checks import existing_file
 from ._describe import describe_file
@@ -67,5 +70,5 @@ __all__ = [
     "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
     "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
     "write_png_preview", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
-    "is_napari_metadata", "napari_camera",
+    "is_napari_metadata", "napari_camera", "read_camera",
 ]

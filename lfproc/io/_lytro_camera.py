@@ -11,7 +11,7 @@ lenses), each named in ``provenance`` so that ``lfproc geometry`` can say where 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from ..camera import Camera
 from ..errors import LfprocError
@@ -97,7 +97,7 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
         text = "metadata: devices.lens.exitPupilOffset.z"
     provenance.append(("main_lens.exit_pupil_distance_mm", text))
     f_u = metres_to_mm(meta.focal_length_m)
-    camera = Camera(
+    fields = dict(
         pixel_pitch_mm=metres_to_mm(meta.pixel_pitch_m), mla_pitch_mm=metres_to_mm(meta.lens_pitch_m),
         mla_focal_length_mm=metres_to_mm(meta.sensor_offset_m[2]), main_focal_length_mm=f_u, image_distance_mm=f_u,
         f_number=meta.f_number, grid="hexagonal" if "hex" in (meta.tiling or "").lower() else "rectangular",
@@ -106,11 +106,13 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
     if focus_distance_mm is None:
         provenance.append(("main_lens.image_distance_mm", DEFAULT_FOCUS))
     else:
-        camera = camera.with_focus_distance(float(focus_distance_mm))
+        fields["image_distance_mm"] = Camera(**fields).with_focus_distance(float(focus_distance_mm)).image_distance_mm
         provenance.append(("main_lens.image_distance_mm",
                            f"flag: --focus-distance {focus_distance_mm:g} mm (thin-lens equation)"))
-    provenance.append(("decode.micro_image_px", "default: largest odd integer not above pitch / pixel pitch"))
-    return LytroCamera(camera=replace(camera, provenance=tuple(provenance)), provenance=tuple(provenance),
+    provenance.append(("decode.micro_image_px", "not stated: the largest odd integer not above the measured micro "
+                                                "image pitch (the white image's calibration), else pitch / pixel pitch"))
+    # built once with its provenance: a camera copied with dataclasses.replace would state m̂ (Camera)
+    return LytroCamera(camera=Camera(**fields, provenance=tuple(provenance)), provenance=tuple(provenance),
                        notes=tuple(_notes(meta)))
 
 

@@ -83,7 +83,8 @@ def napari_camera(path: str):
     provenance.append(("microscope.relay_magnification",
                        "napari-LF metadata: calibrate.pixel_size is the pixel at the lenslets (no relay): 1"))
     provenance.append(("mla.grid", "default: rectangular (napari-LF's lenslet model)"))
-    provenance.append(("decode.micro_image_px", "default: largest odd integer not above pitch / pixel pitch"))
+    provenance.append(("decode.micro_image_px", "not stated: the largest odd integer not above the measured micro "
+                                                "image pitch (the white image's calibration), else pitch / pixel pitch"))
     scope = Microscope(objective_magnification=values["microscope.objective_magnification"],
                        numerical_aperture=values["microscope.numerical_aperture"],
                        immersion_index=values["microscope.immersion_index"],
