@@ -70,7 +70,7 @@ def test_a_z_step_far_finer_than_the_dof_is_warned_with_a_sensible_step():
     assert proc.returncode == 0, proc.stderr
     warnings = [line for line in proc.stderr.splitlines() if "warning" in line]
     assert len(warnings) == 1 and "finer than the slices' depth of field" in warnings[0], proc.stderr
-    assert f"about {dof / 2:.2g} um" in warnings[0] and f"({dof:.3g} um)" in warnings[0]
+    assert f"about {dof / 2:.2g} µm" in warnings[0] and f"({dof:.3g} µm)" in warnings[0]
     for step in (dof / 2, dof / 9):                            # sensible steps: silent
         proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{step:.6g}", "--json")
         assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr

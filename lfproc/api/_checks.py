@@ -52,3 +52,20 @@ def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=Non
         warnings.warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
                       f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused",
                       LfprocWarning, stacklevel=3)
+
+
+def check_z_step(camera, a_values) -> None:
+    """Warn (:class:`lfproc.LfprocWarning`, once) when a microscope's slices form an evenly spaced z-stack whose
+    step is far finer than their depth of field (:func:`lfproc.geometry.z_step_advice`): what
+    :func:`lfproc.focal_stack` and every command that plans slices say, in the same words."""
+    from .. import geometry
+
+    if camera.object_space.from_sensor or len(a_values) < 3:
+        return
+    z = np.sort(np.asarray(a_values, dtype=np.float64)) * geometry.z_per_a_um(camera)
+    steps = np.diff(z)
+    if not (steps[0] > 0 and np.allclose(steps, steps[0], rtol=1e-6, atol=0.0)):
+        return
+    advice = geometry.z_step_advice(camera, float(steps[0]), float(z[0]), float(z[-1]))
+    if advice:
+        warnings.warn(advice, LfprocWarning, stacklevel=3)

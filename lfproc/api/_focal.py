@@ -171,14 +171,15 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     Warns
     -----
     LfprocWarning
-        Slices where fewer than half the pixels average every view.
+        Slices where fewer than half the pixels average every view; a microscope's evenly spaced slices far
+        closer than their depth of field.
     """
     from ..lightfield import LightField
     from ..outputs import slice_metadata, stack_f_number
     from ..provenance import provenance
     from ..refocus import refocus
     from ..viewpoints import with_aperture
-    from ._checks import check_slice_meaning, check_view_coverage
+    from ._checks import check_slice_meaning, check_view_coverage, check_z_step
 
     if not isinstance(lf, LightField) or lf.camera is None:
         raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
@@ -192,6 +193,7 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     lf = with_aperture(lf, aperture)
     source = None if lf.source is None else os.path.abspath(lf.source)
     check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask)
+    check_z_step(camera, a_values)
     images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
     prov = provenance(lf.inputs)
     records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)

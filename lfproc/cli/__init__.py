@@ -70,9 +70,15 @@ def main(argv=None) -> int:
 @contextlib.contextmanager
 def _plain_warnings(command: str):
     """Warnings reach the user as one plain line on stderr, like errors (no Python source line), in the
-    commands' words."""
+    commands' words, each once per command (a check that runs before decoding and again on the decoded light
+    field, or once per capture, says it once)."""
+    said = set()
+
     def show(message, category, filename, lineno, file=None, line=None):
-        print(f"lfproc {command}: warning: {command_words(str(message))}", file=sys.stderr)
+        text = f"lfproc {command}: warning: {command_words(str(message))}"
+        if text not in said:
+            said.add(text)
+            print(text, file=sys.stderr)
 
     with warnings.catch_warnings():
         warnings.simplefilter("default")

@@ -203,9 +203,9 @@ def z_range_parameters(camera, text: str):
     if len(values) not in (2, 3):
         raise LfprocError(f"--z-range: {text!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres, e.g. -50:50 or -50:50:2")
     planned = geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
-    if len(values) == 3 and (advice := geometry.z_step_advice(camera, values[2], values[0], values[1])):
-        import warnings
-        warnings.warn(f"--z-range {text}: {advice}", stacklevel=2)
+    from ..api import check_z_step
+
+    check_z_step(camera, planned)       # as focal_stack says it (the commands print each warning once)
     return planned
 
 

@@ -305,6 +305,6 @@ def z_step_advice(camera, step_um: float, z0_um: float, z1_um: float) -> str | N
     dof = float(np.min(ends.dof_um))
     if not (math.isfinite(dof) and dof > 0 and step_um * FINE_STEP_FACTOR < dof):
         return None
-    return (f"a z step of {step_um:g} um is {dof / step_um:.0f}x finer than the slices' depth of field "
-            f"({dof:.3g} um): neighbouring slices show the same; a step of about {dof / 2:.2g} um (half the DOF) "
+    return (f"a z step of {step_um:.4g} µm is {dof / step_um:.0f}x finer than the slices' depth of field "
+            f"({dof:.3g} µm): neighbouring slices show the same; a step of about {dof / 2:.2g} µm (half the DOF) "
             f"samples the depth fully")
