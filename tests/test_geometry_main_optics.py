@@ -193,7 +193,7 @@ def test_usable_range_follows_the_object_space():
     low, high = g.usable_a_range(lens)
     assert low == float(g.infinity_parameter(lens)) and high == math.inf
     z1 = float(g.slice_geometry(scope, 1.0).depth)
-    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.4g} um) to +1 (z = {z1:+.4g} um)"
+    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.4g} µm) to +1 (z = {z1:+.4g} µm)"
     text = g.usable_range_text(lens)
     assert text.startswith(f"a from {g.format_a(low, +1)} (infinity) to +inf (approaching the front focal plane")
 

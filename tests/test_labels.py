@@ -16,9 +16,9 @@ from lfproc.outputs._display import label_layout
 #: the widest labels lfproc writes under a preview (their longest numbers)
 WIDEST = [
     slice_label(123456789.0, 98765432.1, float("inf")),
-    f"z {-12345.6:+.1f} um | DOF {-12345.6:+.1f} to {-12000.1:+.1f} um",
+    f"z {-12345.6:+.1f} µm | DOF {-12345.6:+.1f} to {-12000.1:+.1f} µm",
     "225 of 15x15 views (black: no light or outside the aperture) | baseline 0.123 mm",
-    "189 of 15x15 views (black: no light or outside the aperture) | 0.417 um per lens",
+    "189 of 15x15 views (black: no light or outside the aperture) | 0.417 µm per lens",
     "view [14, 14] | 123.45 mm from the centre",
     "view [14, 14] | 57.1 deg in the object",
 ]
@@ -106,11 +106,11 @@ def test_ranges_read_near_to_far_and_low_to_high():
 
     scope = _camera("lfm-20x")
     for label in slice_labels(scope, [-3.0, 0.0, 2.0]):
-        low, high = (float(v) for v in re.search(r"DOF ([+-][\d.]+) to ([+-][\d.]+) um", label).groups())
+        low, high = (float(v) for v in re.search(r"DOF ([+-][\d.]+) to ([+-][\d.]+) µm", label).groups())
         assert low < high
     out = io.StringIO()
     describe_slices(scope, [-3.0, 0.0, 2.0], out=out)
-    pairs = re.findall(r"in focus \[([+-][\d.]+), ([+-][\d.]+)\] um", out.getvalue())
+    pairs = re.findall(r"in focus \[([+-][\d.]+), ([+-][\d.]+)\] µm", out.getvalue())
     assert len(pairs) == 3 and all(float(lo) < float(hi) for lo, hi in pairs)
     camera = _camera("paper-f100-b10")
     for label in slice_labels(camera, [0.0, 0.5, 2.0]):

@@ -46,7 +46,7 @@ def test_geometry_json_lists_slices_in_micrometres():
     assert {"i", "angle_deg", "inside_na"} == set(out["views"][0])
     assert out["camera"]["aplanatic"] is False
     table = run_cli("geometry", "--camera", SAMPLES / "cameras" / "lfm-60x-water.toml", "--z-range", "-5:5")
-    assert table.returncode == 0 and "aplanatic (sine condition)" in table.stdout and "[um]" in table.stdout
+    assert table.returncode == 0 and "aplanatic (sine condition)" in table.stdout and "[µm]" in table.stdout
 
 
 def test_geometry_z_range_plans_cover_or_step():
@@ -139,7 +139,7 @@ def test_depth_map_is_in_micrometres(lfm):
     known = depth[np.isfinite(depth)]
     assert known.size and np.all(np.abs(known) <= 40)      # within the searched range plus the padding
     assert not (lfm / "depth" / "capture_depth_points.ply").exists()
-    assert "um from the native object plane" in proc.stdout
+    assert "µm from the native object plane" in proc.stdout
 
 
 def test_viewer_page_in_micrometres(lfm):

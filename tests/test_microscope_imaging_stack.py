@@ -52,7 +52,7 @@ def test_imagej_hyperstack_has_micron_spacing(tmp_path, upsample):
     # ordered by increasing z whatever the order given
     assert np.array_equal(data, images[::-1][::-1, :, :, 0])
     assert [s["z_um"] for s in info["slices"]] == z
-    assert meta["Labels"][0].startswith("a=-0.4 z=-4 um")
+    assert meta["Labels"][0].startswith("a=-0.4 z=-4 µm")
 
 
 def test_ome_tiff_has_physical_sizes_and_plane_positions(tmp_path):

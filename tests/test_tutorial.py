@@ -34,7 +34,7 @@ def test_tutorial_runs(tmp_path, monkeypatch):
                 pytest.fail(f"block {i + 1} of {TUTORIAL.name} failed: {exc!r}\n{out.getvalue()}")
     printed = out.getvalue()
     assert "<LightField 11x11 views (89 carry light) of 53x75 lenses" in printed
-    assert "sharpest at z = 12 um" in printed
+    assert "sharpest at z = 12 µm" in printed
     assert list(home.iterdir()) == []
     for folder in ("refocus", "views", "depth", "scope"):
         assert any((work / "out" / folder).iterdir()), folder

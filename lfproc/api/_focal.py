@@ -129,9 +129,9 @@ class FocalStack(SliceNames):
     def __repr__(self) -> str:
         k, ny, nx, c = self.images.shape
         if self.space.from_sensor:
-            where = f"{_span(self.depth)} {self.space.unit} {self.space.origin}"
+            where = f"{_span(self.depth)} {self.space.symbol} {self.space.origin}"
         else:
-            where = f"z {_span(self.depth)} {self.space.unit}"
+            where = f"z {_span(self.depth)} {self.space.symbol}"
         return (f"<FocalStack of {k} slice(s) {ny}x{nx}x{c}, a {_span(self.a)}, {where}, "
                 f"{self.views_summed} views summed>")
 

@@ -58,6 +58,11 @@ class ObjectSpace:
         """True for distances from the sensor (positive, ``inf`` at infinity); False for signed depths."""
         return self.unit == "mm"
 
+    @property
+    def symbol(self) -> str:
+        """The unit as people read it (``"mm"``, ``"µm"``); ``unit`` is the one of file names and record keys."""
+        return "µm" if self.unit == "um" else self.unit
+
 
 def _in_space(unit: str, name: str, doc: str) -> property:
     """A contract name that reads the field ``name`` where the result is in ``unit``, else ``None``."""

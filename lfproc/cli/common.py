@@ -197,7 +197,7 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
               f"follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
     if not geo.space.from_sensor:   # signed depths (µm from the native object plane): in focus low to high
-        unit = geo.space.unit
+        unit = geo.space.symbol
         for a, z, near, far in zip(*(np.atleast_1d(x).tolist() for x in (geo.a, geo.depth, geo.near, geo.far))):
             low, high = sorted((far, near))
             print(f"  a={a:+.4f}  z = {z:+.2f} {unit}  in focus [{low:+.2f}, {high:+.2f}] {unit}", file=out)

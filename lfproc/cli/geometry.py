@@ -17,6 +17,11 @@ def register(sub) -> None:
                                    "those disparities between views G apart. Negative lists work with or without "
                                    "'=': --a -1:1 or --a=-1:1.")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
+    p.add_argument("--calib", metavar="GRID.json",
+                   help="the grid from 'lfproc calibrate': m̂ from its measured micro image pitch and the views "
+                        "decoding delivers from its white image (read once, then from the decoder cache), so that "
+                        "every number is the one refocus writes into its sidecars; without it m̂ is the camera "
+                        "file's (nominal, unless [decode] micro_image_px states it) and all views count")
     p.add_argument("--a", default=None, metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
     p.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
@@ -48,16 +53,19 @@ def run(args) -> int:
     camera = Camera.from_toml(args.camera)
     if args.a is not None and args.z_range is not None:
         raise LfprocError("give --a or --z-range, not both")
-    if args.z_range is not None:
-        a_values = [float(a) for a in z_range_parameters(camera, args.z_range)]
-    else:
+    if args.z_range is None:
         a_values = parse_number_list("0:5" if args.a is None else args.a, "--a")
     if not (args.wavelength_nm > 0 and math.isfinite(args.wavelength_nm)):
         raise LfprocError(f"--wavelength-nm must be a positive number, got {args.wavelength_nm}")
     if args.gap == 0:
         raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
-    aperture = synthetic_aperture(camera, args.aperture)
+    if args.calib is not None:
+        camera, aperture = grid_geometry_inputs(camera, args.calib, args.aperture)
+    else:
+        aperture = synthetic_aperture(camera, args.aperture)
+    if args.z_range is not None:      # planned with the m̂ the slices are refocused with
+        a_values = [float(a) for a in z_range_parameters(camera, args.z_range)]
     if not camera.object_space.from_sensor:   # an objective: slices in um from the native plane, views by angle
         if getattr(args, "real_rays", False):
             raise LfprocError(f"{args.camera}: --real-rays traces a main lens prescription; a microscope camera has "
@@ -75,6 +83,7 @@ def run(args) -> int:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
     plotted = f"plot of each slice's distance and DOF -> {args.plot}\n" if args.plot else ""
+    nominal_m_hat_note(args, camera)
     real = getattr(args, "real_rays", False)
     if args.json:
         report = with_aperture_tags(json_report(camera, slices, views, gaps, check, tri), aperture)
@@ -106,17 +115,47 @@ def synthetic_aperture(camera, f_number) -> dict:
     return {"f_number": float(f_number), "extent": extent, "tags": tags}
 
 
+def nominal_m_hat_note(args, camera) -> None:
+    """One line on stderr, once the table is sure to follow, when m̂ is the nominal one a white image would
+    override (neither stated in the camera file nor measured: no ``--calib``)."""
+    if args.calib is None and not camera.micro_image_px_given:
+        print(f"lfproc geometry: note: m̂ {camera.m_hat} is the camera file's nominal one ({camera.pitch_px:.3f} px a "
+              f"lens); decoding with a white image takes it from the measured pitch: --calib GRID.json gives the "
+              f"numbers refocus writes", file=sys.stderr)
+
+
+def grid_geometry_inputs(camera, calib: str, f_number):
+    """``--calib GRID``: the camera refocus decodes with (m̂ from the grid's measured pitch) and the views it sums
+    (those the decoder delivers from the grid's white image, within ``--aperture``), as ``(camera, aperture)``
+    of :func:`synthetic_aperture`'s form. The Python route is the light field's own: ``lf.camera`` and
+    ``geometry.summed_view_extent(lf.view_mask)``."""
+    from .. import geometry
+    from ..outputs import summed_views_metadata
+    from ..pipeline import prepare_decoding
+
+    setup = prepare_decoding(camera, calib, cache=True)
+    camera = setup.camera
+    mask = setup.decoder_for((), "none").views_delivered if setup.has_white else None
+    if f_number is not None:
+        views = geometry.aperture_views(camera, f_number)
+        mask = views if mask is None else views & mask
+    extent, tags = summed_views_metadata(camera, mask)
+    return camera, {"f_number": None if f_number is None else float(f_number), "extent": extent, "tags": tags}
+
+
 def with_aperture_tags(report: dict, aperture: dict) -> dict:
-    """The report with each slice carrying the aperture's tags, as refocus's sidecars do, and ``"aperture"``."""
-    if aperture["f_number"] is not None:
+    """The report with each slice carrying the tags of the views summed, as refocus's sidecars do, and
+    ``"aperture"`` for ``--aperture``."""
+    if aperture["tags"]:
         report["slices"] = [dict(record, **aperture["tags"]) for record in report["slices"]]
+    if aperture["f_number"] is not None:
         report["aperture"] = dict(f_number=aperture["f_number"], **aperture["tags"])
     return report
 
 
 def aperture_line(aperture: dict, camera=None) -> str:
     tags = aperture["tags"]
-    if aperture["f_number"] is None:
+    if aperture["f_number"] is None and not tags:
         return ""
     equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
     if camera is not None and camera.f_number is None and camera.main_optics.image_aperture_sine is not None and tags:
@@ -124,7 +163,9 @@ def aperture_line(aperture: dict, camera=None) -> str:
         from .. import geometry
         equivalent = f" ({geometry.aperture_text(camera, aperture['extent'])})"
     summed = f"{tags['views_summed']} views summed{equivalent}" if tags else "all views summed"
-    return f"synthetic aperture f/{aperture['f_number']:g}: {summed}; the DOF follows them\n"
+    head = "the views decoding delivers" if aperture["f_number"] is None else \
+        f"synthetic aperture f/{aperture['f_number']:g}"
+    return f"{head}: {summed}; the DOF follows them\n"
 
 
 def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
@@ -138,6 +179,7 @@ def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
         raise LfprocError(f"{args.camera}: --plot draws distances from a main lens; not available for a microscope")
     slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.microscope_views(camera)
+    nominal_m_hat_note(args, camera)
     if args.json:
         print(dumps_strict(with_aperture_tags(microscope_report(camera, slices, views), aperture)))
         return 0
@@ -170,12 +212,12 @@ def format_microscope_table(camera, slices, views, path) -> str:
     s = microscope_summary(camera)
     out = [f"microscope {camera.name or path}: {s['objective_magnification']:g}x/{s['numerical_aperture']:g} "
            f"(n = {s['immersion_index']:g}), m = {camera.m_hat} samples per lens "
-           f"({camera.pitch_px:.3f} sensor px), {s['lateral_sampling_um']:.4g} um per lens in the object, "
-           f"{s['z_per_a_um']:.4g} um per unit of a",
+           f"({camera.pitch_px:.3f} sensor px), {s['lateral_sampling_um']:.4g} µm per lens in the object, "
+           f"{s['z_per_a_um']:.4g} µm per unit of a",
            f"refocusing: {'aplanatic (sine condition)' if s['aplanatic'] else 'paraxial'} per-view shifts (a "
            f"paraxial z would be off by up to {100 * s['paraxial_depth_error']:.1f} % at this NA); the DOF adds the "
            f"wave term at {s['wavelength_nm']:.0f} nm",
-           "depths from the native object plane [um], positive towards the objective",
+           "depths from the native object plane [µm], positive towards the objective",
            f"{'a':>8} {'z_far':>11} {'z':>11} {'z_near':>11} {'DOF':>11}"]
     for r in slices.records():
         out.append(f"{r['a']:>+8.4f} {r['z_far_um']:>11.3f} {r['z_um']:>11.3f} {r['z_near_um']:>11.3f} "
@@ -240,9 +282,9 @@ def format_table(camera, slices, views, gaps, check, path, tri=None) -> str:
     from .. import geometry
     pupil = ("exit pupil at infinity (telecentric)" if camera.telecentric else
              f"exit pupil {camera.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
-             f"{geometry.micro_image_scale(camera):.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} um apart)")
+             f"{geometry.micro_image_scale(camera):.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} µm apart)")
     out = [f"camera {camera.name or path}: m = {camera.m_hat} px per micro image, effective pixel pitch "
-           f"{camera.effective_pixel_pitch_mm * 1e3:.3f} um, b_U - f_U = "
+           f"{camera.effective_pixel_pitch_mm * 1e3:.3f} µm, b_U - f_U = "
            f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm, {pupil}"]
     if camera.provenance:
         out.append("where the camera's numbers came from:")

@@ -67,6 +67,9 @@ class DepthMap(PositionNames):
         Seconds spent per step.
     space : ObjectSpace
         Unit, origin and record keys of ``depth``, ``near`` and ``far``.
+    lit : ndarray (Ny, Nx) bool or None
+        The lenses light reached (:func:`lit_lenses`); elsewhere the depth is unknown for want of light, not of
+        texture (the preview draws them black). ``None``: not recorded (all counted as lit).
 
     The contract's names read the same arrays: ``distance_mm``, ``near_mm``, ``far_mm`` (mm from the sensor)
     and ``z_um``, ``z_near_um``, ``z_far_um`` (µm from the native object plane); each is ``None`` where the
@@ -86,6 +89,7 @@ class DepthMap(PositionNames):
     timings_s: dict = field(default_factory=dict)
     aperture_f_number: float | None = None
     space: ObjectSpace = SENSOR_MM
+    lit: np.ndarray | None = None
 
     def metadata(self) -> dict:
         """Fields shared by every output of this depth map."""
@@ -340,7 +344,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
         t0 = time.perf_counter()
         minimum, conf = best_of_half_apertures(sweep, a_values, interpolation, volume, minimum, conf, c)
         timings["half apertures (borders, occlusions)"] = time.perf_counter() - t0
-    conf = np.where(lit_lenses(views, weight), conf, np.float32(0.0))   # no depth where no light fell
+    lit = lit_lenses(views, weight)
+    conf = np.where(lit, conf, np.float32(0.0))   # no depth where no light fell
     known = conf >= min_confidence
     a_known = np.where(known, minimum.a, np.nan)
 
@@ -361,6 +366,6 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     positional = not camera.main_optics.views_are_orthographic
     return DepthMap(depth=f32(metric.depth), confidence=f32(conf), near=f32(metric.near), far=f32(metric.far),
                     a=f32(a_known), allfocus=sharp, a_searched=a_values, view_step=view_step, view_reach=reach,
-                    timings_s=timings, space=metric.space,
+                    timings_s=timings, space=metric.space, lit=lit,
                     aperture_f_number=geometry.equivalent_f_number(camera, geometry.summed_view_extent(mask))
                     if mask is not None and positional else None)

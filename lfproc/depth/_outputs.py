@@ -27,10 +27,10 @@ DEPTH_CONTENT = {"mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = 
                        "slice); NaN = unknown"}
 
 #: the preview's legend unit and its sidecar's ``content``, by the unit of the depth map's object space
-PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown), legend in "
-                              "metres"),
+PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown, black no "
+                              "light), legend in metres"),
                   "um": ("um", "colour-mapped depth (viridis: yellow nearest the objective, dark purple farthest, grey "
-                               "unknown), legend in um")}
+                               "unknown, black no light), legend in µm")}
 
 
 def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
@@ -99,7 +99,7 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     unit, content = PREVIEW_LEGEND[space.unit]
     meta = dict(common, unit=unit, content=content)
     path = os.path.join(outdir, stem + PREVIEW)
-    write_preview(path, depth_map.distance_mm, depth_map.z_um)
+    write_preview(path, depth_map.distance_mm, depth_map.z_um, None if depth_map.lit is None else ~depth_map.lit)
     write_sidecar(path, meta)
     paths["preview"] = path
     if point_cloud and camera is not None and space.from_sensor:   # x, y from each lens's chief ray; z from the sensor
@@ -120,23 +120,24 @@ def _lateral_sampling_um(camera) -> float | None:
 
 
 def summary_line(depth_map) -> str:
-    """One line for a terminal: how much is known and the range of the known distances (metres; µm for a
-    microscope)."""
+    """One line for a terminal: how much is known (and of the lenses light reached), and the range of the known
+    distances (metres; µm for a microscope)."""
+    depth = depth_map.depth
+    known = ~np.isnan(depth)
+    text = f"depth known at {known.mean():.0%} of {depth.size} lenses"
+    lit = depth_map.lit
+    if lit is not None and not lit.all():
+        text += f" ({known[lit].mean() if lit.any() else 0.0:.0%} of the {lit.mean():.0%} that light reached)"
     if not depth_map.space.from_sensor:   # signed z, linear: no infinity
-        z = depth_map.depth
-        text = f"depth known at {np.isfinite(z).mean():.0%} of {z.size} lenses"
-        if np.isfinite(z).any():
-            lo, hi = (float(v) for v in np.percentile(z[np.isfinite(z)], [1, 99]))
-            text += f", z {lo:.4g} to {hi:.4g} um from the native object plane (1st to 99th percentile)"
+        if known.any():
+            lo, hi = (float(v) for v in np.percentile(depth[known], [1, 99]))
+            text += f", z {lo:.4g} to {hi:.4g} µm from the native object plane (1st to 99th percentile)"
         return text
-    distance = depth_map.depth
-    known = ~np.isnan(distance)
-    text = f"depth known at {known.mean():.0%} of {distance.size} lenses"
-    finite = distance[np.isfinite(distance)]
+    finite = depth[np.isfinite(depth)]
     if finite.size:
         near, far = (float(v) / 1000.0 for v in np.percentile(finite, [1, 99]))
         text += f", {near:.3g} to {far:.3g} m (1st to 99th percentile)"
-    if np.isinf(distance).any():
+    if np.isinf(depth).any():
         text += ", some at infinity"
     return text
 

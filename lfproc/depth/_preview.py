@@ -2,8 +2,9 @@
 
 Colour follows the inverse distance (proportional to the refocus parameter and to disparity, so equal
 steps of colour are equal steps of parallax) on the colour scale the viewer uses too
-(:func:`lfproc.colours.colour_scale`: viridis, far dark purple, near yellow); unknown lenses are grey.
-The legend is a colour bar with its ticks labelled in metres from the sensor.
+(:func:`lfproc.colours.colour_scale`: viridis, far dark purple, near yellow); lenses no light reached are
+black, lit lenses whose depth is unknown grey. The legend is a colour bar with ticks at round values of its
+unit: metres from the sensor, or µm from a microscope's native object plane.
 """
 
 from __future__ import annotations
@@ -13,6 +14,9 @@ import math
 import numpy as np
 
 from ..colours import UNKNOWN_COLOUR as UNKNOWN_RGB
+
+#: lenses no light reached (`lfproc.depth.lit_lenses`): their depth is unknown for want of light
+NO_LIGHT_RGB = (0, 0, 0)
 from ..colours import colour_scale
 
 #: the preview's depth map is enlarged (Lanczos, unknown lenses kept unknown: :func:`enlarge_scale`) to about
@@ -62,44 +66,67 @@ def _label(distance_mm: float) -> str:
 
 
 def _distance_scale(distance_mm: np.ndarray):
-    """(t per lens, [(t, label)] ticks, title): inverse distance, 1 at the nearest shown distance."""
+    """(t per lens, [(t, label)] ticks, title): inverse distance, 1 at the nearest shown distance; ticks at round
+    distances (and ``inf`` where the far end is infinity)."""
     near, far = display_range_mm(distance_mm)
     inv_near, inv_far = 1.0 / near, (0.0 if math.isinf(far) else 1.0 / far)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (1.0 / distance_mm - inv_far) / (inv_near - inv_far)
-    ticks = [((0.0 if math.isinf(d) else 1.0 / d) - inv_far, _label(d)) for d in [near, far] + _nice_ticks(near, far)]
+    ends = [far] if math.isinf(far) else []
+    ticks = [((0.0 if math.isinf(d) else 1.0 / d) - inv_far, _label(d)) for d in ends + _nice_ticks(near, far)]
     return t, [(v / (inv_near - inv_far), label) for v, label in ticks], "distance"
 
 
-def _um(z: float) -> str:
-    """A legend's z: signed, four significant digits without an exponent (``"+11500 um"``, ``"-6.36 um"``)."""
-    return f"{z:+.0f} um" if abs(z) >= 1000 else f"{z:+.4g} um"
+def round_ticks(lo: float, hi: float, count: int = 5) -> tuple[list[float], float]:
+    """``(ticks, step)``: the multiples of a round step (1, 2 or 5 times a power of ten) inside [lo, hi], the
+    step the largest that gives at least ``count - 1`` of them (about ``count``)."""
+    span = float(hi - lo)
+    if not span > 0:
+        return [float(lo)], 1.0
+    step = 10.0 ** math.floor(math.log10(span))
+    while True:
+        for factor in (5.0, 2.0, 1.0):
+            candidate = step * factor
+            first, last = math.ceil(lo / candidate - 1e-9), math.floor(hi / candidate + 1e-9)
+            if last - first + 1 >= max(count - 1, 2):
+                return [k * candidate + 0.0 for k in range(first, last + 1)], candidate
+        step /= 10.0
+
+
+def _um(z: float, step: float) -> str:
+    """A legend's z at a round value: signed, as many decimals as the step has (``"+20 µm"``, ``"-0.5 µm"``)."""
+    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
+    return f"{z:+.{decimals}f} µm" if z else "0 µm"
 
 
 def _z_scale(z_um: np.ndarray):
-    """(t per lens, ticks, title) of a microscope's depth in µm: linear in z, 1 nearest the objective."""
+    """(t per lens, ticks, title) of a microscope's depth in µm: linear in z, 1 nearest the objective; ticks at
+    round values."""
     known = z_um[np.isfinite(z_um)]
     lo, hi = (float(v) for v in np.percentile(known, [1, 99])) if known.size else (-1.0, 1.0)
     if hi <= lo:
         lo, hi = lo - 1.0, hi + 1.0
     t = (z_um - lo) / (hi - lo)
-    ticks = [((z - lo) / (hi - lo), _um(z)) for z in [hi, lo] + list(np.linspace(lo, hi, 5)[1:-1])]
-    return t, ticks, "z (um)"
+    values, step = round_ticks(lo, hi)
+    return t, [((z - lo) / (hi - lo), _um(z, step)) for z in values], "z (µm)"
 
 
-def enlarge_scale(t: np.ndarray, unknown: np.ndarray, scale: int) -> np.ndarray:
+def enlarge_scale(t: np.ndarray, unknown: np.ndarray, scale: int, unlit: np.ndarray | None = None) -> np.ndarray:
     """uint8 RGB of the colour position ``t`` per lens enlarged ``scale`` times, unknown lenses kept unknown.
 
     The known lenses are resampled with OpenCV's Lanczos-4 kernel (as the other previews,
     :func:`lfproc.outputs.upscale`), after each unknown lens took its nearest known lens's value, so that
     no unknown value leaks into the colours around it; every display pixel whose nearest lens is unknown
-    is then grey (:data:`lfproc.outputs.UNKNOWN_COLOUR`): unknown stays unknown, exactly where it was.
+    is then grey (:data:`lfproc.outputs.UNKNOWN_COLOUR`), or black (:data:`NO_LIGHT_RGB`) where ``unlit``
+    marks it: unknown stays unknown, exactly where it was.
     """
     t = np.asarray(t, dtype=np.float64)
     unknown = np.asarray(unknown, bool) | ~np.isfinite(t)
+    dark = np.zeros(t.shape, bool) if unlit is None else np.asarray(unlit, bool) & unknown
     if scale == 1 or unknown.all():
         rgb = colour_map(np.nan_to_num(t))
         rgb[unknown] = UNKNOWN_RGB
+        rgb[dark] = NO_LIGHT_RGB
         return np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1)
     import cv2
     from scipy.ndimage import distance_transform_edt
@@ -112,45 +139,54 @@ def enlarge_scale(t: np.ndarray, unknown: np.ndarray, scale: int) -> np.ndarray:
     smooth = cv2.resize(filled.astype(np.float32), (nx * scale, ny * scale), interpolation=cv2.INTER_LANCZOS4)
     rgb = colour_map(smooth)
     rgb[np.repeat(np.repeat(unknown, scale, axis=0), scale, axis=1)] = UNKNOWN_RGB
+    rgb[np.repeat(np.repeat(dark, scale, axis=0), scale, axis=1)] = NO_LIGHT_RGB
     return rgb
 
 
-def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> np.ndarray:
+def preview_image(distance_mm: np.ndarray | None, z_um: np.ndarray | None = None,
+                  unlit: np.ndarray | None = None) -> np.ndarray:
     """uint8 RGB ``(H, W, 3)``: the enlarged colour-mapped depth map with a legend on its right.
 
     ``z_um`` (a microscope's depth from the native object plane) instead of ``distance_mm``: colour
-    linear in z, red nearest the objective, legend in µm.
+    linear in z, yellow nearest the objective, legend in µm. ``unlit`` (``(Ny, Nx)`` booleans, the lenses no
+    light reached): drawn black, apart from the grey of lit lenses whose depth is unknown.
     """
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import Image, ImageDraw
 
+    from ..io import label_font, label_text
+
+    font = label_font()
     values = distance_mm if z_um is None else z_um
     t, ticks, title = _distance_scale(distance_mm) if z_um is None else _z_scale(z_um)
+    ticks, title = [(v, label_text(label, font)) for v, label in ticks], label_text(title, font)
     ny, nx = values.shape
     scale = max(1, round(TARGET_SIZE_PX / max(ny, nx)))
-    body = enlarge_scale(t, np.isnan(values), scale)
+    unknown = np.isnan(values)
+    body = enlarge_scale(t, unknown, scale, unlit)
     height = max(body.shape[0], 160)
-    font = ImageFont.load_default()
     bar_w, margin = 18, 10
-    words = [label for _, label in ticks] + [title, "grey: unknown"]
+    notes = ["grey: unknown"] + (["black: no light"] if unlit is not None and (unknown & unlit).any() else [])
+    words = [label for _, label in ticks] + [title] + notes
     label_w = max(80, max(_width(font, w) for w in words) + 12)   # every label inside the picture
     canvas = Image.new("RGB", (body.shape[1] + margin + bar_w + label_w, height + 2 * margin), (255, 255, 255))
     canvas.paste(Image.fromarray(body), (0, margin))
     line_h = _height(font)
-    bar_h = height - 24 - 8   # room below the bar for the bottom tick's lower half and "grey: unknown"
+    bar_h = height - 12 - 12 * len(notes) - 8   # room below the bar for the bottom tick's lower half and the notes
     bar_t = np.linspace(1.0, 0.0, bar_h)[:, None].repeat(bar_w, axis=1)   # near at the top
     x0, y0 = body.shape[1] + margin, margin + 12
     canvas.paste(Image.fromarray(colour_map(bar_t)), (x0, y0))
     draw = ImageDraw.Draw(canvas)
     draw.text((x0, margin - 8), title, fill=(0, 0, 0), font=font)
     drawn: list[int] = []
-    for position, label in ticks:   # the ends first, then round values between
+    for position, label in ticks:
         y = y0 + round((1.0 - position) * (bar_h - 1))
         if any(abs(y - other) < line_h + 3 for other in drawn):   # labels never overlap
             continue
         drawn.append(y)
         draw.line([(x0 + bar_w, y), (x0 + bar_w + 4, y)], fill=(0, 0, 0))
         draw.text((x0 + bar_w + 6, y - 5), label, fill=(0, 0, 0), font=font)
-    draw.text((x0, y0 + bar_h + 8), "grey: unknown", fill=(80, 80, 80), font=font)
+    for row, note in enumerate(notes):
+        draw.text((x0, y0 + bar_h + 8 + 12 * row), note, fill=(80, 80, 80), font=font)
     return np.asarray(canvas)
 
 
@@ -160,13 +196,14 @@ def _width(font, text: str) -> int:
 
 
 def _height(font) -> int:
-    _, top, _, bottom = font.getbbox("0123456789-+.e um")
+    _, top, _, bottom = font.getbbox("0123456789-+.e µm")
     return int(math.ceil(bottom - min(top, 0)))
 
 
-def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None) -> None:
+def write_preview(path: str, distance_mm: np.ndarray | None, z_um: np.ndarray | None = None,
+                  unlit: np.ndarray | None = None) -> None:
     """Write :func:`preview_image` as an 8-bit PNG, atomically, tagged as a depth map's preview (``lfproc info``)."""
     from ..io import write_png_preview
 
-    legend = "distance (m)" if z_um is None else "z (um)"
-    write_png_preview(path, preview_image(distance_mm, z_um), {"preview": "depth map", "legend": legend})
+    legend = "distance (m)" if z_um is None else "z (µm)"
+    write_png_preview(path, preview_image(distance_mm, z_um, unlit), {"preview": "depth map", "legend": legend})

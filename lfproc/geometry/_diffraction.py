@@ -38,12 +38,12 @@ class DiffractionCheck:
     pixel_limited: bool
 
     def message(self) -> str:
-        parts = [f"micro lens Airy radius {self.micro_lens_airy_mm * 1e3:.2f} um"]
+        parts = [f"micro lens Airy radius {self.micro_lens_airy_mm * 1e3:.2f} µm"]
         if self.main_lens_airy_mm is not None:
-            parts.append(f"main lens Airy radius {self.main_lens_airy_mm * 1e3:.2f} um")
+            parts.append(f"main lens Airy radius {self.main_lens_airy_mm * 1e3:.2f} µm")
         verdict = ("pixel-limited, as the model assumes" if self.pixel_limited else
                    "diffraction-limited: the optics, not the pixels, bound the DOF, which is then wider than predicted")
-        return (f"{', '.join(parts)} vs effective pixel pitch {self.effective_pixel_pitch_mm * 1e3:.2f} um at "
+        return (f"{', '.join(parts)} vs effective pixel pitch {self.effective_pixel_pitch_mm * 1e3:.2f} µm at "
                 f"{self.wavelength_mm * 1e6:.0f} nm: {verdict}")
 
     def record(self) -> dict:

@@ -69,8 +69,8 @@ def _where(camera, a: float) -> str:
         return f"approaching the front focal plane at {front_focal_plane_mm(camera):.1f} mm"
     position = float(_pair_position(camera, a, a)[0])       # the slice's centre, as slice_geometry's depth
     if not space.from_sensor:
-        return f"z = {position:+.4g} {space.unit}"
-    return "infinity" if math.isinf(position) else f"{position:.1f} {space.unit}"
+        return f"z = {position:+.4g} {space.symbol}"
+    return "infinity" if math.isinf(position) else f"{position:.1f} {space.symbol}"
 
 
 def usable_range_text(camera, a_low: float | None = None, a_high: float | None = None) -> str:

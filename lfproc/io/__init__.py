@@ -28,7 +28,8 @@ Writing
     with lfproc's metadata dict embedded (see ``_write.py`` for what each format keeps). The JSON
     sidecar (`write_sidecar`, contract: ``NAME.EXT`` -> ``NAME.json``) holds the same dict for every
     format. `write_gif` writes animated previews of linear frames; `write_png_preview` and
-    `write_gif_frames` write 8-bit pictures for people with lfproc's tags embedded (``_preview.py``). All
+    `write_gif_frames` write 8-bit pictures for people with lfproc's tags embedded, `label_font` and
+    `label_text` draw their labels (with µ where a font has it; ``_preview.py``). All
     writers are atomic.
 
 OpenImageIO, rawpy and Pillow are imported inside the functions that use them, so importing this
@@ -55,7 +56,7 @@ from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._napari_metadata import is_napari_metadata, napari_camera
 from ._oiio import read_image
-from ._preview import write_gif_frames, write_png_preview
+from ._preview import label_font, label_text, write_gif_frames, write_png_preview
 from ._read import RAW_EXTENSIONS, read_capture
 from ._sidecar import sidecar_path, write_sidecar
 from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_image
@@ -69,6 +70,6 @@ __all__ = [
     "sidecar_path",
     "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
     "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
-    "write_png_preview", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
+    "write_png_preview", "label_font", "label_text", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
     "is_napari_metadata", "napari_camera", "read_camera",
 ]

@@ -1,12 +1,13 @@
 """8-bit pictures for people (previews, animations), written atomically with lfproc's tags embedded.
 
 The tags (a JSON-able dict: what the picture shows, its label) are embedded the way `write_image` embeds
-lfproc's metadata in its data products, so ``lfproc info`` can tell a preview for what it is. Pillow is
-imported inside the writers.
+lfproc's metadata in its data products, so ``lfproc info`` can tell a preview for what it is; the labels drawn
+into pictures use `label_font` (one with µ) through `label_text`. Pillow is imported inside the functions.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
@@ -91,3 +92,39 @@ def _tag_text(tags: dict) -> str:
     import json
 
     return json.dumps(json_safe(dict(tags)), allow_nan=False)
+
+
+@functools.lru_cache(maxsize=32)
+def label_font(size: int | None = None):
+    """The font of the labels drawn into pictures, one that has µ: DejaVu Sans where the system or matplotlib
+    has it, else Pillow's own (``size`` None: Pillow's default size). Pillow's own font has no µ:
+    :func:`label_text` then writes "u"."""
+    from importlib.util import find_spec
+
+    from PIL import ImageFont
+
+    candidates = ["DejaVuSans.ttf"]      # Pillow looks in the system's font folders
+    spec = find_spec("matplotlib")
+    if spec is not None and spec.origin:
+        candidates.append(os.path.join(os.path.dirname(spec.origin), "mpl-data", "fonts", "ttf", "DejaVuSans.ttf"))
+    for name in candidates:
+        try:
+            return ImageFont.truetype(name, 11 if size is None else size)
+        except OSError:
+            continue
+    try:
+        return ImageFont.load_default() if size is None else ImageFont.load_default(size=size)
+    except (TypeError, OSError):  # Pillow < 10.1 or without FreeType: the small bitmap font
+        return ImageFont.load_default()
+
+
+def label_text(text: str, font) -> str:
+    """``text`` as ``font`` can draw it: "µ" becomes "u" where the font has no glyph for it (only a box)."""
+    if "µ" in text and _glyph(font, "µ") == _glyph(font, "\U0010fffd"):
+        return text.replace("µ", "u")
+    return text
+
+
+def _glyph(font, character: str) -> bytes:
+    mask = font.getmask(character)
+    return bytes(mask) + bytes(str(mask.size), "ascii")

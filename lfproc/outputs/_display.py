@@ -12,7 +12,6 @@ image content, and are sized (smaller font, then more lines) so that they never 
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -65,14 +64,11 @@ def as_rgb(image: np.ndarray) -> np.ndarray:
     return np.repeat(image, 3, axis=2) if image.shape[2] == 1 else image[:, :, :3]
 
 
-@functools.lru_cache(maxsize=64)
 def _font(size: int):
-    from PIL import ImageFont
+    """The labels' font at ``size`` px (`lfproc.io.label_font`: one with µ)."""
+    from ..io import label_font
 
-    try:
-        return ImageFont.load_default(size=size)
-    except (TypeError, OSError):  # Pillow < 10.1 or without FreeType: the small bitmap font
-        return ImageFont.load_default()
+    return label_font(size)
 
 
 def _text_width(font, text: str) -> int:
@@ -89,6 +85,9 @@ def label_layout(width: int, text: str, max_size: int | None = None) -> tuple[in
     """
     size = max_size or max(10, min(28, width // 34))
     margin = max(2, size // 3)
+    from ..io import label_text
+
+    text = label_text(text, _font(size))
     while size > 8 and _text_width(_font(size), text) > width - 2 * margin:
         size -= 1
         margin = max(2, size // 3)
@@ -138,7 +137,7 @@ def add_label(image: np.ndarray, text: str) -> np.ndarray:
     grey = image.ndim == 2
     pixels = image if grey else as_rgb(image)
     height, width = pixels.shape[:2]
-    size, lines, band, margin = label_layout(width, text)
+    size, lines, band, margin = label_layout(width, text)   # lines as the font can draw them (label_text)
     font = _font(size)
     canvas = Image.new("L" if grey else "RGB", (width, height + band), 0 if grey else (0, 0, 0))
     canvas.paste(Image.fromarray(np.ascontiguousarray(pixels)), (0, 0))

@@ -57,7 +57,7 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     depth, near, far = (np.atleast_1d(x) for x in (geo.depth, geo.near, geo.far))
     if geo.space.from_sensor:   # metres from the sensor
         return [slice_label(d, lo, hi) for d, lo, hi in zip(depth, near, far)]
-    unit = geo.space.unit       # signed depths (µm from the native object plane): the DOF low to high
+    unit = geo.space.symbol     # signed depths (µm from the native object plane): the DOF low to high
     return [f"z {z:+.1f} {unit} | DOF {min(lo, hi):+.1f} to {max(lo, hi):+.1f} {unit}"
             for z, lo, hi in zip(depth.tolist(), near.tolist(), far.tolist())]
 
@@ -170,7 +170,7 @@ def write_mosaic_preview(outdir: str, stem: str, views: np.ndarray, keep: np.nda
     label = f"{shown} of {m}x{m} views" + ("" if shown == m * m else " (black: no light or outside the aperture)")
     if camera is not None:
         key, spacing = lens_spacing_tag(camera)
-        label += (f" | {spacing:.3g} um per lens" if key == "lateral_sampling_um" else
+        label += (f" | {spacing:.3g} µm per lens" if key == "lateral_sampling_um" else
                   f" | baseline {float(spacing):.3g} mm")
     factor = upscale_factor(tiled.shape, min_long_side)
     if factor > 1 and method != "nearest":   # each view enlarged alone: none bleeds into its neighbours or gaps

@@ -138,6 +138,6 @@ def _even(z: np.ndarray) -> bool:
 
 def _label(record: dict) -> str:
     if "z_um" in record:
-        return f"a={record['a']:.6g} z={record['z_um']:.6g} um"
+        return f"a={record['a']:.6g} z={record['z_um']:.6g} µm"
     distance = record.get("distance_mm", math.nan)
     return f"a={record['a']:.6g} d={'inf' if not math.isfinite(distance) else f'{distance:.6g}'} mm"

@@ -213,7 +213,7 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
         a = a_far + t * (a_near - a_far)
         if not space.from_sensor:   # signed depths, linear in a
             z = float(a * geometry.z_per_a_um(camera))
-            ticks.append({"t": float(t), space.position_key: z, "label": f"{z:.3g} {space.unit}"})
+            ticks.append({"t": float(t), space.position_key: z, "label": f"{z:.3g} {space.symbol}"})
             continue
         distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
         ticks.append({"t": float(t), space.position_key: distance, "label": metres(distance)})
@@ -293,7 +293,7 @@ def page_entry(outdir: str, page_dir: str) -> dict:
     middle = data["slices"][len(data["slices"]) // 2]
     if data.get("unit") == "um":
         depths = [s["z_um"] for s in data["slices"]]
-        span = f"{min(depths):.3g} to {max(depths):.3g} um"
+        span = f"{min(depths):.3g} to {max(depths):.3g} µm"
     else:
         distances = [math.inf if s["distance_mm"] is None else s["distance_mm"] for s in data["slices"]]
         span = f"{metres(min(distances))} to {metres(max(distances))}"
