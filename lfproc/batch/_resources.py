@@ -35,7 +35,10 @@ def default_workers(sample_path: str | None, memory_fraction: float = 0.5) -> in
         with contextlib.suppress(Exception):  # the estimate only sizes the pool
             import OpenImageIO as oiio
 
-            inp = oiio.ImageInput.open(sample_path)
+            from ..io import libraries_quiet
+
+            with libraries_quiet():      # a damaged file is reported by the capture's own reading, once
+                inp = oiio.ImageInput.open(sample_path)
             if inp:
                 spec = inp.spec()
                 pixels = float(spec.width * spec.height)

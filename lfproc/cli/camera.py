@@ -68,8 +68,11 @@ def _lambda_note(meta) -> str:
         focus = slice_distance_mm(lambda_map(meta).camera, 0.0)
     except LfprocError:
         return ""
-    return (f"# lambda reading (docs/lytro.md): infinityLambda {meta.infinity_lambda:g} puts the focus at "
-            f"{focus:.1f} mm from the sensor; to use it: lfproc camera FILE --focus-distance {focus:.1f}\n")
+    return (f"# lambda reading (docs/lytro.md, not a published specification): this capture's infinityLambda "
+            f"{meta.infinity_lambda:g} puts its focus {focus:.1f} mm from the sensor; the camera below is focused at "
+            f"infinity unless --focus-distance says otherwise\n"
+            f"# the focus is this capture's only: a camera file for it is 'lfproc camera FILE --focus-distance "
+            f"{focus:.1f}'; other pictures of this camera focused elsewhere (their own metadata says where)\n")
 
 
 def _napari(path: str, args) -> int:

@@ -20,7 +20,8 @@ Reading
     ``metadata.txt``, a Lytro file's metadata).
     `decode_picture_views` decodes a picture's H.264 perspective views; `is_container` and
     `has_container_extension` tell a Lytro container by its bytes and its name; `existing_file` checks a
-    path names a readable file (one-line error).
+    path names a readable file (one-line error); `libraries_quiet` keeps what the image libraries print
+    themselves off stderr (every reader calls them inside it).
 
 Writing
     `write_image` writes float32 linear images as float TIFF (the default for outputs), 16-bit
@@ -55,6 +56,7 @@ from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
 from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
 from ._napari_metadata import is_napari_metadata, napari_camera
+from ._native import libraries_quiet
 from ._oiio import read_image
 from ._preview import label_font, label_text, write_gif_frames, write_png_preview
 from ._read import RAW_EXTENSIONS, read_capture
@@ -71,5 +73,5 @@ __all__ = [
     "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
     "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
     "write_png_preview", "label_font", "label_text", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
-    "is_napari_metadata", "napari_camera", "read_camera",
+    "is_napari_metadata", "napari_camera", "read_camera", "libraries_quiet",
 ]

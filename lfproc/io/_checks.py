@@ -33,6 +33,15 @@ def require_finite_pixels(pixels: np.ndarray, path: str) -> None:
         raise LfprocError(f"{path}: the image contains NaN or infinite values; re-export it with finite pixels")
 
 
+def unreadable_reasons(reasons: list[str]) -> str:
+    """`` (why)`` after "not a readable image …": the readers' own messages where one recognised the format
+    and found it damaged; nothing where none knows the format (their texts would only name their internals)."""
+    unknown = ("could not find a format reader", "not a supported camera raw", "Input/output error",
+               "unknown format")
+    told = [reason for reason in reasons if not any(text in reason for text in unknown)]
+    return f" ({'; '.join(told)})" if told else " (none of lfproc's readers knows its format)"
+
+
 def one_line(text: str) -> str:
     return " ".join(str(text or "").split())
 

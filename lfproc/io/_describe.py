@@ -14,7 +14,8 @@ import math
 import os
 
 from ..errors import LfprocError
-from ._checks import _NotThisFormat, existing_file, library_error
+from ._checks import _NotThisFormat, existing_file, library_error, one_line, unreadable_reasons
+from ._native import libraries_quiet
 
 
 def describe_file(path: str | os.PathLike) -> dict:
@@ -36,6 +37,7 @@ def describe_file(path: str | os.PathLike) -> dict:
         return _describe_lytro(path)
     if is_lightfield_file(path):
         return _describe_lightfield(path)
+    _refuse_json(path)
     order = (_describe_camera_raw, _describe_image)
     if os.path.splitext(path)[1].lower() not in RAW_EXTENSIONS:
         order = order[::-1]
@@ -45,8 +47,38 @@ def describe_file(path: str | os.PathLike) -> dict:
             return describe(path)
         except _NotThisFormat as exc:
             reasons.append(str(exc))
-    raise LfprocError(f"{path}: not a readable image, camera raw or Lytro file ({'; '.join(reasons)}); "
+    raise LfprocError(f"{path}: not a readable image, camera raw or Lytro file{unreadable_reasons(reasons)}; "
                       f"pass a capture or image file")
+
+
+def _refuse_json(path: str) -> None:
+    """A JSON file is no image: say which of lfproc's JSON files it is, and what reads it."""
+    import json
+
+    with open(path, "rb") as fh:
+        if not fh.read(64).lstrip().startswith(b"{"):
+            return
+    from ._napari_metadata import is_napari_metadata
+
+    stem = os.path.splitext(path)[0]
+    raw = next((stem + ext for ext in (".raw", ".RAW") if os.path.isfile(stem + ext)), None)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            document = json.load(fh)
+    except (OSError, ValueError, UnicodeDecodeError):
+        document = None
+    if raw is not None:
+        what = f" (the metadata of the Lytro raw {raw}: pass that)"
+    elif is_napari_metadata(path):
+        what = " (napari-LF's metadata of a microscope: lfproc.read_camera reads it as a camera, the command " \
+               "lfproc camera writes a camera file from it)"
+    elif isinstance(document, dict) and "pitch_px" in document:
+        what = " (a lens grid, lfproc calibrate's GRID.json: pass it as grid=)"
+    elif isinstance(document, dict) and ("provenance" in document or "source" in document):
+        what = " (the sidecar of an output lfproc wrote: the metadata of the image beside it, readable as it is)"
+    else:
+        what = ""
+    raise LfprocError(f"{path}: a JSON file{what}, not an image; pass a capture or image file")
 
 
 def _describe_lytro(path: str) -> dict:
@@ -191,7 +223,7 @@ def _describe_camera_raw(path: str) -> dict:
     import rawpy
 
     try:
-        with rawpy.imread(path) as raw:
+        with libraries_quiet(), rawpy.imread(path) as raw:
             height, width = raw.raw_image_visible.shape
             white = float(raw.white_level)
             info = {"path": path, "format": "camera-raw", "raw_light_field": True, "width": int(width),
@@ -214,9 +246,10 @@ def _describe_camera_raw(path: str) -> dict:
 def _describe_image(path: str) -> dict:
     import OpenImageIO as oiio
 
-    inp = oiio.ImageInput.open(path)
+    with libraries_quiet() as native:
+        inp = oiio.ImageInput.open(path)
     if inp is None:
-        raise _NotThisFormat(library_error(oiio.geterror) or "OpenImageIO: unknown format")
+        raise _NotThisFormat(library_error(oiio.geterror) or one_line(native.text()) or "OpenImageIO: unknown format")
     try:
         spec = inp.spec()
         info = {"path": path, "format": "image", "file_format": inp.format_name(),

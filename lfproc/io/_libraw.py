@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import LfprocError
 from ._capture import Capture, normalise_mosaic
 from ._checks import _NotThisFormat
+from ._native import libraries_quiet
 
 BAYER_PATTERNS = ("RGGB", "BGGR", "GRBG", "GBRG")
 
@@ -24,7 +25,8 @@ def read_libraw_capture(path: str, camera=None, fallback: bool = False) -> Captu
     import rawpy
 
     try:
-        raw_file = rawpy.imread(path)
+        with libraries_quiet():              # LibRaw prints its own errors ("Unexpected end of file") to fd 2
+            raw_file = rawpy.imread(path)
     except rawpy.LibRawFileUnsupportedError:
         raise _NotThisFormat("LibRaw: not a supported camera raw") from None
     except rawpy.LibRawError as exc:
@@ -33,7 +35,7 @@ def read_libraw_capture(path: str, camera=None, fallback: bool = False) -> Captu
         raise LfprocError(f"{path}: truncated or corrupt camera raw ({_libraw_message(exc)}); "
                           f"re-copy the file from the camera") from None
     try:
-        with raw_file as raw:
+        with raw_file as raw, libraries_quiet():
             if raw.raw_type != rawpy.RawType.Flat:
                 raise LfprocError(f"{path}: camera raw with several values per pixel (Foveon or linear DNG) is "
                                   f"not supported; convert it to a linear TIFF first")

@@ -64,9 +64,17 @@ def open_picture(path: str) -> LytroPicture:
     from ._checks import existing_file
     from ._lytro_container import read_container
 
+    from ._lytro_container import frame_without_image
+
     path = existing_file(path)
     container = read_container(path, verify=True)
     if not is_picture(container):
+        found = frame_without_image(container)
+        if found is not None:     # the raw image section removed (ExifTool's test file): neither picture nor capture
+            raise LfprocError(f"{path}: holds a raw frame's metadata but not its image (the section {found[1]} is "
+                              f"not in the file: removed, or an incomplete copy), and no processed picture: nothing to "
+                              f"export or refocus; its metadata still gives the camera (lfproc.read_camera, the "
+                              f"command lfproc camera)")
         raise LfprocError(f"{path}: holds the raw light field, not a processed picture; use lfproc refocus, views or "
                           f"depth on it")
     picture = read_picture(container)

@@ -5,14 +5,14 @@ OpenImageIO is imported inside the functions that use it, so importing this modu
 
 from __future__ import annotations
 
-import contextlib
+import math
 import os
-import sys
 
 import numpy as np
 
 from ..errors import LfprocError
 from ._capture import Capture
+from ._native import libraries_quiet
 from ._checks import (_NotThisFormat, check_declared_size, existing_file, library_error, one_line,
                       require_finite_pixels)
 
@@ -46,9 +46,10 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
 
     config = oiio.ImageSpec()
     config.attribute("oiio:UnassociatedAlpha", 1)      # colour as stored, not multiplied by alpha
-    inp = oiio.ImageInput.open(path, config)
+    with libraries_quiet() as native:                  # libtiff, libpng & co. print their own errors to fd 2
+        inp = oiio.ImageInput.open(path, config)
     if inp is None:
-        raise _NotThisFormat(library_error(oiio.geterror) or "OpenImageIO: unknown format")
+        raise _NotThisFormat(library_error(oiio.geterror) or one_line(native.text()) or "OpenImageIO: unknown format")
     try:
         spec = inp.spec()
         if spec.width <= 0 or spec.height <= 0 or spec.nchannels <= 0:
@@ -57,7 +58,7 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
             raise LfprocError(f"{path}: volume images are not supported; pass a 2-D image")
         check_declared_size(path, spec.width * spec.height * spec.nchannels * max(1, spec.channel_bytes()),
                             f"{spec.width} x {spec.height} x {spec.nchannels}")
-        with _native_stderr_captured() as native:   # libpng & co. print their own errors to fd 2
+        with libraries_quiet() as native:
             pixels = inp.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN)
         failed = pixels is None or inp.has_error
         message = (library_error(inp.geterror) or one_line(native.text())) if failed else ""
@@ -71,37 +72,6 @@ def oiio_pixels(path: str) -> tuple[np.ndarray, "object"]:
     return pixels, spec
 
 
-class _CapturedText:
-    """What was written to fd 2 inside :func:`_native_stderr_captured` (available after it ends)."""
-
-    def __init__(self):
-        self.value = ""
-
-    def text(self) -> str:
-        return self.value
-
-
-@contextlib.contextmanager
-def _native_stderr_captured():
-    """Route what C libraries write to file descriptor 2 into a temporary file for the duration, so that a
-    corrupt file gives lfproc's one-line error and not the library's lines as well (the text is kept for
-    that error message)."""
-    import tempfile
-
-    sys.stderr.flush()
-    captured = _CapturedText()
-    with tempfile.TemporaryFile() as sink:
-        saved = os.dup(2)
-        try:
-            os.dup2(sink.fileno(), 2)
-            yield captured
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            sink.seek(0)
-            captured.value = sink.read().decode("utf-8", "replace")
-
-
 def read_oiio_capture(path: str, camera=None) -> Capture:
     """Read a TIFF/PNG/EXR/... capture and apply the camera's levels to integer data."""
     pixels, spec = oiio_pixels(path)
@@ -110,9 +80,12 @@ def read_oiio_capture(path: str, camera=None) -> Capture:
         type_max = float(np.iinfo(pixels.dtype).max)
         black, white = camera.raw_levels(type_max) if camera is not None else (0.0, type_max)
         if white > type_max:
-            raise LfprocError(f"{path}: the camera's sensor.white_level {white:g} exceeds this "
-                              f"{8 * pixels.dtype.itemsize}-bit file's maximum {type_max:g}; "
-                              f"set sensor.white_level (and black_level) for this file in the camera file")
+            bits, sensor_bits = 8 * pixels.dtype.itemsize, math.ceil(math.log2(white + 1.0))
+            named, article = " ".join(["the camera", camera.source or camera.name]).strip(), "an" if bits == 8 else "a"
+            raise LfprocError(f"{path}: {article} {bits}-bit file (at most {type_max:g}), but {named} saturates at "
+                              f"{white:g} (sensor.white_level, a {sensor_bits}-bit sensor): it describes another "
+                              f"camera; pass camera= the camera of the instrument that took this file (or, if it is "
+                              f"that camera, set its sensor.white_level to {type_max:g})")
         if black >= white:
             raise LfprocError(f"{path}: the camera's sensor.black_level {black:g} is not below this file's white level "
                               f"{white:g}; set sensor.black_level (and white_level) for this file in the camera file")

@@ -6,7 +6,7 @@ import os
 
 from ..errors import LfprocError
 from ._capture import Capture
-from ._checks import _NotThisFormat, existing_file
+from ._checks import _NotThisFormat, existing_file, unreadable_reasons
 
 #: extensions tried with LibRaw (rawpy) first; everything else goes to OpenImageIO first
 RAW_EXTENSIONS = frozenset({
@@ -77,5 +77,5 @@ def read_capture(path: str | os.PathLike, camera=None) -> Capture:
             reasons.append(str(exc))
         except LfprocError as exc:
             raise LfprocError(f"{exc}{hint}") from None
-    raise LfprocError(f"{path}: not a readable image or camera raw ({'; '.join(reasons)}); "
+    raise LfprocError(f"{path}: not a readable image or camera raw{unreadable_reasons(reasons)}; "
                       f"pass a camera raw (DNG, CR2, NEF, …), a Lytro .lfr/.lfp, a TIFF, PNG or EXR file{hint}")

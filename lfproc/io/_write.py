@@ -26,6 +26,7 @@ import numpy as np
 from ..atomic import atomic_path, json_safe, python_scalar
 from ..errors import LfprocError
 from ._checks import existing_file, library_error
+from ._native import libraries_quiet
 
 #: output formats of `write_image`
 FORMATS = ("tiff", "png16", "jpeg", "exr", "uint16")
@@ -203,7 +204,8 @@ def read_metadata(path: str | os.PathLike) -> dict:
     import OpenImageIO as oiio
 
     path = existing_file(path)
-    inp = oiio.ImageInput.open(path)
+    with libraries_quiet():
+        inp = oiio.ImageInput.open(path)
     if inp is None:
         raise LfprocError(f"{path}: not a readable image ({library_error(oiio.geterror)}); pass a TIFF, PNG, EXR "
                           f"or JPEG written by lfproc")

@@ -50,6 +50,11 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
     LfprocError
         Not a picture, damaged, an undecodable depth map or H.264 block, a focus distance without a
         camera. Everything is read and decoded before the first file is written.
+
+    Warns
+    -----
+    LfprocWarning
+        No camera (lambda only, and how to get distances); stack images beyond infinity for the camera's focus.
     """
     from ..io import confidence_map, depth_lambda, open_picture, picture_lambda_map
     from ..io import camera_lambda_map, refocused_map
@@ -79,6 +84,7 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
     jobs = []        # (writer, path) run after everything is decoded
     records = mapping.slices([s.lambda_ for s in picture.stack]) if mapping and picture.stack else \
         [{"lambda": s.lambda_} for s in picture.stack]
+    _say_what_has_no_distance(path, mapping, note, records)
     for image, record, (data, rgb) in zip(picture.stack, records, stack_images(picture)):
         name = os.path.join(outdir, f"{stem}_stack_{image.index:02d}")
         metadata = dict(common, kind="focus stack image", index=image.index, **record)
@@ -102,6 +108,28 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
         write(target)
         written.append(target)
     return written
+
+
+def _say_what_has_no_distance(path: str, mapping, note: str, records: list) -> None:
+    """Warn (`LfprocWarning`, one line) where the outputs get no distances: the camera unknown, or stack images
+    focused beyond infinity by the camera's focus (their ``distance_mm`` is null)."""
+    import math
+    import warnings
+
+    from ..errors import LfprocWarning
+
+    if mapping is None:
+        warnings.warn(f"{path}: no distances, lambda only: {note}; pass camera= a camera file of the camera that took "
+                      f"it (lfproc camera on a raw .lfr/.lfp of the same camera) and focus_distance_mm= where its lens "
+                      f"focused", LfprocWarning, stacklevel=3)
+        return
+    beyond = [r["lambda"] for r in records if r.get("distance_mm") is None or not math.isfinite(r["distance_mm"])]
+    if beyond:
+        warnings.warn(f"{path}: {len(beyond)} of {len(records)} stack images (lambda {min(beyond):+.3g} to "
+                      f"{max(beyond):+.3g}) lie beyond infinity for the camera's focus (infinity at lambda "
+                      f"{mapping.infinity_lambda:.3g}), so their distance_mm is null: the lens focused nearer than "
+                      f"the camera says; pass focus_distance_mm= where it focused, if known", LfprocWarning,
+                      stacklevel=3)
 
 
 def _linear(rgb: np.ndarray) -> np.ndarray:
