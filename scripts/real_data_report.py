@@ -1,10 +1,11 @@
 """Every check on every real file: writes docs/real-data.json and the table in docs/real-data.md.
 
-Real files are the public captures in ``../shared/real`` (its README says what each is); the simulated ones
+Real files are the public captures in ``../shared/real`` (or the folder ``LFPROC_REAL_DATA`` names; its README
+says what each is); the simulated ones
 are the bundled sample's capture and white image and the Lytro sample's white image. For each file:
 calibration (whites: pitch, its uncertainty, residual, rotation, lenses, m̂ the measured pitch gives), the
-white/scene measures of `lfproc.inputs` (texture ratio with its refusal limit, lens-to-lens contrast beyond
-noise with its warning limit) and what they decide when the file is given as a white image, and for captures
+white/scene measures of `lfproc.inputs` (texture ratio with its refusal limit, lens-to-lens contrast shared with
+neighbouring lenses and their correlation, with the warning limits) and what they decide when the file is given as a white image, and for captures
 the lens-level flatness of the decoded views (a white image given as the capture is refused below 0.5 %).
 
 Run from the repository root::
@@ -17,13 +18,15 @@ The table in docs/real-data.md is replaced between its ``real-data-table`` marke
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-REAL = ROOT.parent / "shared" / "real"
+REAL = Path(os.environ["LFPROC_REAL_DATA"]).expanduser() if os.environ.get("LFPROC_REAL_DATA") else \
+    ROOT.parent / "shared" / "real"
 CAMERAS = ROOT / "tests" / "real" / "cameras"
 SAMPLES = ROOT / "lfproc" / "samples"
 DOC = ROOT / "docs" / "real-data.md"
@@ -51,8 +54,8 @@ def measure(name, path, camera_path, kind, white_of, origin, grids) -> dict:
     from lfproc.calibrate import TEXTURE_LIMIT, find_grid
     from lfproc.camera import Camera
     from lfproc.errors import LfprocError
-    from lfproc.inputs import (SCENE_CONTRAST_LIMIT, WHITE_FLATNESS, check_white_is_white, lens_flatness,
-                               measured_m_hat, read_dark, subtract_dark, white_evidence)
+    from lfproc.inputs import (SCENE_CONTRAST_LIMIT, SCENE_CORRELATION_LIMIT, WHITE_FLATNESS, check_white_is_white,
+                               lens_flatness, measured_m_hat, read_dark, subtract_dark, white_evidence)
     from lfproc.io import read_capture
 
     camera = Camera.from_toml(str(camera_path)) if camera_path else None
@@ -83,7 +86,8 @@ def measure(name, path, camera_path, kind, white_of, origin, grids) -> dict:
         except LfprocError:
             verdict = "refused"
     row.update(texture_ratio=evidence.texture, texture_limit=TEXTURE_LIMIT, lens_contrast=evidence.contrast,
-               lens_noise=evidence.noise, contrast_limit=SCENE_CONTRAST_LIMIT, as_white=verdict)
+               lens_correlation=evidence.correlation, contrast_limit=SCENE_CONTRAST_LIMIT,
+               correlation_limit=SCENE_CORRELATION_LIMIT, as_white=verdict)
     if kind == "capture" and camera is not None:
         from lfproc.decode import make_decoder
         white = read_capture(str(dict((n, p) for n, p, *_ in FILES)[white_of]), camera)
@@ -105,7 +109,8 @@ def markdown(rows) -> str:
         return "—" if v is None else format(v, fmt)
 
     head = ("| file | origin | kind | calibration: pitch px (± σ) | residual px | rotation ° | lenses (fitted) | m̂ used "
-            "(nominal) | texture ratio (refused > 0.04) | lens-to-lens contrast, noise (warned > 0.6 %) | given as "
+            "(nominal) | texture ratio (refused > 0.04) | lens-to-lens contrast shared with neighbours, their correlation "
+            "(warned > 0.5 % and 0.3) | given as "
             "white | decoded lens flatness (white < 0.5 %) | lit lenses (≥ 5 % of the bright level) | time s |")
     lines = [head, "| " + " | ".join(["---"] * 14) + " |"]
     for r in rows:
@@ -115,10 +120,9 @@ def markdown(rows) -> str:
                  f"{r['m_hat']} ({r['nominal_m_hat']})" if "nominal_m_hat" in r else str(r.get("m_hat", "—")))
         flat = f"{100 * r['lens_flatness']:.1f} %" if "lens_flatness" in r else "—"
         lit = f"{100 * r['lit_lens_fraction']:.1f} %" if "lit_lens_fraction" in r else "—"
-        noise = "—" if r["lens_noise"] == float("inf") else f"{100 * r['lens_noise']:.2f} %"
         lines.append(f"| `{r['file']}`{' (dark subtracted)' if r['dark'] else ''} | {r['origin']} | {r['kind']} | {cal} | "
                      f"{num(r.get('residual_px'), '.4f')} | {num(r.get('rotation_deg'), '.4f')} | {lenses} | {m_hat} | "
-                     f"{r['texture_ratio']:.4f} | {100 * r['lens_contrast']:.2f} %, {noise} | "
+                     f"{r['texture_ratio']:.4f} | {100 * r['lens_contrast']:.2f} %, {r['lens_correlation']:+.2f} | "
                      f"{r['as_white']} | {flat} | {lit} | {r['seconds']:.1f} |")
     return "\n".join(lines)
 

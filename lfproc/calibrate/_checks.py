@@ -23,7 +23,9 @@
   lens's front focal plane), so its micro images sit exactly under their lenslets and a pitch that
   differs from the camera file's is no exit pupil: it is the pixel size at the lenslets' focal plane,
   ``sensor.pixel_pitch_mm / microscope.relay_magnification``, that is off. The measured pitch implies
-  the relay magnification (or, without a relay, the pixel pitch) to write into the camera file.
+  the relay magnification to write into the camera file (the sensor's pixel is what its maker states; a
+  nominally 1:1 relay, or none, is what is rarely exact). Decoding takes m̂ from the measured pitch anyway, and
+  the geometry depends on the pixel only through m̂ (docs/microscope.md).
 """
 
 from __future__ import annotations
@@ -198,11 +200,13 @@ def microscope_pitch_warning(source: str, estimate: ExitPupilEstimate, camera) -
         return None
     ratio = estimate.scale
     relay = camera.relay_magnification
+    m_hat = (f"decoding uses the camera file's m̂ {camera.m_hat}" if camera.micro_image_px_given else
+             "decoding takes m̂ from the measured pitch")
     return (f"{source}: warning: the micro images are {ratio * camera.pitch_px:.4f} px apart but the camera file "
-            f"predicts {camera.pitch_px:.4f} px ({100 * (ratio - 1):+.2f} %); a microscope is telecentric, so the "
-            f"pixel size at the lenslets is off: set microscope.relay_magnification = {relay * ratio:.5g} (now "
-            f"{relay:g}), or, without a relay, check sensor.pixel_pitch_mm (the pitch implies "
-            f"{camera.pixel_pitch_mm / ratio:.6g} mm)")
+            f"predicts {camera.pitch_px:.4f} px ({100 * (ratio - 1):+.2f} %): a microscope is telecentric, so the "
+            f"lenslets' focal plane reaches the sensor magnified {relay * ratio:.5g}, not {relay:g}; {m_hat} and "
+            f"nothing else depends on the pixel size; for numbers made without a grid, set "
+            f"microscope.relay_magnification = {relay * ratio:.5g} (sensor.pixel_pitch_mm stays the camera's pixel)")
 
 
 def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance_mm) -> str | None:

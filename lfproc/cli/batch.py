@@ -146,6 +146,10 @@ def run(args) -> int:
                                           max_slices=args.max_slices, z_range=args.z_range,
                                           view_extent=summed_view_extent(summed)))
         jobs = [dataclasses.replace(job, refocus_a=a_values) for job in jobs]
+    if a_values:   # the workers keep their warnings to themselves: the z-step advice is said here, once
+        from ..api import check_z_step
+
+        check_z_step(camera, a_values)
     try:
         os.makedirs(outdir, exist_ok=True)
     except OSError as exc:

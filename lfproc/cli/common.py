@@ -129,7 +129,7 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
         values = parse_number_list(a_list, what)
     elif z_range is not None:
         from .geometry import z_range_parameters
-        values = [float(a) for a in z_range_parameters(camera, z_range)]
+        values = [float(a) for a in z_range_parameters(camera, z_range, advise=False)]   # focal_stack advises
         what = "--z-range"
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)

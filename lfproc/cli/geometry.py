@@ -230,8 +230,10 @@ def format_microscope_table(camera, slices, views, path) -> str:
     return "\n".join(out) + "\n"
 
 
-def z_range_parameters(camera, text: str):
-    """The ``a`` of ``--z-range Z0:Z1[:STEP]`` (µm): the fewest covering slices, or an evenly spaced stack."""
+def z_range_parameters(camera, text: str, advise: bool = True):
+    """The ``a`` of ``--z-range Z0:Z1[:STEP]`` (µm): the fewest covering slices, or an evenly spaced stack;
+    ``advise``: warn of a step far finer than the DOF here (commands that render leave it to focal_stack, which
+    says it with the m̂ the light field is decoded with)."""
     from .. import geometry
     from ..errors import LfprocError
     if camera.object_space.from_sensor:   # distances in mm from the sensor: no native object plane
@@ -245,9 +247,10 @@ def z_range_parameters(camera, text: str):
     if len(values) not in (2, 3):
         raise LfprocError(f"--z-range: {text!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres, e.g. -50:50 or -50:50:2")
     planned = geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
-    from ..api import check_z_step
+    if advise:
+        from ..api import check_z_step
 
-    check_z_step(camera, planned)       # as focal_stack says it (the commands print each warning once)
+        check_z_step(camera, planned)       # as focal_stack says it
     return planned
 
 
