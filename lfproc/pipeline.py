@@ -268,12 +268,14 @@ def prepare_decoding(camera: Camera, calib: str | None = None, white: str | None
 
 
 def camera_file(camera) -> str | None:
-    """The camera file ``camera`` was read from (its provenance), or None (built in Python, from a Lytro
-    capture's metadata, or carried by a saved light field)."""
+    """The camera file ``camera`` was read from (its provenance: a TOML file or napari-LF's metadata), or None
+    (built in Python, from a Lytro capture's metadata, or carried by a saved light field)."""
+    from .io import is_napari_metadata
+
     source = getattr(camera, "source", None)
-    if not source or not os.path.isfile(source) or not str(source).lower().endswith(".toml"):
+    if not source or not os.path.isfile(source):
         return None
-    return source
+    return source if str(source).lower().endswith(".toml") or is_napari_metadata(source) else None
 
 
 def _record_of(grid, white_path):

@@ -94,6 +94,7 @@ def test_every_camera_argument_takes_the_metadata_file(metadata):
     assert grid.pitch_px == pytest.approx(true.pitch_px, abs=0.02)           # 17.196 px
     lf = lfproc.read_light_field(0.05 + 0.9 * white * 0.8, metadata, white=0.05 + 0.9 * white, grid=grid)
     assert lf.camera.m_hat == 17 and lf.views.shape[:2] == (17, 17)
+    assert lf.inputs["camera"] == str(metadata)              # the file the camera came from, in the provenance
 
 
 def test_read_camera_is_lazy():
