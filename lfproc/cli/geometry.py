@@ -129,13 +129,21 @@ def grid_geometry_inputs(camera, calib: str, f_number):
     (those the decoder delivers from the grid's white image, within ``--aperture``), as ``(camera, aperture)``
     of :func:`synthetic_aperture`'s form. The Python route is the light field's own: ``lf.camera`` and
     ``geometry.summed_view_extent(lf.view_mask)``."""
+    import warnings
+
     from .. import geometry
+    from ..errors import LfprocWarning
     from ..outputs import summed_views_metadata
     from ..pipeline import prepare_decoding
 
-    setup = prepare_decoding(camera, calib, cache=True)
+    with warnings.catch_warnings():       # what decoding would warn of is decoding's to say, not geometry's
+        warnings.simplefilter("ignore", LfprocWarning)
+        setup = prepare_decoding(camera, calib, cache=True)
     camera = setup.camera
     mask = setup.decoder_for((), "none").views_delivered if setup.has_white else None
+    if mask is None:
+        print(f"lfproc geometry: note: {calib}: its white image is gone, so the views decoding delivers are not "
+              f"known: all views counted", file=sys.stderr)
     if f_number is not None:
         views = geometry.aperture_views(camera, f_number)
         mask = views if mask is None else views & mask

@@ -34,20 +34,27 @@ _state = {"users": 0, "saved": None, "sink": None}
 @contextlib.contextmanager
 def libraries_quiet():
     """File descriptor 2 goes into a buffer while inside; yields a :class:`CapturedText` that holds what was
-    written there once the block ends."""
+    written there once the block ends. Where descriptor 2 cannot be routed (closed), the block runs as it is."""
     captured = CapturedText()
-    sys.stderr.flush()
+    _flush_stderr()
     with _lock:
-        if _state["users"] == 0:
-            _state["sink"] = tempfile.TemporaryFile()
-            _state["saved"] = os.dup(2)
-            os.dup2(_state["sink"].fileno(), 2)
-        _state["users"] += 1
-        start = os.lseek(2, 0, os.SEEK_END)
+        try:
+            if _state["users"] == 0:
+                _state["sink"] = tempfile.TemporaryFile()
+                _state["saved"] = os.dup(2)
+                os.dup2(_state["sink"].fileno(), 2)
+            start = os.lseek(2, 0, os.SEEK_END)
+        except OSError:
+            start = None
+        else:
+            _state["users"] += 1
+    if start is None:
+        yield captured
+        return
     try:
         yield captured
     finally:
-        sys.stderr.flush()
+        _flush_stderr()
         with _lock:
             sink = _state["sink"]
             end = os.lseek(2, 0, os.SEEK_END)
@@ -59,3 +66,10 @@ def libraries_quiet():
                 os.close(_state["saved"])
                 sink.close()
                 _state["saved"] = _state["sink"] = None
+
+
+def _flush_stderr() -> None:
+    """Python's own stderr buffer out to descriptor 2 before it is routed or restored (none in some hosts)."""
+    if sys.stderr is not None:
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.flush()
