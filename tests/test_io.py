@@ -573,3 +573,16 @@ def test_describe_camera_raw_and_image(tmp_path):
     with pytest.raises(LfprocError, match="not a readable image, camera raw or Lytro file"):
         (tmp_path / "junk.xyz").write_text("junk" * 10)
         lio.describe_file(tmp_path / "junk.xyz")
+
+
+def test_a_gif_keeps_its_tags_whatever_their_length(tmp_path):
+    """OpenImageIO reads one 255-byte block of a GIF comment: a wobble GIF written under a long path (pytest-xdist's
+    temporary folders) was described as a raw light field."""
+    from lfproc.io import write_gif_frames
+
+    frames = [np.zeros((8, 8, 3), np.uint8)] * 2
+    for length in (10, 400):
+        path = write_gif_frames(tmp_path / "w.gif", frames, 100, {"source": "x" * length, "preview": "views"})
+        info = lio.describe_file(path)
+        assert (info["format"], info["raw_light_field"], info["tags"]["source"]) == ("lfproc-output", False,
+                                                                                   "x" * length)

@@ -256,7 +256,7 @@ def _describe_image(path: str) -> dict:
                 "raw_light_field": True, "width": spec.width, "height": spec.height,
                 "channels": spec.nchannels, "channel_names": list(spec.channelnames),
                 "pixel_type": str(spec.format), "bits_per_pixel": spec.format.size() * 8}
-        tags = _lfproc_tags(spec)
+        tags = _gif_tags(path) if info["file_format"] == "gif" else _lfproc_tags(spec)
         stack_header = info["file_format"] == "tiff" and _is_stack_header(spec)
     finally:
         inp.close()
@@ -301,6 +301,24 @@ def _lfproc_tags(spec) -> dict | None:
     except (ValueError, UnicodeDecodeError):
         return None
     if not isinstance(tags, dict) or (software != "lfproc" and tags.pop("software", None) != "lfproc"):
+        return None
+    return tags
+
+
+def _gif_tags(path: str) -> dict | None:
+    """A GIF's lfproc tags from its whole comment (Pillow): OpenImageIO keeps one 255-byte block of a longer
+    comment, so tags with a long path in them read as no tags."""
+    import json
+
+    from PIL import Image
+
+    try:
+        with Image.open(path) as image:
+            comment = image.info.get("comment", b"")
+        tags = json.loads(comment.decode("utf-8") if isinstance(comment, bytes) else comment or "{}")
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if not isinstance(tags, dict) or tags.pop("software", None) != "lfproc":
         return None
     return tags
 
