@@ -126,7 +126,7 @@ def partial_files(outdir) -> list:
 
 @pytest.fixture(scope="module")
 def reference(data):
-    """The local run everything else is compared with: 2 worker processes, in a subprocess like a user's."""
+    """The local run everything else is compared with: 2 worker processes."""
     out = data / "ref"
     proc = run_cli(*batch_argv(data, out, "--workers", "2"))
     assert proc.returncode == 0, proc.stderr
@@ -324,6 +324,7 @@ def assert_only_recorded_outputs(outdir, data):
 SLOW = {"stems": ["cap1", "cap2", "cap3"], "seconds": 0.15}
 
 
+@pytest.mark.alone
 def test_ctrl_c_stops_a_local_batch_at_once_and_the_rerun_does_only_the_rest(data, reference, tmp_path):
     """SIGINT to the process group (what Ctrl-C does) while cap0 is recorded and cap1 is being written:
     one stderr line, exit 130, every lfproc process gone within 2 s, cap0 in the manifest, nothing of
@@ -348,6 +349,7 @@ def test_ctrl_c_stops_a_local_batch_at_once_and_the_rerun_does_only_the_rest(dat
     assert tree_bytes(out) == reference[1]
 
 
+@pytest.mark.alone
 def test_ctrl_c_while_the_workers_start_is_one_line_too(data, tmp_path):
     """The tracebacks of issue 23 came from workers hit by Ctrl-C while their interpreter started
     (multiprocessing/spawn.py … KeyboardInterrupt): SIGINT to the group exactly then."""

@@ -76,6 +76,18 @@ def test_animations_are_preview_pictures(small_lf, tmp_path):
     assert info["tags"]["frames"] == 3 and "software" not in info["tags"]
 
 
+def test_an_animation_from_a_long_path_is_still_a_preview_picture(tmp_path):
+    """Its tags name the source: past 255 bytes the GIF comment takes several blocks, all of them read."""
+    from lfproc.io import write_gif_frames
+
+    source = str(tmp_path / ("deep" * 70) / "capture.png")
+    frames = [np.full((8, 8, 3), value, np.uint8) for value in (0, 255)]
+    path = write_gif_frames(tmp_path / "long.gif", frames, 100.0, {"preview": "view animation", "source": source})
+    info = describe_file(path)
+    assert info["product"] == "preview picture" and info["raw_light_field"] is False
+    assert info["tags"] == {"preview": "view animation", "source": source}
+
+
 def test_depth_preview_is_a_preview_picture(tmp_path):
     from lfproc.depth._preview import write_preview
 

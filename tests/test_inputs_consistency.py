@@ -11,17 +11,8 @@ SAMPLE = SAMPLES / "sample"
 CAMERA = SAMPLE / "camera.toml"
 
 
-@pytest.fixture(scope="module")
-def grid_file(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("grid")
-    out = folder / "grid.json"
-    proc = run_cli("calibrate", SAMPLE / "white.png", "--camera", CAMERA, "-o", out)
-    assert proc.returncode == 0, proc.stderr
-    return out
-
-
-def test_the_grid_records_what_it_was_made_from(grid_file):
-    data = json.loads(grid_file.read_text())
+def test_the_grid_records_what_it_was_made_from(sample_grid):
+    data = json.loads(sample_grid.read_text())
     for key in ("grid", "pitch_px", "rotation_deg", "residual_rms_px", "centers_xy_px"):   # contract keys stay
         assert key in data
     made = data["made_from"]
@@ -36,25 +27,25 @@ def test_the_grid_records_what_it_was_made_from(grid_file):
     assert 0 < data["pitch_sigma_px"] < 0.01
 
 
-def test_a_grid_of_another_camera_is_refused(grid_file, tmp_path):
+def test_a_grid_of_another_camera_is_refused(sample_grid, tmp_path):
     # the examples: exit 0 with 313.1 mm (paper-f100) and 11562.5 mm (a hexagonal Lytro camera) before
     proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "paper-f100.toml",
-                   "--calib", grid_file, "--a", "1", "-o", tmp_path / "a")
-    assert_clean_error(proc, str(grid_file), "paper-f100.toml", "11.112 px", "25.000 px")
+                   "--calib", sample_grid, "--a", "1", "-o", tmp_path / "a")
+    assert_clean_error(proc, str(sample_grid), "paper-f100.toml", "11.112 px", "25.000 px")
     proc = run_cli("views", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "illum-like.toml",
-                   "--calib", grid_file, "-o", tmp_path / "b")
-    assert_clean_error(proc, str(grid_file), "illum-like.toml", "rectangular", "hexagonal")
+                   "--calib", sample_grid, "-o", tmp_path / "b")
+    assert_clean_error(proc, str(sample_grid), "illum-like.toml", "rectangular", "hexagonal")
     proc = run_cli("batch", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "paper-f100.toml",
-                   "--calib", grid_file, "--a", "1", "-o", tmp_path / "c")
-    assert_clean_error(proc, str(grid_file), "paper-f100.toml", "25.000 px")
+                   "--calib", sample_grid, "--a", "1", "-o", tmp_path / "c")
+    assert_clean_error(proc, str(sample_grid), "paper-f100.toml", "25.000 px")
     proc = run_cli("viewer", SAMPLE / "capture.png", "--camera", SAMPLES / "cameras" / "illum-like.toml",
-                   "--calib", grid_file, "-o", tmp_path / "d")
-    assert_clean_error(proc, str(grid_file), "illum-like.toml", "hexagonal")
+                   "--calib", sample_grid, "-o", tmp_path / "d")
+    assert_clean_error(proc, str(sample_grid), "illum-like.toml", "hexagonal")
     assert not any((tmp_path / name).exists() for name in "abcd")
 
 
-def test_the_right_camera_passes_and_old_grid_files_still_load_and_are_checked(grid_file, tmp_path):
-    data = json.loads(grid_file.read_text())
+def test_the_right_camera_passes_and_old_sample_grids_still_load_and_are_checked(sample_grid, tmp_path):
+    data = json.loads(sample_grid.read_text())
     for key in ("made_from", "pitch_sigma_px", "micro_image_scale", "micro_image_scale_sigma"):
         data.pop(key)
     old = tmp_path / "old.json"
@@ -66,9 +57,9 @@ def test_the_right_camera_passes_and_old_grid_files_still_load_and_are_checked(g
     # 3 % off: within what lfproc calibrate accepts (5 %) for a grid without a record, refused with one
     camera = tmp_path / "off.toml"
     camera.write_text(CAMERA.read_text().replace("pitch_mm = 0.1\n", "pitch_mm = 0.103\n"))
-    proc = run_cli("decode", SAMPLE / "capture.png", "--camera", camera, "--calib", grid_file,
+    proc = run_cli("decode", SAMPLE / "capture.png", "--camera", camera, "--calib", sample_grid,
                    "-o", tmp_path / "x.lfp.npz")
-    assert_clean_error(proc, str(grid_file), "off.toml", "11.444 px", "-2.9 %")
+    assert_clean_error(proc, str(sample_grid), "off.toml", "11.444 px", "-2.9 %")
     from lfproc.camera import Camera
     from lfproc.inputs import check_grid_fits_camera, read_grid_record
     check_grid_fits_camera(Camera.from_toml(camera), read_grid_record(str(old)))   # old file: accepted
@@ -98,26 +89,26 @@ def test_the_exit_pupil_scale_is_part_of_the_predicted_pitch(tmp_path):
         check_grid_fits_camera(far, fitted)                           # 2 % > the 1 % floor, not the recorded camera
 
 
-def test_sensor_size_and_bayer_pattern_must_match(grid_file, tmp_path):
+def test_sensor_size_and_bayer_pattern_must_match(sample_grid, tmp_path):
     from PIL import Image
     crop = tmp_path / "crop.png"
     Image.fromarray(np.asarray(Image.open(SAMPLE / "capture.png"))[:400, :600]).save(crop)
-    proc = run_cli("refocus", crop, "--camera", CAMERA, "--calib", grid_file, "--a", "1", "-o", tmp_path / "a")
+    proc = run_cli("refocus", crop, "--camera", CAMERA, "--calib", sample_grid, "--a", "1", "-o", tmp_path / "a")
     assert_clean_error(proc, str(crop), "600x400", "840x600")
     bggr = tmp_path / "bggr.toml"
     bggr.write_text(CAMERA.read_text().replace('cfa = "RGGB"', 'cfa = "BGGR"'))
-    proc = run_cli("depth", SAMPLE / "capture.png", "--camera", bggr, "--calib", grid_file, "-o", tmp_path / "b")
-    assert_clean_error(proc, "BGGR", "RGGB", str(grid_file), str(bggr))
+    proc = run_cli("depth", SAMPLE / "capture.png", "--camera", bggr, "--calib", sample_grid, "-o", tmp_path / "b")
+    assert_clean_error(proc, "BGGR", "RGGB", str(sample_grid), str(bggr))
     proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", CAMERA, "--white", crop, "--a", "1",
                    "-o", tmp_path / "c")    # a white image of another size than the capture, before calibrating
     assert_clean_error(proc, str(crop), "600x400", "840x600")
 
 
-def test_a_damaged_provenance_record_is_one_error_not_a_crash(grid_file, tmp_path):
+def test_a_damaged_provenance_record_is_one_error_not_a_crash(sample_grid, tmp_path):
     from lfproc.errors import LfprocError
     from lfproc.inputs import read_grid_record
 
-    data = json.loads(grid_file.read_text())
+    data = json.loads(sample_grid.read_text())
     good = data["made_from"]
     for bad in (1, {"camera": 1}, {**good, "camera": {**good["camera"], "lens_pitch_px": "11"}},
                 {**good, "white": {**good["white"], "channels": [1]}}, {**good, "dark": {"path": [1], "hash": "x"}}):

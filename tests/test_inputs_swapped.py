@@ -16,9 +16,8 @@ SAMPLE = SAMPLES / "sample"
 CAMERA = SAMPLE / "camera.toml"
 
 
-def test_sample_white_as_capture_and_capture_as_white_are_refused(tmp_path):
-    grid = tmp_path / "grid.json"
-    assert run_cli("calibrate", SAMPLE / "white.png", "--camera", CAMERA, "-o", grid).returncode == 0
+def test_sample_white_as_capture_and_capture_as_white_are_refused(sample_grid, tmp_path):
+    grid = sample_grid
     # the white image as the capture: refocused silently before
     proc = run_cli("refocus", SAMPLE / "white.png", "--camera", CAMERA, "--calib", grid, "--a", "1", "-o", tmp_path / "a")
     assert_clean_error(proc, str(SAMPLE / "white.png"), "looks like a white image, not a capture")

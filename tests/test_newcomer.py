@@ -13,16 +13,6 @@ from conftest import SAMPLES, assert_clean_error, run_cli
 SAMPLE = SAMPLES / "sample"
 
 
-@pytest.fixture(scope="module")
-def sample_lf(tmp_path_factory):
-    """The bundled sample decoded once (``lfproc decode``), for the commands below."""
-    out = tmp_path_factory.mktemp("newcomer")
-    proc = run_cli("decode", SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--white",
-                   SAMPLE / "white.png", "-o", out / "sample.lfp.npz")
-    assert proc.returncode == 0, proc.stderr
-    return out / "sample.lfp.npz"
-
-
 def _read(path):
     import OpenImageIO as oiio
 

@@ -3,8 +3,8 @@ light-field microscope: its tags are the sidecars the commands write (1e-9), its
 ``save`` writes what the commands write, it prints nothing and writes nothing under $HOME, its provenance
 hashes are the files' SHA-256, and its errors name Python arguments.
 
-The commands run in subprocesses (``run_cli``), the API in this process with HOME pointing at an empty
-folder and the decoder cache variables unset (a cache write would land under HOME).
+The commands run as ``run_cli`` runs them, the API with HOME pointing at an empty folder and the decoder
+cache variables unset (a cache write would land under HOME).
 """
 
 import contextlib
@@ -226,13 +226,11 @@ def test_provenance_hashes_are_the_files_sha256(sample_api, sample_cli):
         assert read_json(path)["provenance"] == prov, path
 
 
-def test_a_grid_file_and_a_saved_light_field_are_recorded(sample_api, sample_cli, tmp_path):
-    proc = run_cli("calibrate", SAMPLE / "white.png", "--camera", SAMPLE / "camera.toml", "-o", tmp_path / "grid.json")
-    assert proc.returncode == 0, proc.stderr
-    lf = lfproc.read_light_field(SAMPLE / "capture.png", SAMPLE / "camera.toml", grid=tmp_path / "grid.json")
+def test_a_grid_file_and_a_saved_light_field_are_recorded(sample_api, sample_cli, sample_grid, tmp_path):
+    lf = lfproc.read_light_field(SAMPLE / "capture.png", SAMPLE / "camera.toml", grid=sample_grid)
     inputs = lfproc.focal_stack(lf, a=0.682).provenance["inputs"]
     assert list(inputs) == ["capture", "camera", "white", "grid"]   # the grid's recorded white image devignettes
-    assert inputs["grid"]["sha256"] == sha256(tmp_path / "grid.json")
+    assert inputs["grid"]["sha256"] == sha256(sample_grid)
     saved = tmp_path / "capture.lfp.npz"
     sample_api["lf"].save(saved)
     again = lfproc.read_light_field(saved)

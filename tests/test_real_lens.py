@@ -243,6 +243,7 @@ def test_the_telecentric_experiment_shows_the_papers_pattern_and_nulls_inside_th
     assert records[2] == dict(distance_mm=None, near_mm=None, far_mm=None, spread_mm=None)
 
 
+@pytest.mark.alone
 def test_a_101_slice_sweep_is_fast():
     cam = Camera.from_toml(TELE)
     a = np.linspace(0, 10, 101)

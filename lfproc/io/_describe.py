@@ -256,7 +256,7 @@ def _describe_image(path: str) -> dict:
                 "raw_light_field": True, "width": spec.width, "height": spec.height,
                 "channels": spec.nchannels, "channel_names": list(spec.channelnames),
                 "pixel_type": str(spec.format), "bits_per_pixel": spec.format.size() * 8}
-        tags = _gif_tags(path) if info["file_format"] == "gif" else _lfproc_tags(spec)
+        tags = _lfproc_tags(spec, _description(spec, info["file_format"], path))
         stack_header = info["file_format"] == "tiff" and _is_stack_header(spec)
     finally:
         inp.close()
@@ -287,38 +287,34 @@ def _is_stack_header(spec) -> bool:
         return False
 
 
-def _lfproc_tags(spec) -> dict | None:
-    """The metadata lfproc embedded in an image it wrote (``Software`` "lfproc", JSON in
-    ``ImageDescription``; a GIF, which has no Software tag, says ``"software": "lfproc"`` in its JSON
-    comment), or None for any other image."""
+def _description(spec, file_format: str, path: str) -> str:
+    """An image's ``ImageDescription``; a GIF's comment read whole by Pillow (OpenImageIO keeps only the last
+    255-byte block of a longer comment, and lfproc's tags name their source's path)."""
+    if file_format == "gif":
+        from PIL import Image
+
+        try:
+            with Image.open(path) as image:
+                return image.info.get("comment", b"").decode("utf-8", "replace")
+        except (OSError, ValueError, EOFError, SyntaxError):  # what OpenImageIO read is all there is
+            pass
+    return spec.get_string_attribute("ImageDescription")
+
+
+def _lfproc_tags(spec, description: str) -> dict | None:
+    """The metadata lfproc embedded in an image it wrote (``Software`` "lfproc", JSON in its
+    ``description``; a GIF, which has no Software tag, says ``"software": "lfproc"`` in its JSON comment), or
+    None for any other image."""
     import json
 
     software = spec.get_string_attribute("Software")
     if software not in ("lfproc", ""):
         return None
     try:
-        tags = json.loads(spec.get_string_attribute("ImageDescription") or "{}")
+        tags = json.loads(description or "{}")
     except (ValueError, UnicodeDecodeError):
         return None
     if not isinstance(tags, dict) or (software != "lfproc" and tags.pop("software", None) != "lfproc"):
-        return None
-    return tags
-
-
-def _gif_tags(path: str) -> dict | None:
-    """A GIF's lfproc tags from its whole comment (Pillow): OpenImageIO keeps one 255-byte block of a longer
-    comment, so tags with a long path in them read as no tags."""
-    import json
-
-    from PIL import Image
-
-    try:
-        with Image.open(path) as image:
-            comment = image.info.get("comment", b"")
-        tags = json.loads(comment.decode("utf-8") if isinstance(comment, bytes) else comment or "{}")
-    except (OSError, ValueError, UnicodeDecodeError):
-        return None
-    if not isinstance(tags, dict) or tags.pop("software", None) != "lfproc":
         return None
     return tags
 
