@@ -215,7 +215,7 @@ def test_nothing_outside_the_optics_branches_on_the_kind_of_optics():
     """Issue 31: the main optics are one parameter behind one interface (``Camera.main_optics``,
     :mod:`lfproc.camera._main_optics`). Code elsewhere names, orders and labels positions by the camera's
     ``object_space`` (unit and origin), places views by ``views_are_orthographic`` and reads apertures through
-    ``image_aperture_sine``; it never asks ``camera.microscope`` / ``is_microscope`` / ``result.microscope``."""
+    ``image_aperture_sine``; it never asks ``camera.main_optics`` / ``is_microscope`` / ``result.microscope``."""
     bad = []
     for path in _modules().values():
         rel = str(path.relative_to(ROOT))
@@ -227,6 +227,6 @@ def test_nothing_outside_the_optics_branches_on_the_kind_of_optics():
 
 
 def test_the_kind_scan_sees_each_idiom():
-    tree = ast.parse('a = camera.microscope\nb = camera.is_microscope\nc = getattr(camera, "microscope", None)\n'
+    tree = ast.parse('a = camera.main_optics\nb = camera.is_microscope\nc = getattr(camera, "microscope", None)\n'
                      'd = geo.space.from_sensor\n')
     assert [what for _, what in _kind_branches(tree)] == [".microscope", ".is_microscope", 'getattr(..., "microscope")']

@@ -277,7 +277,7 @@ def test_slices_nearer_than_the_front_focal_plane_are_refused(sample, tmp_path):
     """Issue 20: on the sample (50 mm lens focused at infinity) --at 67 wrote a=-17.0114, 17 mm in front
     of the lens, and --a=-17 the same; nothing there forms a real image. Both are refused before decoding."""
     camera = Camera.from_toml(sample / "camera.toml")
-    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+    front = camera.main_optics.sensor_path_mm(camera.mla_path_mm) + camera.main_optics.focal_length_mm
     assert 67 < front and geometry.slice_distance_mm(camera, -17.0) < front   # the model puts it there
     for option in (["--at", "67"], ["--a=-17"]):
         proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "o")

@@ -14,13 +14,12 @@ from scipy import ndimage
 
 import lfproc
 from lfproc import Camera, LightField, geometry
-from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM
+from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM, MainLens
 from lfproc.depth._metric import metric_depth
 
 from scopefile import TINY_LFM
 
-LENS_CAMERA = Camera(pixel_pitch_mm=0.02, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                     image_distance_mm=50.5, f_number=4.0, name="fields")
+LENS_CAMERA = Camera(0.02, 0.1, 0.4, MainLens(50.0, 50.5, f_number=4.0), name="fields")
 MICROSCOPE = Camera.from_toml_string(TINY_LFM)
 
 CONTRACT = {"mm": ("distance_mm", "near_mm", "far_mm"), "um": ("z_um", "z_near_um", "z_far_um")}
@@ -47,7 +46,7 @@ def estimate(request):
 
 def test_one_set_of_fields_in_the_cameras_space(estimate):
     camera, dm = estimate
-    assert dm.space == camera.object_space
+    assert dm.space == camera.main_optics.object_space
     assert dm.space == (SENSOR_MM if camera is LENS_CAMERA else NATIVE_PLANE_UM)
     assert not hasattr(dm, "microscope")
     mine, other = CONTRACT[dm.space.unit], CONTRACT["um" if dm.space.unit == "mm" else "mm"]
@@ -97,7 +96,7 @@ def test_metric_depth_one_path(camera):
     a_low = np.array([[0.2, -np.inf, 0.0, 1.9]])
     a_high = np.array([[0.4, 1.1, 0.0, np.inf]])
     m = metric_depth(camera, a, a_low, a_high, 1.0)
-    assert m.space == camera.object_space
+    assert m.space == camera.main_optics.object_space
     assert all(getattr(m, name) is field for name, field in zip(CONTRACT[m.space.unit], (m.depth, m.near, m.far)))
     assert np.isnan(m.depth[0, 2]) and np.isnan(m.near[0, 2]) and np.isnan(m.far[0, 2])
     dof = geometry.slice_geometry(camera, np.array([0.3, 1.0, 2.0]), 1.0)   # the DOF of the views summed

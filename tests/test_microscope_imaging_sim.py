@@ -133,7 +133,7 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
     pixel_um = camera.lenslet_pixel_pitch_mm * 1000
     for bead in beads:
         # the bead's image on the sensor: −M·(x, y) from the axis (the sensor centre), in lenslet-plane pixels
-        xy = (size - 1) / 2 - camera.microscope.objective_magnification * np.array([bead.x_um, bead.y_um]) / pixel_um
+        xy = (size - 1) / 2 - camera.main_optics.objective_magnification * np.array([bead.x_um, bead.y_um]) / pixel_um
         r, q = np.unravel_index(np.argmin(np.hypot(*(centres - xy).transpose(2, 0, 1))), lf.lens_shape)
         i = int(np.argmax(stack[:, r - 1:r + 2, q - 1:q + 2, 0].max(axis=(1, 2))))
         assert abs(geo.z_um[i] - bead.z_um) <= geo.dof_um[i] / 2, (bead.z_um, geo.z_um[i], geo.dof_um[i])

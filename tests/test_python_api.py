@@ -159,7 +159,7 @@ def test_focal_stack_holds_one_set_of_tags_in_its_cameras_object_space(sample_ap
     from lfproc.camera import SENSOR_MM
 
     fs = sample_api["fs"]
-    assert fs.space == SENSOR_MM == sample_api["lf"].camera.object_space
+    assert fs.space == SENSOR_MM == sample_api["lf"].camera.main_optics.object_space
     for name, field in zip(SENSOR_MM.keys, ("depth", "near", "far", "dof")):
         assert getattr(fs, name) is getattr(fs, field)
         assert [r[name] for r in fs.records()] == getattr(fs, field).tolist()
