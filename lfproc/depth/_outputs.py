@@ -21,11 +21,11 @@ import numpy as np
 DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence.tif", "_allfocus.tif",
                                                 "_depth_preview.png", "_depth_points.ply")
 
-#: what ``STEM_depth.tif`` holds, in the words of the two built-in object spaces (other spaces:
+#: what ``STEM_depth.tif`` holds, by the position key of the two built-in object spaces (other spaces:
 #: :func:`_depth_content`)
-DEPTH_CONTENT = {"mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
-                 "um": "depth from the native object plane, positive towards the objective (z_um of the sharpest "
-                       "slice); NaN = unknown"}
+DEPTH_CONTENT = {"distance_mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
+                 "z_um": "depth from the native object plane, positive towards the objective (z_um of the sharpest "
+                         "slice); NaN = unknown"}
 
 #: the preview's legend unit and its sidecar's ``content``, by the unit of the depth map's object space
 PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown), legend in "
@@ -124,10 +124,10 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
 
 def _depth_content(space) -> str:
     """What ``STEM_depth.tif`` holds: the built-in spaces' words, else the space's own."""
-    if space.position_key in ("distance_mm", "z_um"):
-        return DEPTH_CONTENT[space.unit]
     reach = ", inf = infinity" if space.toward_optics < 0 else ""
-    return f"{space.position_key} of the sharpest slice, {space.symbol} {space.origin}; NaN = unknown{reach}"
+    return DEPTH_CONTENT.get(space.position_key,
+                             f"{space.position_key} of the sharpest slice, {space.symbol} {space.origin}; NaN = "
+                             f"unknown{reach}")
 
 
 def summary_line(depth_map) -> str:
