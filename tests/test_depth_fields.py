@@ -64,7 +64,7 @@ def test_positions_are_the_geometrys_and_the_bounds_are_ordered(estimate):
     known = np.isfinite(dm.a)
     assert known.mean() > 0.5
     a = dm.a[known].astype(np.float64)
-    if dm.space.from_sensor:          # Eq. 21 of the estimate's a; nearer is less distance from the sensor
+    if camera is LENS_CAMERA:         # Eq. 21 of the estimate's a; nearer is less distance from the sensor
         expected = geometry.slice_distance_mm(camera, a)
         lower, upper = dm.near[known], dm.far[known]
     else:                             # z = a·m̂·f_s·n/M² µm, independently of the ray transfer
@@ -96,13 +96,12 @@ def test_metric_depth_one_path(camera):
     a_low = np.array([[0.2, -np.inf, 0.0, 1.9]])
     a_high = np.array([[0.4, 1.1, 0.0, np.inf]])
     m = metric_depth(camera, a, a_low, a_high, 1.0)
-    assert m.space == camera.main_optics.object_space
-    assert all(getattr(m, name) is field for name, field in zip(CONTRACT[m.space.unit], (m.depth, m.near, m.far)))
+    assert m.space == camera.main_optics.object_space and not hasattr(m, "distance_mm")   # a private result
     assert np.isnan(m.depth[0, 2]) and np.isnan(m.near[0, 2]) and np.isnan(m.far[0, 2])
     dof = geometry.slice_geometry(camera, np.array([0.3, 1.0, 2.0]), 1.0)   # the DOF of the views summed
     cols = [0, 1, 3]
     np.testing.assert_allclose(m.depth[0, cols], dof.depth, rtol=1e-12)
-    if m.space.from_sensor:
+    if camera is LENS_CAMERA:
         assert np.all(m.near[0, cols] <= dof.near) and np.all(m.far[0, cols] >= dof.far)
         assert m.far[0, 1] == np.inf                                         # a_low = −inf: beyond infinity
         assert m.near[0, 3] == pytest.approx(geometry.front_focal_plane_mm(camera))   # a_high = +inf

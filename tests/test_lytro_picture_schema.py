@@ -173,7 +173,7 @@ def test_export_focus_distance_needs_a_camera(tmp_path, capsys):
                      '[microscope]\nobjective_magnification = 20\nnumerical_aperture = 0.5\nimmersion_index = 1.33\n'
                      'tube_lens_focal_length_mm = 200\n')
     status, _, err = cli(capsys, "export", pic, "--camera", scope, "-o", tmp_path / "out")
-    assert status == 2 and len(err) == 1 and "microscope" in err[0] and not (tmp_path / "out").exists()
+    assert status == 2 and len(err) == 1 and "objective, not a Lytro camera" in err[0] and not (tmp_path / "out").exists()
 
 
 def test_export_focus_distance_overrides_the_lambda_reading(tmp_path, capsys):

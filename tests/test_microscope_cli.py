@@ -46,7 +46,7 @@ def test_geometry_json_lists_slices_in_micrometres():
     assert {"i", "angle_deg", "inside_na"} == set(out["views"][0])
     assert out["camera"]["aplanatic"] is False
     table = run_cli("geometry", "--camera", SAMPLES / "cameras" / "lfm-60x-water.toml", "--z-range", "-5:5")
-    assert table.returncode == 0 and "aplanatic (sine condition)" in table.stdout and "[um]" in table.stdout
+    assert table.returncode == 0 and "aplanatic (sine condition)" in table.stdout and "[µm]" in table.stdout
 
 
 def test_geometry_z_range_plans_cover_or_step():
@@ -63,14 +63,14 @@ def test_a_z_step_far_finer_than_the_dof_is_warned_with_a_sensible_step():
     from lfproc import geometry
     cam_path = SAMPLES / "cameras" / "lfm-20x.toml"
     cam = Camera.from_toml(cam_path)
-    ends = geometry.slice_geometry(cam, [geometry.refocus_parameter_z(cam, z) for z in (-10.0, 10.0)])
+    ends = geometry.slice_geometry(cam, [geometry.position_parameter(cam, z) for z in (-10.0, 10.0)])
     dof = float(min(ends.z_near_um - ends.z_far_um))          # the thinnest DOF over the range, from its limits
     fine = dof / 40
     proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{fine:.6g}", "--json")
     assert proc.returncode == 0, proc.stderr
     warnings = [line for line in proc.stderr.splitlines() if "warning" in line]
     assert len(warnings) == 1 and "finer than the slices' depth of field" in warnings[0], proc.stderr
-    assert f"about {dof / 2:.2g} um" in warnings[0] and f"({dof:.3g} um)" in warnings[0]
+    assert f"about {dof / 2:.2g} µm" in warnings[0] and f"({dof:.3g} µm)" in warnings[0]
     for step in (dof / 2, dof / 9):                            # sensible steps: silent
         proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{step:.6g}", "--json")
         assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
@@ -80,7 +80,7 @@ def test_bad_depth_options_are_one_line_errors(lfm):
     assert_clean_error(run_cli("refocus", *_inputs(lfm), "--depth-range", "100:200", "-o", lfm / "x"),
                        "--z-range")
     assert_clean_error(run_cli("geometry", "--camera", SAMPLES / "cameras" / "paper-f100.toml", "--z-range", "0:5"),
-                       "needs a microscope camera")
+                       "--z-range", "µm from the native object plane", "--depth-range")
     assert_clean_error(run_cli("geometry", "--camera", lfm / "lfm.toml", "--disparity", "1"), "--disparity")
     assert_clean_error(run_cli("geometry", "--camera", lfm / "lfm.toml", "--z-range", "0:x"), "--z-range")
     assert not (lfm / "x").exists()
@@ -139,7 +139,7 @@ def test_depth_map_is_in_micrometres(lfm):
     known = depth[np.isfinite(depth)]
     assert known.size and np.all(np.abs(known) <= 40)      # within the searched range plus the padding
     assert not (lfm / "depth" / "capture_depth_points.ply").exists()
-    assert "um from the native object plane" in proc.stdout
+    assert "µm from the native object plane" in proc.stdout
 
 
 def test_viewer_page_in_micrometres(lfm):

@@ -326,7 +326,7 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert fs.space == NATIVE_PLANE_UM and fs.z_um is fs.depth and fs.dof_um is fs.dof
     assert all(getattr(fs, name) is None for name in ("distance_mm", "near_mm", "far_mm", "dof_mm"))
     assert np.all(fs.z_near_um >= fs.z_um) and np.all(fs.z_far_um <= fs.z_um)   # signed z: near is more
-    assert " um," in repr(fs) and "from the sensor" not in repr(fs)
+    assert " µm from the native object plane" in repr(fs) and "from the sensor" not in repr(fs)
     np.testing.assert_allclose(by_depth.a, a_values, rtol=1e-9, atol=1e-12)
     for i, name in enumerate(p.stem for p in slice_files(tmp_path / "cli", a_values, lf.camera)):
         sidecar = read_json(tmp_path / "cli" / f"{name}.json")

@@ -27,7 +27,7 @@ cfa = "RGGB"
 [camera.mla]
 pitch_mm = 0.1
 focal_length_mm = 0.4
-[camera.main_optics]
+[camera.main_lens]
 focal_length_mm = 50.0
 image_distance_mm = 50.0
 f_number = 4.0

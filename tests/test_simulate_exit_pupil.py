@@ -18,9 +18,10 @@ from plainref import shifted_views
 F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main lens and micro lens
 
 
-def camera(pixel_mm=0.009, f_number=13.0, grid="rectangular", **kw):
+def camera(pixel_mm=0.009, f_number=13.0, grid="rectangular", exit_pupil_distance_mm=float("inf"), **kw):
     """The paper's camera (p_m = 0.25 mm), focused at infinity."""
-    return Camera(pixel_mm, 0.25, F_S, MainLens(F_U, F_U, principal_plane_gap_mm=H_U, f_number=f_number), mla_principal_plane_gap_mm=H_S, grid=grid, **kw)
+    return Camera(pixel_mm, 0.25, F_S, MainLens(F_U, F_U, H_U, f_number, exit_pupil_distance_mm),
+                  mla_principal_plane_gap_mm=H_S, grid=grid, **kw)
 
 
 def centroids(white, expected_xy, radius_px):

@@ -40,7 +40,7 @@ def check_slices(camera, a_values, lens_shape, view_mask, source: str, what: str
 
     mask = camera.m_hat if view_mask is None else view_mask
     bound = usable_a_bound(mask, lens_shape)
-    geometry.check_usable_a(camera, a_values, what, -bound, bound, asked)
+    geometry.check_usable_a(camera, a_values, what, -bound, bound, asked, source)
     a = np.atleast_1d(np.asarray(a_values, dtype=np.float64))
     share = refocused_fraction(a, mask, lens_shape)
     bad = np.flatnonzero(share < MIN_REFOCUSED_AREA)

@@ -66,6 +66,9 @@ def run(args) -> int:
         geometry.require_space(camera, SENSOR_MM, "--plot (each slice's distance and DOF)")
     slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.view_geometry(camera)
+    if disparities is not None and views.baseline_mm is None:
+        raise LfprocError(f"{args.camera}: --disparity triangulates between virtual cameras; this camera's views are "
+                          f"orthographic (directions, no baselines): a depth is a shift of lenses per unit of a")
     tri = None if disparities is None else geometry.triangulate(camera, disparities, args.gap)
     perspective = views.baseline_mm is not None     # virtual cameras: integer gaps and the Airy check (Eq. 22)
     check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False) if perspective else None

@@ -95,8 +95,16 @@ def usable_range_text(camera, a_low: float | None = None, a_high: float | None =
     if name == "a":
         return " to ".join(f"{text} ({_position_text(space, position, text, usable)})" for text, position in
                            ends).join(("a from ", ""))
-    ends.sort(key=lambda end: end[1])
-    return f"{name} from " + " to ".join(f"{space.text(position)} (a={text})" for text, position in ends)
+    (low_a, low_position), (high_a, high_position) = sorted(ends, key=lambda end: end[1])
+    return (f"{name} from {_plain(space, low_position)} to {_plain(space, high_position)} (a from {low_a} to "
+            f"{high_a})")
+
+
+def _plain(space, position: float) -> str:
+    """A position with its unit and no name: ``"176.2 mm"``, ``"infinity"``, ``"-66.31 µm"``."""
+    if math.isinf(position):
+        return "infinity" if position > 0 and space.toward_optics < 0 else f"{position:+} {space.symbol}"
+    return f"{position:{space.spec}} {space.symbol}"
 
 
 def _position_text(space, position: float, a_text: str, usable) -> str:
@@ -116,7 +124,7 @@ def _outside(camera, a_values, a_low=None, a_high=None) -> np.ndarray:
 
 
 def check_usable_a(camera, a_values, what: str = "a", a_low: float | None = None, a_high: float | None = None,
-                   asked=None) -> None:
+                   asked=None, source: str | None = None) -> None:
     """Refuse refocus parameters whose slices image no real object (beyond infinity, nearer than a main lens's
     front focal plane).
 
@@ -132,6 +140,9 @@ def check_usable_a(camera, a_values, what: str = "a", a_low: float | None = None
     asked : array_like, optional
         The values as the user gave them, in the unit ``what`` names (positions, where ``what`` is a position
         key); the message then speaks in them and gives the range in positions.
+    source : str, optional
+        The capture the slices are of: the message starts with it (as a refusal of its refocused area does)
+        instead of ``what``.
 
     Raises
     ------
@@ -147,8 +158,9 @@ def check_usable_a(camera, a_values, what: str = "a", a_low: float | None = None
     count = f" ({len(bad)} of the {len(a)} slices)" if len(a) > 1 else ""
     name = _name(camera, what)
     space = camera.main_optics.object_space
-    given = f"a={value:g}" if asked is None else f"{np.atleast_1d(asked)[bad[0]]:g} {space.symbol}"
-    raise LfprocError(f"{what}: {given} {why}{count}; usable: {usable_range_text(camera, a_low, a_high, name)}")
+    given = f"a={value:g}" if asked is None else f"{what}={np.atleast_1d(asked)[bad[0]]:g} {space.symbol}"
+    raise LfprocError(f"{source or what}: {given} {why}{count}; usable: "
+                      f"{usable_range_text(camera, a_low, a_high, name)}")
 
 
 def _name(camera, what: str) -> str:
@@ -169,5 +181,5 @@ def check_usable_distances(camera, distances_mm, what: str = "distance_mm") -> N
     if not len(bad):
         return
     raise LfprocError(f"{what}: {d[bad[0]]:g} mm is not beyond the main lens's front focal plane ({front:.1f} mm "
-                      f"from the sensor): nothing there forms a real image to focus on; usable: "
-                      f"{usable_range_text(camera, name='distance_mm')}")
+                      f"from the sensor): nothing there forms a real image to focus on; usable: distances beyond "
+                      f"{front:.1f} mm up to infinity, i.e. {usable_range_text(camera)}")

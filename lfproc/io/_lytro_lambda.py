@@ -166,5 +166,8 @@ def focused_at(camera, focus_distance_mm: float):
     equation, ``MainLens.focused_at``); the provenance of b_U (or of a focus distance) no longer holds and is
     dropped."""
     stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
+    if not isinstance(camera.main_optics, MainLens):
+        raise LfprocError(f"{camera.source or 'camera'}: a focus distance needs a main lens ([main_lens]); this "
+                          f"camera's optics are a {camera.main_optics.describe()}")
     lens = camera.main_optics.focused_at(focus_distance_mm, camera.mla_path_mm, camera.source or "camera")
     return replace(camera, main_optics=lens, provenance=tuple(p for p in camera.provenance if p[0] not in stale))
