@@ -195,11 +195,11 @@ def test_usable_range_follows_the_object_space():
     low, high = g.usable_a_range(lens)
     assert low == float(g.infinity_parameter(lens)) and high == math.inf
     z1 = float(g.slice_geometry(scope, 1.0).depth)
-    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.4g} µm) to +1 (z = {z1:+.4g} µm)"
+    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.2f} µm) to +1 (z = {z1:+.2f} µm)"
     front = g.front_focal_plane_mm(lens)
     assert g.usable_range_text(lens) == f"a from {g.format_a(low, +1)} (infinity) to +inf (approaching the main lens's front focal plane at {front:.1f} mm)"
     # in positions (the argument a user gave), low to high, each end with its a
-    assert g.usable_range_text(scope, -1.0, 1.0, "z_um") == f"z_um from {-z1:+.4g} µm to {z1:+.4g} µm (a from -1 to +1)"
+    assert g.usable_range_text(scope, -1.0, 1.0, "z_um") == f"z_um from {-z1:+.2f} µm to {z1:+.2f} µm (a from -1 to +1)"
     assert g.usable_range_text(lens, None, 2.0, "distance_mm").endswith(f" mm to infinity (a from +2 to "
                                                                         f"{g.format_a(low, +1)})")
 

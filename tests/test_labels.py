@@ -110,7 +110,7 @@ def test_ranges_read_near_to_far_and_low_to_high():
         assert low < high
     out = io.StringIO()
     describe_slices(scope, [-3.0, 0.0, 2.0], out=out)
-    pairs = re.findall(r"in focus \[z = ([+-][\d.]+) µm, z = ([+-][\d.]+) µm\]", out.getvalue())
+    pairs = re.findall(r"in focus \[([+-][\d.]+), ([+-][\d.]+)\] µm", out.getvalue())
     assert len(pairs) == 3 and all(float(lo) < float(hi) for lo, hi in pairs)
     camera = _camera("paper-f100-b10")
     for label in slice_labels(camera, [0.0, 0.5, 2.0]):

@@ -223,9 +223,10 @@ def test_calibrate_read_focal_stack_views_depth_and_save(third, tmp_path):
     sidecar = json.loads(open(written[1].rsplit(".", 1)[0] + ".json").read())
     assert sidecar["distance_m"] == pytest.approx(float(position[1]), rel=1e-12) and "distance_mm" not in sidecar
     assert [p.split("_")[-1] for p in written] == ["a+0.500.tif", "a+1.000.tif", "a+2.000.tif"]   # named by a
-    with pytest.raises(lfproc.LfprocError, match="distance_mm= names positions .* metres|m from the lens"):
+    with pytest.raises(lfproc.LfprocError, match=r"distance_mm= names positions .* in m from the lens.s front principal plane; give a=$"):
         lfproc.focal_stack(lf, distance_mm=[500.0])
-    with pytest.raises(lfproc.LfprocError, match=r"a: a=-9 focuses beyond infinity; usable: a from "):
+    with pytest.raises(lfproc.LfprocError, match=r"capture.png: a=-9 focuses beyond infinity; usable: a from \+0 "
+                                                 r"\(infinity\) to \+[\d.]+ \(0\.\d+ m\)$"):   # the capture's one range, in m
         lfproc.focal_stack(lf, a=[-9.0])
     # the views: Eq. 17's virtual cameras, tagged as the commands tag them
     vs = lfproc.view_stack(lf)

@@ -39,13 +39,17 @@ def check_slices(camera, a_values, lens_shape, view_mask, source: str, what: str
     from ..refocus import MIN_REFOCUSED_AREA, refocused_fraction, usable_a_bound
 
     mask = camera.m_hat if view_mask is None else view_mask
-    bound = usable_a_bound(mask, lens_shape)
-    geometry.check_usable_a(camera, a_values, what, -bound, bound, asked, source)
+    try:
+        geometry.check_usable_a(camera, a_values, what, asked=asked, source=source)
+    except LfprocError:   # refused: say so with this light field's range (its bound is found only to be said)
+        bound = usable_a_bound(mask, lens_shape)
+        geometry.check_usable_a(camera, a_values, what, -bound, bound, asked, source)
     a = np.atleast_1d(np.asarray(a_values, dtype=np.float64))
     share = refocused_fraction(a, mask, lens_shape)
     bad = np.flatnonzero(share < MIN_REFOCUSED_AREA)
     if not len(bad):
         return
+    bound = usable_a_bound(mask, lens_shape)
     space = camera.main_optics.object_space
     name = what if what == space.position_key else "a"
     given = f"a={a[bad[0]]:g}" if asked is None else f"{what}={np.atleast_1d(asked)[bad[0]]:g} {space.symbol}"

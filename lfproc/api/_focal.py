@@ -18,13 +18,16 @@ from ..camera import ObjectSpace
 from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
 
+#: the positions focal_stack takes besides a: the record keys of the built-in object spaces
+POSITION_ARGUMENTS = ("distance_mm", "z_um")
+
 
 @dataclass(frozen=True, eq=False, repr=False)
 class FocalStack:
     """Refocused slices of one light field and their geometry.
 
     One set of tags for any main optics, in the unit and from the origin of ``space`` (the camera's
-    :attr:`~lfproc.camera.Camera.object_space`), as :class:`lfproc.geometry.SliceGeometry` holds them.
+    :attr:`~lfproc.camera.MainOptics.object_space`), as :class:`lfproc.geometry.SliceGeometry` holds them.
 
     Attributes
     ----------
@@ -243,15 +246,16 @@ def _parameters(camera, a, distance_mm, z_um):
     into a by the optics (Eq. 21 inverted for a main lens)."""
     from .. import geometry
 
-    given = [name for name, value in (("a", a), ("distance_mm", distance_mm), ("z_um", z_um)) if value is not None]
+    given = [name for name, value in zip(("a",) + POSITION_ARGUMENTS, (a, distance_mm, z_um)) if value is not None]
     if len(given) != 1:
         raise LfprocError(f"give exactly one of a=, distance_mm= or z_um=, got {', '.join(given) or 'none'}")
     name = given[0]
     space = camera.main_optics.object_space
     values = np.atleast_1d(np.asarray({"a": a, "distance_mm": distance_mm, "z_um": z_um}[name], dtype=np.float64))
     if name != "a" and name != space.position_key:   # positions in another object space than the optics'
+        own = f"{space.position_key}= or " if space.position_key in POSITION_ARGUMENTS else ""
         raise LfprocError(f"{name}= names positions the optics of this camera ({camera.main_optics.describe()}) do not "
-                          f"use: they place slices in {space.symbol} {space.origin}; give {space.position_key}= or a=")
+                          f"use: they place slices in {space.symbol} {space.origin}; give {own}a=")
     # positions may be infinite where the optics have a slice at infinity (distances); a never
     finite = np.isfinite(values) if name == "a" else np.array([math.isfinite(v) or space.holds(v) for v in values.ravel()])
     if values.ndim != 1 or values.size == 0 or not np.all(finite):

@@ -137,8 +137,6 @@ class Microscope:
     object_space = NATIVE_PLANE_UM
     #: the aperture stop in the objective's back focal plane: image-side telecentric, no exit pupil to place
     exit_pupil_distance_mm = math.inf
-    #: object-side telecentric too: a view is one direction through every lens
-    views_are_orthographic = True
 
     @property
     def image_aperture_sine(self) -> float:

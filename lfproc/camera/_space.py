@@ -89,6 +89,13 @@ class ObjectSpace:
             return value * (1.0 + hair)
         return value - self.toward_optics * hair * max(1.0, abs(value))
 
+    def interval(self, low: float, high: float) -> str:
+        """An interval for people, low to high: ``"[335.9 mm, 439.3 mm]"``, ``"[-23.47, -3.07] µm"`` (a named
+        coordinate such as z gives its numbers and then its unit)."""
+        if self.name:
+            return f"[{low:{self.spec}}, {high:{self.spec}}] {self.symbol}"
+        return f"[{self.text(low)}, {self.text(high)}]"
+
     def text(self, value: float) -> str:
         """A position for people: ``"206.7 mm"``, ``"infinity"``, ``"z = +12.5 µm"``."""
         if math.isinf(value):
@@ -100,4 +107,4 @@ class ObjectSpace:
 SENSOR_MM = ObjectSpace("mm", "mm", "from the sensor", ("distance_mm", "near_mm", "far_mm", "dof_mm"), 1.0, -1.0, "d")
 #: a microscope's object space: micrometres from the native object plane, positive towards the objective
 NATIVE_PLANE_UM = ObjectSpace("um", "µm", "from the native object plane, positive towards the objective",
-                              ("z_um", "z_near_um", "z_far_um", "dof_um"), 1000.0, 1.0, "z", "z = ", "+.4g")
+                              ("z_um", "z_near_um", "z_far_um", "dof_um"), 1000.0, 1.0, "z", "z = ", "+.2f")

@@ -190,7 +190,7 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
     space = geo.space
     for a, position, near, far in zip(*(np.atleast_1d(x).tolist() for x in (geo.a, geo.depth, geo.near, geo.far))):
         low, high = space.low_high(near, far)      # in focus, low to high
-        print(f"  a={a:+.4f}  {space.text(position)}  in focus [{space.text(low)}, {space.text(high)}]", file=out)
+        print(f"  a={a:+.4f}  {space.text(position)}  in focus {space.interval(low, high)}", file=out)
     if depth_range is None:
         return
     near, far = parse_depth_range(depth_range)

@@ -1,4 +1,8 @@
-"""Slices and views of a light-field microscope in object space: micrometres from the native object plane.
+"""A light-field microscope's own geometry: z per a, the aperture's views, aplanatic per-view shifts.
+
+Its slices are the generic ray model's (:mod:`._slices`) and its views the objective's own placement
+(:meth:`lfproc.camera.Microscope.place_views`, the sine condition); this module holds what only an objective
+has. Positions are micrometres from the native object plane.
 
 The ray model of :mod:`._slices` with the microscope's transfer (:mod:`._transfer`): a ray pair (A, C)
 meeting w = A·p_m/δ = A·m̂·f_s behind the MLA (δ = p_p/f_s, p_p = p_m/m̂) is the object point

@@ -4,7 +4,7 @@ Pure, vectorised functions of a :class:`~lfproc.camera.Camera` and the refocus p
 images. The ray pairs below are followed to the micro lens array; where they meet in object space is
 the camera's main optics' business (:attr:`Camera.main_optics`, one interface for a main lens and a
 microscope objective, :mod:`lfproc.camera._main_optics`), reported in its unit and from its origin
-(:attr:`Camera.object_space`): millimetres from the sensor for a main lens, the closed forms below;
+(``camera.main_optics.object_space``): millimetres from the sensor for a main lens, the closed forms below;
 micrometres from the native object plane for a microscope (:mod:`._microscope`).
 
 Closed forms
@@ -87,7 +87,7 @@ def _slope_gap(camera: Camera, spread):
 def _pair_position(camera: Camera, shift, spread):
     """(position, D) of the object point where a ray pair (A, C) meets, through the camera's main optics.
 
-    The position is in the optics' object-space unit (:attr:`Camera.object_space`): for a main lens the
+    The position is in the optics' object-space unit (``camera.main_optics.object_space``): for a main lens the
     distance from the sensor, ``inf`` where the rays do not meet in front of it (z ≤ 0 or parallel).
     D = −(N·A_S + A·p_m·C_S) with S the optics' transfer: linear in (A, C) and of the sign of the object
     vergence (for a main lens D = (A·p_m + N·ε)/f_U, the sign of 1/x); it changes sign where the meeting
@@ -183,7 +183,7 @@ class SliceGeometry:
     """Geometry of refocused slices (arrays with the shape of ``a``, or floats for a scalar ``a``).
 
     One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
-    :attr:`~lfproc.camera.Camera.object_space`): millimetres from the sensor for a main lens (Eqs. 21, 31),
+    :attr:`~lfproc.camera.MainOptics.object_space`): millimetres from the sensor for a main lens (Eqs. 21, 31),
     micrometres from the native object plane, positive towards the objective, for a microscope.
 
     Attributes

@@ -26,7 +26,7 @@ Ray model (one ray per sensor point x and micro lens aperture point t)
    The main lens rim, a circle of radius ``rim_radius_mm`` in the principal plane, blocks rays with
    ``|U|`` above it (vignetting).
 4. An object plane at distance D from the sensor lies at ``z = D − L`` with L the sensor-to-H1U path
-   (``Camera.sensor_to_main_lens_mm``). A ray takes the radiance of the nearest plane whose region it
+   (``MainLens.sensor_path_mm``). A ray takes the radiance of the nearest plane whose region it
    hits, else the background (:mod:`lfproc.simulate._scene`).
 
 Each pixel integrates stratified sub-samples over its area (``pixel_samples``² points) and over the
