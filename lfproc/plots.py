@@ -40,7 +40,8 @@ def slice_figure(camera, slices):
     if finite:
         bottom, top = min(finite) / 1.25, max(finite) * 2.0
     else:
-        bottom, top = camera.sensor_to_main_lens_mm, camera.sensor_to_main_lens_mm * 100.0
+        front = camera.main_optics.usable_range(camera).high_position   # the nearest any slice focuses
+        bottom, top = front, front * 100.0
     fig, (ax, ax_dof) = plt.subplots(2, 1, figsize=(7.5, 6.0), dpi=100, sharex=True,
                                      gridspec_kw=dict(height_ratios=(3, 2)))
     for r in recs:

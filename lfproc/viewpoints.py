@@ -74,10 +74,10 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
 class ViewpointGeometry:
     """The virtual camera of view (ky, kx); lengths in mm, angles in degrees, pairs as [y, x].
 
-    Orthographic views (a microscope's, ``MainOptics.views_are_orthographic``): ``position_mm`` is where each
-    crosses the objective's pupil (:func:`lfproc.geometry.pupil_positions_mm`), ``tilt_deg`` and ``angle_deg``
-    its object-space angle (sine condition, :func:`lfproc.geometry.microscope_views`), ``inside_na`` whether it
-    lies inside the NA; it has no baselines (``None``).
+    Orthographic views (a microscope's: the optics place them as directions, without a baseline):
+    ``position_mm`` is where each crosses the objective's pupil, ``tilt_deg`` and ``angle_deg`` its object-space
+    angle (sine condition, :func:`lfproc.geometry.place_views`), ``inside_na`` whether it lies inside the NA
+    (:func:`lfproc.geometry.views_inside_aperture`); it has no baselines (``None``).
     """
 
     view: tuple            # (ky, kx)
@@ -109,27 +109,24 @@ def viewpoint_geometry(camera, centre=None) -> list[list[ViewpointGeometry]]:
     """
     offsets = geometry.view_offsets(camera)
     cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
-    if camera.main_optics.views_are_orthographic:   # views are directions: angles, positions in the pupil
-        angles_y = geometry.microscope_views(camera, cy).angle_deg
-        angles_x = geometry.microscope_views(camera, cx).angle_deg
-        inside = geometry.views_inside_na(camera)
-        pupil_y, pupil_x = geometry.pupil_positions_mm(camera, cy), geometry.pupil_positions_mm(camera, cx)
-        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)), (float(pupil_y[ky]), float(pupil_x[kx])),
-                                   (_finite(angles_y[ky]), _finite(angles_x[kx])), None, None,
-                                   angle_deg=(_finite(angles_y[ky]), _finite(angles_x[kx])),
+    along_y, along_x = geometry.place_views(camera, offsets + cy), geometry.place_views(camera, offsets + cx)
+    if along_y.orthographic:   # views are directions: angles, positions in the objective's pupil
+        inside = geometry.views_inside_aperture(camera)
+        return [[ViewpointGeometry((ky, kx), (int(iy), int(ix)),
+                                   (float(along_y.position_mm[ky]), float(along_x.position_mm[kx])),
+                                   (_finite(along_y.tilt_deg[ky]), _finite(along_x.tilt_deg[kx])), None, None,
+                                   angle_deg=(_finite(along_y.tilt_deg[ky]), _finite(along_x.tilt_deg[kx])),
                                    inside_na=bool(inside[ky, kx]))
                  for kx, ix in enumerate(offsets)] for ky, iy in enumerate(offsets)]
-    pos_y, pos_x = geometry.view_positions_mm(camera, offsets + cy), geometry.view_positions_mm(camera, offsets + cx)
-    tilt_y, tilt_x = geometry.view_tilts_deg(camera, offsets + cy), geometry.view_tilts_deg(camera, offsets + cx)
-    neighbour = geometry.baseline_mm(camera, 1)
+    neighbour = along_y.baseline_mm
     table = []
     for ky, iy in enumerate(offsets):
         row = []
         for kx, ix in enumerate(offsets):
             row.append(ViewpointGeometry(
-                (ky, kx), (int(iy), int(ix)), (float(pos_y[ky]), float(pos_x[kx])),
-                (float(tilt_y[ky]), float(tilt_x[kx])), float(math.hypot(pos_y[ky], pos_x[kx])),
-                float(neighbour)))
+                (ky, kx), (int(iy), int(ix)), (float(along_y.position_mm[ky]), float(along_x.position_mm[kx])),
+                (float(along_y.tilt_deg[ky]), float(along_x.tilt_deg[kx])),
+                float(math.hypot(along_y.position_mm[ky], along_x.position_mm[kx])), float(neighbour)))
         table.append(row)
     return table
 

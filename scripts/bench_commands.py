@@ -56,9 +56,7 @@ TARGETS = {"refocus_s": 5.0, "peak_gb": 1.5, "views_s": 5.0, "decode_s": 1.5, "b
 
 def illum_camera():
     from lfproc import Camera
-    return Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=2.0, grid="hexagonal", cfa="GRBG", black_level=64.0,
-                  white_level=1023.0, micro_image_px=15, name="lytro-illum-like")
+    return Camera(0.0014, 0.02, 0.04, MainLens(50.0, 50.0, f_number=2.0), grid="hexagonal", cfa="GRBG", black_level=64.0, white_level=1023.0, micro_image_px=15, name="lytro-illum-like")
 
 
 def lattice_distance(x, y, grid):
@@ -178,6 +176,7 @@ from lfproc.io import read_capture
 from lfproc.pipeline import prepare_decoding
 from lfproc.refocus import refocus
 from lfproc.outputs import write_slices
+from lfproc.camera import MainLens
 mark("imports (numpy, OpenCV, OpenImageIO, numba)")
 camera = Camera.from_toml(os.path.join(folder, "camera.toml"))
 setup = prepare_decoding(camera, calib=os.path.join(folder, "grid.json"))

@@ -39,6 +39,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import benchlib as bl  # noqa: E402  (this folder)
 import benchsim as suite  # noqa: E402
+from lfproc.camera import MainLens
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
@@ -72,11 +73,9 @@ def colour_scene(kind: str):
     from lfproc import Camera, geometry, simulate
     from lfproc.simulate import Noise, Plane, Scene, Uniform
 
-    cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=0,
-                 white_level=65535)
+    cam = Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="RGGB", black_level=0, white_level=65535)
     distance = geometry.slice_distance_mm(cam, 1.0)
-    feature = 4 * cam.mla_pitch_mm * (distance - cam.sensor_to_main_lens_mm) / cam.main_focal_length_mm
+    feature = 4 * cam.mla_pitch_mm * (distance - cam.main_optics.sensor_path_mm(cam.mla_path_mm)) / cam.main_optics.focal_length_mm
     texture = Uniform(0.5) if kind == "grey card" else Noise(feature_mm=feature, seed=3)
     scene = Scene((Plane(distance, texture, tint=(1.0, 1.0, 1.0) if kind == "grey card" else (0.9, 0.7, 0.5)),),
                   background=0.1)

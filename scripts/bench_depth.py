@@ -33,6 +33,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from benchlib import fmt, machine_info, markdown_table
+from lfproc.camera import MainLens
 
 TARGET_MEDIAN_DOF = 0.05
 TARGET_BADPIX = 0.05
@@ -44,9 +45,7 @@ NAIVE_STEP = 0.05
 def test_camera():
     from lfproc import Camera
 
-    return Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383, cfa="RGGB",
-                  name="depth-bench")
+    return Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), black_level=64, white_level=16383, cfa="RGGB", name="depth-bench")
 
 
 def scenes(camera):
@@ -160,9 +159,7 @@ def illum_light_field():
 
     from lfproc import Camera, LightField
 
-    camera = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=30.0,
-                    image_distance_mm=30.0, f_number=2.0, cfa="GRBG", grid="hexagonal", micro_image_px=15,
-                    name="illum-like")
+    camera = Camera(0.0014, 0.02, 0.04, MainLens(30.0, 30.0, f_number=2.0), cfa="GRBG", grid="hexagonal", micro_image_px=15, name="illum-like")
     rng = np.random.default_rng(0)
     pad = 24
     base = ndimage.gaussian_filter(rng.random((434 + 2 * pad, 625 + 2 * pad, 3), dtype=np.float32), (1.5, 1.5, 0))

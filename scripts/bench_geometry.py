@@ -53,7 +53,7 @@ def plenoptisign_rate(camera, count=2000):
         return None
     rng = np.random.default_rng(1)
     base = dict(pp=camera.sample_pitch_mm, fs=camera.mla_focal_length_mm, hh=0.0,
-                pm=camera.mla_pitch_mm, dA=camera.exit_pupil_distance_mm, fU=camera.main_focal_length_mm,
+                pm=camera.mla_pitch_mm, dA=camera.main_optics.exit_pupil_distance_mm, fU=camera.main_optics.focal_length_mm,
                 HH=0.0, df=1000.0 - camera.mla_focal_length_mm, M=camera.m_hat)
     args = [dict(base, a=float(a), G=1, dx=float(x)) for a, x in zip(rng.uniform(-1, 3, count),
                                                                       rng.uniform(-3, 3, count))]

@@ -72,7 +72,7 @@ def make_inputs(folder, camera):
 
     capture, white = os.path.join(folder, "capture.tif"), os.path.join(folder, "white.tif")
     if not (os.path.exists(capture) and os.path.exists(white)):
-        lat, zpa = geometry.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
+        lat, zpa = camera.main_optics.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
         rng = np.random.default_rng(0)
         beads = tuple(Bead(float(x), float(y), float(z), radius_um=0.6 * lat)
                       for x, y, z in zip(rng.uniform(-30, 30, 12) * lat, rng.uniform(-30, 30, 12) * lat,

@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from lfproc.camera import MainLens
 
 ROOT = Path(__file__).resolve().parent.parent
 SHAPE = (15, 434, 625, 3)
@@ -45,8 +46,7 @@ def illum_like_camera():
 
     # 1.4 µm pixels under 20 µm lenses (14.3 px, resampled to 15 × 15 views), f/2 micro lenses, a
     # 30 mm main lens at f/2 focused at about 3 m (b_U > f_U, so a_∞ = −0.5 < 0 as on an Illum)
-    return Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=30.0,
-                  image_distance_mm=30.3, f_number=2.0, micro_image_px=15, name="illum-like")
+    return Camera(0.0014, 0.02, 0.04, MainLens(30.0, 30.3, f_number=2.0), micro_image_px=15, name="illum-like")
 
 
 def two_plane_lightfield():

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from lfproc.camera import MainLens
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMERAS = ROOT / "samples" / "cameras"
@@ -73,9 +74,7 @@ def lytro_camera():
     """A Lytro-Illum-like camera: 1.4 µm pixels, 20 µm hexagonal lenses (14.3 px), GRBG, f/2, m̂ = 15."""
     from lfproc import Camera
 
-    return Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=2.0, grid="hexagonal", cfa="GRBG", black_level=64.0,
-                  white_level=1023.0, micro_image_px=15, name="lytro-illum-like")
+    return Camera(0.0014, 0.02, 0.04, MainLens(50.0, 50.0, f_number=2.0), grid="hexagonal", cfa="GRBG", black_level=64.0, white_level=1023.0, micro_image_px=15, name="lytro-illum-like")
 
 
 def paper_9um_camera(cfa: str = "none", grid: str = "rectangular"):
@@ -92,7 +91,7 @@ def noise_scene(camera, a: float, tint=(1.0, 1.0, 1.0)):
     from lfproc.simulate import Noise, Plane, Scene
 
     d = geometry.slice_distance_mm(camera, a)
-    feature = 4 * camera.mla_pitch_mm * (d - camera.sensor_to_main_lens_mm) / camera.main_focal_length_mm
+    feature = 4 * camera.mla_pitch_mm * (d - camera.main_optics.sensor_path_mm(camera.mla_path_mm)) / camera.main_optics.focal_length_mm
     return Scene((Plane(d, Noise(feature_mm=feature, seed=1), tint=tint),), background=0.1)
 
 
@@ -132,7 +131,7 @@ def camera_description(camera, big_shape) -> str:
     return (f"Speed is measured on a simulated Lytro-Illum-like capture: {big_shape[1]} × {big_shape[0]} px sensor, "
             f"{camera.pixel_pitch_mm * 1000:g} µm pixels, {camera.mla_pitch_mm * 1000:g} µm hexagonal micro lenses "
             f"({camera.pitch_px:.2f} px, rotated {LYTRO_ROTATION_DEG}°), {camera.cfa} Bayer mosaic, f/"
-            f"{camera.f_number:g}, decoded to m̂ = {camera.m_hat} (one pixel-area sample and one aperture sample per "
+            f"{camera.main_optics.f_number:g}, decoded to m̂ = {camera.m_hat} (one pixel-area sample and one aperture sample per "
             f"pixel: its content does not change the timings). Accuracy is measured on smaller captures with exact "
             f"references, described per stage.")
 

@@ -21,18 +21,20 @@ import sys
 import numpy as np
 
 import lfproc
+from lfproc.io import focused_at
 from lfproc import Camera, geometry, simulate
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
-CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
-                image_distance_mm=30.0, f_number=2.0, micro_image_px=13, name="lytro-like").with_focus_distance(600.0)
+CAMERA = focused_at(Camera(0.0014, 0.0182, 0.0364, MainLens(30.0, 30.0, f_number=2.0), micro_image_px=13,
+                           name="lytro-like"), 600.0)
 LENSES = 30
 
 
 def lens_on_plane_mm(camera: Camera, a_z: float) -> float:
     """Plane width seen by one lens of the central view at slice a_z's depth."""
-    z = geometry.slice_distance_mm(camera, a_z) - camera.sensor_to_main_lens_mm
-    return camera.mla_pitch_mm * abs(1.0 - z / camera.main_focal_length_mm)
+    z = geometry.slice_distance_mm(camera, a_z) - camera.main_optics.sensor_path_mm(camera.mla_path_mm)
+    return camera.mla_pitch_mm * abs(1.0 - z / camera.main_optics.focal_length_mm)
 
 
 def render_views(camera: Camera, a_z: float, texture) -> np.ndarray:

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lfproc.io import focused_at
 from lfproc import Camera, geometry
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -25,7 +26,7 @@ OUT = ROOT / "docs" / "exit-pupil-error.png"
 
 
 def curves(focus_mm: float):
-    finite = Camera.from_toml(ROOT / "samples" / "cameras" / "illum-like.toml").with_focus_distance(focus_mm)
+    finite = Camera.focused_at(from_toml(ROOT / "samples" / "cameras" / "illum-like.toml"), focus_mm)
     tele = dataclasses.replace(finite, exit_pupil_distance_mm=math.inf)
     a = np.linspace(geometry.infinity_parameter(finite) + 1e-3, 12.0, 4000)
     true = geometry.slice_geometry(finite, a)

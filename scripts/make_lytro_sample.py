@@ -14,6 +14,7 @@ image-side telecentric, so the metadata says so: ``exitPupilOffset.z`` = 10000 m
 Running it twice gives the same bytes; it prints each file's size and SHA-256.
 """
 
+from lfproc.camera import MainLens
 import hashlib
 import sys
 from pathlib import Path
@@ -27,9 +28,7 @@ from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
 
 SAMPLE = ROOT / "samples" / "lytro"
 SHAPE = (336, 448)        # sensor rows, columns: about 22 x 26 lenses
-CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.020, mla_focal_length_mm=0.0406, main_focal_length_mm=77.59,
-                image_distance_mm=77.59, f_number=2.11, grid="hexagonal", cfa="GRBG", black_level=64,
-                white_level=1023)
+CAMERA = Camera(0.0014, 0.020, 0.0406, MainLens(77.59, 77.59, f_number=2.11), grid="hexagonal", cfa="GRBG", black_level=64, white_level=1023)
 NEAR_A, FAR_A = 1.25, 0.25   # the slices that focus on the two planes (|a| <= 1.8 fits 13 views on 23 lenses)
 TELECENTRIC = 10000.0     # exitPupilOffset.z of a main lens whose exit pupil is at infinity
 
@@ -38,7 +37,7 @@ def main() -> int:
     near, far = geometry.slice_distance_mm(CAMERA, NEAR_A), geometry.slice_distance_mm(CAMERA, FAR_A)
 
     def lens_footprint(distance_mm):     # one lens's width seen in a plane at that distance
-        return CAMERA.mla_pitch_mm * distance_mm / CAMERA.main_focal_length_mm
+        return CAMERA.mla_pitch_mm * distance_mm / CAMERA.main_optics.focal_length_mm
 
     scene = Scene((Plane(near, Noise(feature_mm=4 * lens_footprint(near), seed=11), region_mm=(-40, 0, -40, 40),
                          tint=(1.0, 0.6, 0.3)),

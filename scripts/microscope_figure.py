@@ -64,7 +64,7 @@ def table() -> str:
 
 def _trace(cam: Camera, z_mm: float, slope: float):
     """Points (x along the axis, y) of a ray from the axial point z through the microscope to the sensor."""
-    scope = cam.microscope
+    scope = cam.main_optics
     n, f_o, f_t = scope.immersion_index, scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm
     x, y, u = -n * f_o + z_mm, 0.0, slope
     xs, ys = [x], [y]
@@ -87,7 +87,7 @@ def main():
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 3.6), dpi=80)
     cam = matched_camera(20, 0.5, 1.33)
-    scope = cam.microscope
+    scope = cam.main_optics
     f_o, f_t = scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm
     z_mm = 0.4                              # exaggerated so that the meeting point shows
     for slope in np.linspace(-0.3, 0.3, 7):

@@ -33,7 +33,7 @@ def camera(kind: str, extra_mm: float = 0.0, f_s: float = 2.749) -> Camera:
         old = f"focal_length_mm = {cam.mla_focal_length_mm!r}\n"
         text = cam.to_toml().replace(old, f"focal_length_mm = {f_s!r}\n", 1)     # the [mla] one
         cam = Camera.from_toml_string(text, cam.source)
-    return cam.with_main_lens(cam.main_lens_prescription, cam.main_focal_length_mm + extra_mm)
+    return cam.with_optics(cam.main_optics.with_prescription(cam.main_optics.prescription, cam.main_optics.focal_length_mm + extra_mm))
 
 
 def _fmt(x) -> str:
@@ -168,7 +168,7 @@ def main() -> None:
         for extra in (0.0, 10.0, 20.0):
             for kind in ("telecentric", "own"):
                 cam = camera(kind, extra, f_s)
-                d_a = "∞" if cam.telecentric else f"{cam.exit_pupil_distance_mm:.3f} mm"
+                d_a = "∞" if cam.telecentric else f"{cam.main_optics.exit_pupil_distance_mm:.3f} mm"
                 stop = "stop at F1U (the paper’s experiment)" if kind == "telecentric" else "own stop"
                 print(f"\n#### f_s = {f_s} mm, b_U = f_U + {extra:g} mm, {stop}, d_A = {d_a}\n")
                 print(table(cam, [0, 1, 2, 3, 4, 5]))

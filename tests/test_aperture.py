@@ -10,18 +10,19 @@ import json
 import numpy as np
 import pytest
 
+from focus import focused
 import lfproc
 from lfproc import Camera, LfprocError
 from lfproc import geometry as g
 from lfproc import simulate
 from lfproc.outputs import slice_metadata
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 from conftest import SAMPLES, assert_clean_error, run_cli
 
 # Lytro-like, telecentric: 13 px micro images (c = 6), f/2 matched to the micro lenses, focused at 600 mm
-LYTRO = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
-               image_distance_mm=30.0, f_number=2.0, micro_image_px=13).with_focus_distance(600.0)
+LYTRO = focused(Camera(0.0014, 0.0182, 0.0364, MainLens(30.0, 30.0, f_number=2.0), micro_image_px=13), 600.0)
 C = LYTRO.center_index
 IY, IX = np.mgrid[-C:C + 1, -C:C + 1]
 INSIDE = g.views_inside_aperture(LYTRO)
@@ -37,7 +38,7 @@ SLICES = np.linspace(-1.0, 1.0, 201)   # slice a around the plane at a = 0
 def plane_views():
     """Ideal views of a noise plane at the focus distance (a = 0), 13 x 13 lenses."""
     d = g.slice_distance_mm(LYTRO, 0.0)
-    footprint = LYTRO.mla_pitch_mm * abs(1 - (d - LYTRO.sensor_to_main_lens_mm) / LYTRO.main_focal_length_mm)
+    footprint = LYTRO.mla_pitch_mm * abs(1 - (d - LYTRO.main_optics.sensor_path_mm(LYTRO.mla_path_mm)) / LYTRO.main_optics.focal_length_mm)
     views, _, _ = simulate.render_ideal_views(LYTRO, Scene((Plane(d, Noise(1.5 * footprint, seed=3)),)),
                                               (13 * 13, 13 * 13), channels=1)
     return views, d
@@ -182,17 +183,15 @@ def test_fewer_views_with_a_finite_exit_pupil_match_plenoptisign_with_that_many_
     for _ in range(60):
         m = int(rng.choice([9, 11, 13, 15]))
         pm, fs, fu = float(rng.uniform(0.01, 0.2)), float(rng.uniform(0.02, 3.0)), float(rng.uniform(10.0, 200.0))
-        cam0 = Camera(pixel_pitch_mm=pm / m * 0.999, mla_pitch_mm=pm, mla_focal_length_mm=fs,
-                      main_focal_length_mm=fu, image_distance_mm=fu,
-                      exit_pupil_distance_mm=float(rng.uniform(20.0, 200.0)), micro_image_px=m)
+        cam0 = Camera(pm / m * 0.999, pm, fs, MainLens(fu, fu, exit_pupil_distance_mm=float(rng.uniform(20.0, 200.0))), micro_image_px=m)
         df = float(rng.uniform(5, 50)) * fu
         probe = plenoptisign.MainClass(dict(fU=fu, HH=0.0, df=df))
         probe.compute_img_dist()
-        cam = dataclasses.replace(cam0, image_distance_mm=float(probe.bU))
+        cam = cam0.with_optics(dataclasses.replace(cam0.main_optics, image_distance_mm=float(probe.bU)))
         r = int(rng.integers(1, cam.center_index))
         a = float(rng.uniform(1.0 / (2 * r), 4.0))
         ps = plenoptisign.MainClass(dict(pp=cam.sample_pitch_mm, fs=fs, hh=0.0, pm=pm,
-                                         dA=cam.exit_pupil_distance_mm, fU=fu, HH=0.0, df=df, M=2 * r + 1, a=a,
+                                         dA=cam.main_optics.exit_pupil_distance_mm, fU=fu, HH=0.0, df=df, M=2 * r + 1, a=a,
                                          G=1, dx=0.0))
         ps.refo()
         geo = g.slice_geometry(cam, a, view_extent=r)

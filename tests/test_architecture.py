@@ -194,39 +194,133 @@ def test_modules_stay_under_400_lines():
 
 
 # ---------------------------------------------------------------------------------------------- one optics model
-#: where the kind of main optics may be asked by name: the optics themselves, a microscope's own geometry
-#: (view angles, aplanatic shifts, z ranges) and the microscope renderer
-OPTICS_MODULES = {"lfproc/camera", "lfproc/geometry/_microscope.py", "lfproc/simulate/_microscope.py"}
+#: where the kind of main optics may be asked by name (docs/architecture.md, "One optics model"): the optics
+#: themselves, and each kind's own geometry, renderer and files
+OPTICS_MODULES = {
+    "lfproc/camera": "the optics: MainLens, Microscope, their camera-file tables and transfers",
+    "lfproc/geometry/_main_lens.py": "a main lens's own geometry: its lens, the plane of its virtual cameras",
+    "lfproc/geometry/_diffraction.py": "a main lens's own: the Airy check of its working f-number (Eq. 22)",
+    "lfproc/geometry/_triangulation.py": "a main lens's own: PlenoptiSign's triangulation between virtual cameras",
+    "lfproc/geometry/_real_rays.py": "a main lens's own: real rays through its surfaces",
+    "lfproc/geometry/_ray_model.py": "a main lens's own: PlenoptiSign's parameter set",
+    "lfproc/geometry/_microscope.py": "a microscope's own geometry: z per a, aplanatic per-view shifts",
+    "lfproc/simulate": "the renderers: a thin main lens's ray tracer and the microscope's",
+    "lfproc/io/_lytro_camera.py": "a Lytro camera's main lens from its metadata",
+    "lfproc/io/_lytro_lambda.py": "Lytro's lambda: the focus unit of its main lens",
+}
+
+#: attributes that stand for the kind of optics (the old flags, and asking a camera which kind it has)
+KIND_FLAGS = {"from_sensor", "views_are_orthographic", "views_have_angles", "is_microscope", "require_main_lens",
+              "microscope", "main_lens", "main_focal_length_mm", "main_principal_plane_gap_mm",
+              "main_lens_prescription", "sensor_to_main_lens_mm", "signed_depths"}
+#: attributes of the object space whose comparison with a literal stands for the kind (``space.unit == "um"``)
+SPACE_NAMES = {"unit", "symbol", "letter", "origin", "position_key", "keys", "per_mm"}
+#: geometry functions of one kind only (a microscope's; a main lens's lens), and the ones they replaced
+KIND_FUNCTIONS = {"z_per_a_um", "na_views", "aplanatic_gain", "paraxial_depth_error", "uses_aplanatic",
+                  "microscope_slices", "main_lens_of", "microscope_views", "plan_z_range", "views_inside_na",
+                  "pupil_positions_mm", "refocus_parameter_z", "z_step_advice"}
 
 
-def _kind_branches(tree: ast.AST) -> list[tuple[int, str]]:
-    """Lines that ask a camera or a result which kind of optics it has, rather than what the optics give."""
+def _kind_only_attributes() -> set:
+    """Public members of MainLens and Microscope that are not members of the MainOptics interface."""
+    import dataclasses
+
+    from lfproc.camera import MainLens, MainOptics, Microscope
+    interface = {n for n in dir(MainOptics) if not n.startswith("_")} | {"wave_optics"}
+    members = {n for cls in (MainLens, Microscope) for n in [*dir(cls), *(f.name for f in dataclasses.fields(cls))]}
+    return {n for n in members if not n.startswith("_")} - interface
+
+
+def _optics_names(tree: ast.AST) -> set:
+    """Names bound to a camera's main optics anywhere in the module (``optics = camera.main_optics``)."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Attribute) and node.value.attr == "main_optics":
+            names |= {t.id for t in node.targets if isinstance(t, ast.Name)}
+    return names
+
+
+def _is_optics(node: ast.AST, names: set) -> bool:
+    return (isinstance(node, ast.Attribute) and node.attr == "main_optics") or \
+        (isinstance(node, ast.Name) and node.id in names)
+
+
+def _kind_questions(tree: ast.AST, kind_only: set) -> list[tuple[int, str]]:
+    """Lines that ask which kind the main optics are, rather than asking the optics to do something: kind flags,
+    the object space's unit or keys compared with a literal, isinstance against MainLens or Microscope, reads of
+    members only one kind has (on ``camera.main_optics`` or a name bound to it), calls of one kind's geometry."""
+    names = _optics_names(tree)
     found = []
     for node in ast.walk(tree):
-        if isinstance(node, ast.Attribute) and node.attr in ("microscope", "is_microscope"):
+        if isinstance(node, ast.Attribute) and node.attr in KIND_FLAGS:
             found.append((node.lineno, f".{node.attr}"))
-        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in ("getattr", "hasattr")
-              and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant) and node.args[1].value == "microscope"):
-            found.append((node.lineno, f'{node.func.id}(..., "microscope")'))
+        elif isinstance(node, ast.Attribute) and node.attr in kind_only and _is_optics(node.value, names):
+            found.append((node.lineno, f"main_optics.{node.attr}"))
+        elif isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            literal = any(isinstance(x, ast.Constant) and isinstance(x.value, str) or isinstance(x, (ast.Tuple, ast.Set))
+                          and any(isinstance(e, ast.Constant) and isinstance(e.value, str) for e in x.elts)
+                          for x in sides)
+            named = [x.attr for x in sides if isinstance(x, ast.Attribute) and x.attr in SPACE_NAMES]
+            if literal and named:
+                found.append((node.lineno, f".{named[0]} compared with a literal"))
+        elif isinstance(node, ast.Call):
+            func = node.func
+            name = func.id if isinstance(func, ast.Name) else func.attr if isinstance(func, ast.Attribute) else ""
+            if name == "isinstance" and len(node.args) == 2 and {"MainLens", "Microscope"} & {
+                    n.id if isinstance(n, ast.Name) else getattr(n, "attr", "") for n in ast.walk(node.args[1])}:
+                found.append((node.lineno, "isinstance(..., MainLens|Microscope)"))
+            elif name in ("getattr", "hasattr") and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant) \
+                    and (node.args[1].value in KIND_FLAGS
+                         or node.args[1].value in kind_only and _is_optics(node.args[0], names)):
+                found.append((node.lineno, f'{name}(..., "{node.args[1].value}")'))
+            elif name in KIND_FUNCTIONS:
+                found.append((node.lineno, f"{name}()"))
     return found
 
 
-def test_nothing_outside_the_optics_branches_on_the_kind_of_optics():
-    """Issue 31: the main optics are one parameter behind one interface (``Camera.main_optics``,
-    :mod:`lfproc.camera._main_optics`). Code elsewhere names, orders and labels positions by the camera's
-    ``object_space`` (unit and origin), places views by ``views_are_orthographic`` and reads apertures through
-    ``image_aperture_sine``; it never asks ``camera.microscope`` / ``is_microscope`` / ``result.microscope``."""
+def _owned_by_optics(rel: str) -> bool:
+    return any(rel == owner or rel.startswith(owner + "/") for owner in OPTICS_MODULES)
+
+
+def test_nothing_outside_the_optics_asks_which_kind_of_optics_it_has():
+    """Issues 31 and 37: the main optics are one parameter behind one interface (``Camera.main_optics``,
+    :class:`lfproc.camera.MainOptics`). Code outside the optics and each kind's own modules asks them to *do*
+    things (place their views, invert a position, give their usable range, their object space's order and
+    words); it never reads a flag that stands for the kind, compares the object space's unit or keys with a
+    literal, asks ``isinstance(..., MainLens|Microscope)``, reads a member only one kind has, or calls one kind's
+    geometry (a microscope's z per a, a main lens's ``main_lens_of``)."""
+    kind_only = _kind_only_attributes()
     bad = []
     for path in _modules().values():
         rel = str(path.relative_to(ROOT))
-        if any(rel == owner or rel.startswith(owner + "/") for owner in OPTICS_MODULES):
+        if _owned_by_optics(rel):
             continue
-        for line, what in _kind_branches(ast.parse(path.read_text(encoding="utf-8"))):
+        for line, what in _kind_questions(ast.parse(path.read_text(encoding="utf-8")), kind_only):
             bad.append(f"{rel}:{line} {what}")
-    assert not bad, "branch on the main optics' interface instead (docs/architecture.md):\n" + "\n".join(bad)
+    assert not bad, "ask the main optics to do it instead (docs/architecture.md, One optics model):\n" + "\n".join(bad)
 
 
 def test_the_kind_scan_sees_each_idiom():
-    tree = ast.parse('a = camera.microscope\nb = camera.is_microscope\nc = getattr(camera, "microscope", None)\n'
-                     'd = geo.space.from_sensor\n')
-    assert [what for _, what in _kind_branches(tree)] == [".microscope", ".is_microscope", 'getattr(..., "microscope")']
+    kind_only = _kind_only_attributes()
+    assert {"focal_length_mm", "f_number", "prescription", "objective_magnification", "numerical_aperture",
+            "immersion_index", "aplanatic"} <= kind_only
+    assert not {"object_space", "place_views", "usable_range", "refocus_parameter", "lateral_sampling_um"} & kind_only
+    source = ("a = camera.microscope\nb = geo.space.from_sensor\nc = optics.views_are_orthographic\n"
+              "d = getattr(camera, 'microscope', None)\ne = space.unit == 'um'\nf = space.position_key in ('z_um',)\n"
+              "g = isinstance(camera.main_optics, MainLens)\nh = camera.main_optics.f_number\n"
+              "optics = camera.main_optics\ni = optics.numerical_aperture\nj = geometry.z_per_a_um(camera)\n"
+              "k = main_lens_of(camera, 'x')\nl = camera.require_main_lens('x')\n"
+              "# asking the optics to do things, and reading what they give, is fine:\n"
+              "m = optics.place_views(camera, [0]).orthographic\nn = space.position_key == name\n"
+              "o = optics.usable_range(camera).low\np = lens.focal_length_mm\n")
+    found = [line for line, _ in _kind_questions(ast.parse(source), kind_only)]
+    assert found == [1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13], found
+
+
+def test_the_optics_own_modules_are_the_ones_the_page_names():
+    """docs/architecture.md names every module allowed to know the kind of optics, and each exists."""
+    text = DOC.read_text(encoding="utf-8")
+    for owner in OPTICS_MODULES:
+        assert (ROOT / owner).exists(), owner
+        assert f"`{owner.removeprefix('lfproc/')}`" in text, f"docs/architecture.md does not name {owner}"

@@ -10,6 +10,7 @@
 """
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from scipy.spatial import cKDTree
 from whitegen import covering_grid, drifting_white, true_centres_inside, white_image
 
 from lfproc.calibrate import find_grid, implied_exit_pupil
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.grid import LensGrid
 
 
@@ -38,8 +39,7 @@ def off_sensor(grid: LensGrid, shape) -> int:
 
 
 # ----------------------------------------------------------------------------- filled cells (simulator)
-FILLED = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB")  # f/4 = 0.24/0.06
+FILLED = Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="RGGB")  # f/4 = 0.24/0.06
 
 
 def test_filled_cell_white_from_the_simulator():
@@ -94,8 +94,7 @@ def test_hot_dead_pixels_vignetted_corner_rotated_hexagonal_illum_pitch():
 def test_the_fitted_pitch_implies_the_exit_pupil_distance():
     image, _ = illum_like_white((600, 800))
     estimate = find_grid(image, kind="hexagonal")
-    camera = Camera(pixel_pitch_mm=0.001, mla_pitch_mm=LENS_PITCH_PX / 1000.0, mla_focal_length_mm=F_S_MM,
-                    main_focal_length_mm=9.5, image_distance_mm=9.5, grid="hexagonal", exit_pupil_distance_mm=D_A_MM)
+    camera = Camera(0.001, LENS_PITCH_PX / 1000.0, F_S_MM, MainLens(9.5, 9.5, exit_pupil_distance_mm=D_A_MM), grid="hexagonal")
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     assert pupil.scale == pytest.approx((D_A_MM + F_S_MM) / D_A_MM, abs=3 * pupil.scale_sigma + 2e-5)
     # d_A = f_s / (scale - 1): the scale's uncertainty makes the distance's
@@ -204,8 +203,7 @@ def test_simulated_finite_exit_pupil_white_gives_micro_image_centres_and_the_exi
     # the simulator's white image with an exit pupil 20 mm in front of the array: micro images drift
     # outwards; calibration finds the micro image centres (sim grid) and the distance they imply
     from lfproc.simulate import render_white
-    camera = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                    image_distance_mm=50.0, f_number=4.0, grid="rectangular", exit_pupil_distance_mm=20.0)
+    camera = Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0, exit_pupil_distance_mm=20.0), grid="rectangular")
     shape = (480, 640)
     white, micro_images = render_white(camera, shape, rotation_deg=0.3)
     estimate = find_grid(white, kind="rectangular", approx_pitch_px=camera.pitch_px)
@@ -215,9 +213,7 @@ def test_simulated_finite_exit_pupil_white_gives_micro_image_centres_and_the_exi
     assert pupil.scale == pytest.approx(camera.micro_image_scale, abs=3 * pupil.scale_sigma + 1e-4)
     assert pupil.distance_mm == pytest.approx(20.0, rel=0.1)
     assert not pupil.contradicts_camera
-    telecentric = Camera(**{**{f: getattr(camera, f) for f in ("pixel_pitch_mm", "mla_pitch_mm", "mla_focal_length_mm",
-                                                             "main_focal_length_mm", "image_distance_mm", "f_number",
-                                                             "grid")}})
+    telecentric = camera.with_optics(replace(camera.main_optics, exit_pupil_distance_mm=float("inf")))
     assert implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, telecentric).contradicts_camera
 
 
@@ -233,8 +229,7 @@ def test_pitch_warnings_only_beyond_the_pitchs_own_uncertainty():
     pitch = estimate.grid.pitch_px
     assert estimate.pitch_sigma_px > 0.0002 * pitch          # the halves' spread (0.032 %), not the standard error
     for off, warned in ((1.0005, False), (0.9995, False), (1.02, True)):
-        camera = Camera(pixel_pitch_mm=0.0065, mla_pitch_mm=0.0065 * pitch / off, mla_focal_length_mm=2.5,
-                        microscope=Microscope(20.0, 0.5, 1.33, 200.0))
+        camera = Camera(0.0065, 0.0065 * pitch / off, 2.5, Microscope(20.0, 0.5, 1.33, 200.0))
         line = exit_pupil_warning("drift.tif", implied_exit_pupil(pitch, estimate.pitch_sigma_px, camera), camera)
         assert (line is not None) == warned, (off, line)
         assert line is None or ("relay_magnification" in line and "\n" not in line)

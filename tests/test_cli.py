@@ -275,19 +275,23 @@ def test_an_a_whose_refocused_area_is_under_half_is_refused_with_the_usable_rang
 
 def test_slices_nearer_than_the_front_focal_plane_are_refused(sample, tmp_path):
     """Issue 20: on the sample (50 mm lens focused at infinity) --at 67 wrote a=-17.0114, 17 mm in front
-    of the lens, and --a=-17 the same; nothing there forms a real image. Both are refused before decoding."""
+    of the lens, and --a=-17 the same; nothing there forms a real image. --at is refused before decoding;
+    a refusal of --a states the capture's one usable range (issue 38), the same as --a=400's."""
     camera = Camera.from_toml(sample / "camera.toml")
-    front = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+    front = camera.main_optics.sensor_path_mm(camera.mla_path_mm) + camera.main_optics.focal_length_mm
     assert 67 < front and geometry.slice_distance_mm(camera, -17.0) < front   # the model puts it there
-    for option in (["--at", "67"], ["--a=-17"]):
+    ranges = []
+    for option in (["--at", "67"], ["--a=-17"], ["--a=400"]):
         proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "o")
-        assert_clean_error(proc, "front focal plane", f"{front:.1f} mm")
+        assert_clean_error(proc, "front focal plane" if option[0] != "--a=400" else "only 0 %")
         assert not (tmp_path / "o").exists()
+        ranges.append(proc.stderr.strip().split("usable: ")[-1])
+    assert ranges[1] == ranges[2] and ranges[1].startswith("a from +0 (infinity) to +7.")   # one range
     # a slice beyond infinity is refused too (issue 30: it was written tagged "in focus [inf, inf]"), and a
-    # sweep partly beyond it as a whole, before any work, with the usable range low-to-high
+    # sweep partly beyond it as a whole, before any slice is written, with the usable range low-to-high
     for option in (["--a=-0.3"], ["--a=-0.5:2"]):
         proc = run_cli("refocus", sample / "capture.png", *decode_args(sample), *option, "-o", tmp_path / "b")
-        assert_clean_error(proc, "beyond infinity", "a from +0 (infinity) to +inf", f"{front:.1f} mm")
+        assert_clean_error(proc, "beyond infinity", ranges[1])
         assert not (tmp_path / "b").exists()
 
 

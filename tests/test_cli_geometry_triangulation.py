@@ -7,6 +7,7 @@ import math
 import pytest
 
 from conftest import SAMPLES, assert_clean_error, run_cli
+from focus import focused
 from lfproc import Camera
 from lfproc import geometry as g
 
@@ -99,7 +100,7 @@ def test_provenance_survives_a_round_trip_and_nested_keys():
     again = Camera.from_toml_string(cam.to_toml())
     assert again.provenance == cam.provenance and again == cam
     assert "[provenance]" not in cam.to_toml(include_provenance=False)
-    refocused = cam.with_focus_distance(2000.0)                     # stale provenance of b_U is dropped
+    refocused = focused(cam, 2000.0)                     # stale provenance of b_U is dropped
     assert refocused.provenance_of("main_lens.focus_distance_mm") is None
     assert refocused.provenance_of("mla.pitch_mm") == cam.provenance_of("mla.pitch_mm")
     nested = Camera.from_toml_string(ILLUM.read_text().split("[provenance]")[0]

@@ -9,6 +9,7 @@ import tifffile
 
 from lfproc import Camera, LightField
 from lfproc.io import describe_file
+from lfproc.camera import NATIVE_PLANE_UM
 from lfproc.outputs import write_focal_stack
 
 from conftest import SAMPLES, assert_clean_error, run_cli
@@ -107,7 +108,7 @@ def microscope_records(z_values):
 def test_microscope_stack_is_a_z_stack_with_its_spacing(tmp_path, kind, name, unit):
     z = [-3.0, -1.5, 0.0, 1.5]
     images = np.random.default_rng(0).random((4, 6, 7, 3)).astype(np.float32)
-    path = write_focal_stack(str(tmp_path / name), images, microscope_records(z), kind=kind, lens_um=6.25,
+    path = write_focal_stack(str(tmp_path / name), images, microscope_records(z), NATIVE_PLANE_UM, kind=kind, lens_um=6.25,
                              upsample=2)
     info = info_json(path)
     assert info["format"] == "lfproc-output" and info["raw_light_field"] is False

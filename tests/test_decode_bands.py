@@ -12,14 +12,13 @@ import pytest
 from lfproc import Camera, geometry, simulate
 from lfproc.decode import _plan, make_decoder
 from lfproc.simulate import Plane, Scene, Uniform
+from lfproc.camera import MainLens
 
 TRUE_RGB = (0.72, 0.24, 0.08)     # Uniform(0.8) tinted (0.9, 0.3, 0.1)
 
 
 def camera(cfa="RGGB"):
-    return Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa=cfa, black_level=0,
-                  white_level=65535)
+    return Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa=cfa, black_level=0, white_level=65535)
 
 
 def flat_capture(shape, cfa="RGGB"):
@@ -63,7 +62,7 @@ def test_the_decode_is_bit_identical_for_any_band_size(cfa, method, tolerance, m
     """The bundled sample's case: views were up to 6e-4 apart between one band and two lens rows a band."""
     cam = camera(cfa)
     d = geometry.slice_distance_mm(cam, 1.0)
-    feature = 4 * cam.mla_pitch_mm * (d - cam.sensor_to_main_lens_mm) / cam.main_focal_length_mm
+    feature = 4 * cam.mla_pitch_mm * (d - cam.main_optics.sensor_path_mm(cam.mla_path_mm)) / cam.main_optics.focal_length_mm
     sim = simulate.render(cam, Scene((Plane(d, simulate.Noise(feature_mm=feature, seed=3), tint=(0.9, 0.7, 0.5)),),
                                      background=0.1), (300, 260), rotation_deg=-0.4, rim_radius_mm=None,
                           pixel_samples=1, aperture_samples=2, seed=2, ideal_views=False)

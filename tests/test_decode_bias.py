@@ -13,6 +13,7 @@ from scipy import ndimage
 from lfproc import Camera, geometry, simulate
 from lfproc.decode import make_decoder
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 A_TRUE = 1.93
 
@@ -59,11 +60,10 @@ def test_the_focus_measure_is_unbiased_on_exactly_shifted_views():
 def render(kind, cfa):
     """A textured plane at the true a, 12 px lenses (14 px hexagonal), f-number matched, rotated lattice."""
     pitch_mm = 0.06 if kind == "rectangular" else 0.07
-    cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=pitch_mm, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, grid=kind, cfa=cfa, black_level=0, white_level=65535)
+    cam = Camera(0.005, pitch_mm, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid=kind, cfa=cfa, black_level=0, white_level=65535)
     distance = geometry.slice_distance_mm(cam, A_TRUE)
     a_true = geometry.refocus_parameter(cam, distance)     # the geometry's truth for that plane
-    feature = 3 * cam.mla_pitch_mm * (distance - cam.sensor_to_main_lens_mm) / cam.main_focal_length_mm
+    feature = 3 * cam.mla_pitch_mm * (distance - cam.main_optics.sensor_path_mm(cam.mla_path_mm)) / cam.main_optics.focal_length_mm
     scene = Scene((Plane(distance, Noise(feature_mm=feature, seed=1)),), background=0.1)
     sim = simulate.render(cam, scene, (600, 720), rotation_deg=-0.4, rim_radius_mm=None, pixel_samples=3,
                           aperture_samples=3, seed=1, ideal_views=False)

@@ -9,6 +9,7 @@ import pytest
 from lfproc import Camera, LensGrid, geometry, simulate
 from lfproc.decode import make_decoder, sample_positions
 from lfproc.simulate import Noise, Plane, Scene, Uniform
+from lfproc.camera import MainLens
 
 
 def test_partial_lenses_are_cropped_and_lens_indices_follow_the_grid():
@@ -50,9 +51,7 @@ def test_a_hexagonal_crop_keeps_the_row_parity():
 
 def matched_camera(cfa="RGGB"):
     """12 px lenses under an f-number-matched main lens: micro images fill their cells (as on real cameras)."""
-    return Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa=cfa, black_level=0,
-                  white_level=65535)
+    return Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa=cfa, black_level=0, white_level=65535)
 
 
 def normalised(sim, exposure=0.8):
@@ -123,7 +122,7 @@ def test_colour_against_the_ideal_views():
     """
     cam = matched_camera()
     d = geometry.slice_distance_mm(cam, 1.0)
-    feature = 4 * cam.mla_pitch_mm * (d - cam.sensor_to_main_lens_mm) / cam.main_focal_length_mm
+    feature = 4 * cam.mla_pitch_mm * (d - cam.main_optics.sensor_path_mm(cam.mla_path_mm)) / cam.main_optics.focal_length_mm
     scene = Scene((Plane(d, Noise(feature_mm=feature, seed=3), tint=(0.9, 0.7, 0.5)),), background=0.1)
     sim = simulate.render(cam, scene, (360, 480), rotation_deg=-0.4, rim_radius_mm=None, pixel_samples=3,
                           aperture_samples=3, seed=2)

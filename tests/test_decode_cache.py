@@ -17,15 +17,14 @@ from lfproc import Camera, LensGrid
 from lfproc import decoder_cache as dc
 from lfproc.io import write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield, prepare_decoding
+from lfproc.camera import MainLens
 
 GRID = LensGrid("hexagonal", 9.0, 0.4, (6.3, 5.8), 9, 12)
 SHAPE = (84, 116)
 
 
 def tiny_camera(**changes):
-    cam = Camera(pixel_pitch_mm=0.002, mla_pitch_mm=0.018, mla_focal_length_mm=0.05, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=2.8, grid="hexagonal", cfa="GRBG", black_level=0.0,
-                 white_level=65535.0, micro_image_px=7, name="tiny")
+    cam = Camera(0.002, 0.018, 0.05, MainLens(50.0, 50.0, f_number=2.8), grid="hexagonal", cfa="GRBG", black_level=0.0, white_level=65535.0, micro_image_px=7, name="tiny")
     return dataclasses.replace(cam, **changes)
 
 

@@ -93,7 +93,7 @@ def test_microscope_pupil_off_axis(na, tolerance_px, share):
     size = 301
     grid = square_grid(camera, size)
     na_offset = (0.12, -0.08)
-    sines = np.array(na_offset) / camera.microscope.objective_magnification
+    sines = np.array(na_offset) / camera.main_optics.objective_magnification
     expected = -camera.mla_focal_length_mm * sines / np.sqrt(1 - sines ** 2) / camera.lenslet_pixel_pitch_mm
     centred = render_microscope_sensor(camera, None, (size, size), pixel_samples=2, aperture_samples=1)
     shifted = render_microscope_sensor(camera, None, (size, size), pixel_samples=2, aperture_samples=1,
@@ -145,14 +145,14 @@ def test_view_tags_follow_the_centred_sampling(tmp_path):
                                      na_offset=na_offset).astype(np.float32)
     lf = decode_capture(Capture(white, "none", "capture"), Capture(white, "none", "white"), grid, camera)
     step = grid.pitch_px / camera.m_hat
-    sines = np.array(na_offset) / camera.microscope.objective_magnification
+    sines = np.array(na_offset) / camera.main_optics.objective_magnification
     expected = -camera.mla_focal_length_mm * sines / np.sqrt(1 - sines ** 2) / camera.lenslet_pixel_pitch_mm
     assert lf.view_centre == pytest.approx((expected[1] / step, expected[0] / step), abs=0.03)
     lf.save(tmp_path / "lf.lfp.npz")
     assert LightField.load(tmp_path / "lf.lfp.npz").view_centre == pytest.approx(lf.view_centre, abs=1e-12)
     c = camera.center_index
     central = viewpoint_geometry(camera, lf.view_centre)[c][c]
-    n = camera.microscope.immersion_index
+    n = camera.main_optics.immersion_index
     along = np.degrees(np.arcsin(np.array([na_offset[1], na_offset[0]]) / n))      # (y, x)
     # 0.03 px of the disc's 0.75 px offset (the measurement's tolerance above) is 0.2° of its 5.2°
     assert central.angle_deg == pytest.approx(tuple(along), abs=0.2)

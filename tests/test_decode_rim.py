@@ -18,6 +18,7 @@ from lfproc.decode._rim_demosaic import RATIO_FLOOR, RATIO_LIMIT, balanced_white
 from lfproc.decode._rim_kernel import rim_stack
 from lfproc.grid import LensGrid
 from lfproc.simulate import Noise, Plane, Scene, Uniform
+from lfproc.camera import MainLens
 
 
 class _Generic(LensGrid):
@@ -101,9 +102,7 @@ def test_each_pixel_keeps_its_own_value_and_takes_the_lens_hue_for_the_other_cha
 
 
 def _tinted_render(tint, seed=2):
-    cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=0,
-                 white_level=65535)
+    cam = Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="RGGB", black_level=0, white_level=65535)
     d = geometry.slice_distance_mm(cam, 1.0)
     scene = Scene((Plane(d, Uniform(0.8), tint=tint),), background=0.1)
     sim = simulate.render(cam, scene, (240, 300), rotation_deg=-0.4, rim_radius_mm=None, pixel_samples=2,

@@ -9,6 +9,7 @@ from lfproc import Camera, geometry
 from lfproc import simulate
 from lfproc.decode import decode, make_decoder
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 from conftest import SAMPLES
 
@@ -44,7 +45,7 @@ def paper_9um():
     cam = dataclasses.replace(Camera.from_toml(SAMPLES / "cameras" / "paper-f100.toml"), pixel_pitch_mm=0.009)
     assert cam.m_hat == 25 and cam.pitch_px == pytest.approx(250 / 9)
     d = geometry.slice_distance_mm(cam, 1.0)
-    feature = 4 * cam.mla_pitch_mm * (d - cam.sensor_to_main_lens_mm) / cam.main_focal_length_mm
+    feature = 4 * cam.mla_pitch_mm * (d - cam.main_optics.sensor_path_mm(cam.mla_path_mm)) / cam.main_optics.focal_length_mm
     scene = Scene((Plane(d, Noise(feature_mm=feature, seed=1)),), background=0.1)
     # fine quadrature: the ideal views and the sensor integrate the same rays at different positions
     sim = simulate.render(cam, scene, (336, 448), rotation_deg=0.4, offset_px=(0.3, -0.2), rim_radius_mm=None,
@@ -92,8 +93,7 @@ def test_registration_is_exact(paper_9um):
 
 @pytest.mark.parametrize("kind", ["rectangular", "hexagonal"])
 def test_bayer_and_hexagonal_captures(kind):
-    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, grid=kind, cfa="RGGB", black_level=64, white_level=16383)
+    cam = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), grid=kind, cfa="RGGB", black_level=64, white_level=16383)
     d = geometry.slice_distance_mm(cam, 0.5)
     scene = Scene((Plane(d, Noise(feature_mm=12.0, seed=2), tint=(1.0, 0.7, 0.4)),), background=0.1)
     sim = simulate.render(cam, scene, (240, 300), rotation_deg=-0.6, rim_radius_mm=None, pixel_samples=3,

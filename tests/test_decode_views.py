@@ -13,12 +13,12 @@ import pytest
 from lfproc import Camera, geometry, simulate
 from lfproc.decode import make_decoder
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 
 def slow_main_lens_render(kind, cfa, f_number):
     """12 px lenses at f/4 under a main lens at ``f_number`` (f/8: lit discs half the pitch across)."""
-    cam = Camera(pixel_pitch_mm=0.005, mla_pitch_mm=0.06, mla_focal_length_mm=0.24, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=f_number, grid=kind, cfa=cfa, black_level=0, white_level=65535)
+    cam = Camera(0.005, 0.06, 0.24, MainLens(50.0, 50.0, f_number=f_number), grid=kind, cfa=cfa, black_level=0, white_level=65535)
     distance = geometry.slice_distance_mm(cam, 1.0)
     scene = Scene((Plane(distance, Noise(feature_mm=2.0, seed=4)),), background=0.3)
     sim = simulate.render(cam, scene, (240, 300), rotation_deg=0.3, rim_radius_mm=None, pixel_samples=2,

@@ -18,15 +18,14 @@ from lfproc import Camera, LightField, geometry, simulate
 from lfproc.io import read_capture, read_metadata, write_image
 from lfproc.pipeline import DecodeSetup, load_lightfield
 from lfproc.simulate import Noise, Plane, Scene, Uniform
+from lfproc.camera import MainLens
 
 A_TRUE = {"card": 1.43, "blank": 1.1, "wall": 0.57}   # off the sweep's 0.1-spaced slices
 
 
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
-    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383, cfa="RGGB",
-                 name="depth-test")
+    cam = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), black_level=64, white_level=16383, cfa="RGGB", name="depth-test")
     dist = {k: float(geometry.slice_distance_mm(cam, a)) for k, a in A_TRUE.items()}
     planes = (Plane(dist["card"], Noise(feature_mm=3.0, seed=4, low=0.15, high=0.9), region_mm=(-60, -2, -60, 60)),
               Plane(dist["blank"], Uniform(0.5), region_mm=(4, 60, 4, 60)),
@@ -303,8 +302,7 @@ def test_cli_bad_inputs_fail_cleanly_and_write_nothing(scene, tmp_path):
 
 
 def test_tilted_plane_from_ideal_views_meets_the_accuracy_targets():
-    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, cfa="RGGB", name="tilt")
+    cam = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), cfa="RGGB", name="tilt")
     centre = float(geometry.slice_distance_mm(cam, 1.23))
     # 10 mm features: foreshortened by cos 60° they still span ~4 lenses (finer ones alias, docs/depth.md)
     plane = Plane(centre, Noise(feature_mm=10.0, seed=9, low=0.1, high=0.9), tilt_deg=(60.0, 0.0))
@@ -324,15 +322,14 @@ def test_point_cloud_of_a_plane_is_flat_and_scaled_like_the_object():
     check: the central view looks through the main lens's front focal point)."""
     from lfproc.depth._pointcloud import point_cloud
 
-    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, name="pc")
+    cam = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), name="pc")
     distance = np.full((5, 7), 600.0)
     distance[0, 0] = np.nan
     points, rgb = point_cloud(cam, None, distance, np.ones((5, 7, 1), np.float32))
     assert points.shape == (34, 3) and rgb.shape == (34, 3)
     np.testing.assert_allclose(points[:, 2], 600.0)
-    z_front = 600.0 - cam.sensor_to_main_lens_mm - cam.main_focal_length_mm      # from the front focal point
-    magnification = -z_front / cam.main_focal_length_mm
+    z_front = 600.0 - cam.main_optics.sensor_path_mm(cam.mla_path_mm) - cam.main_optics.focal_length_mm      # from the front focal point
+    magnification = -z_front / cam.main_optics.focal_length_mm
     xs = np.unique(np.round(points[:, 0], 6))
     np.testing.assert_allclose(np.diff(xs), abs(magnification) * cam.mla_pitch_mm, rtol=1e-6)
     last = points[-1]              # lens (4, 6): 3 pitches right of and 2 below the centre lens, seen inverted

@@ -12,6 +12,7 @@ from lfproc import Camera, geometry, simulate
 from lfproc.decode import make_decoder
 from lfproc.lightfield import LightField
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 PLANE_A = (0.25, 0.8, 1.5, 2.5)
 CARD_A = 2.2
@@ -20,8 +21,7 @@ LENSES_PER_FEATURE = 2.5
 
 
 def camera(cfa):
-    return Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383, cfa=cfa, name="edges")
+    return Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), black_level=64, white_level=16383, cfa=cfa, name="edges")
 
 
 def scene_for(cam):
@@ -30,13 +30,13 @@ def scene_for(cam):
     h, w = SHAPE
     planes = []
     for i, dist in enumerate(geometry.slice_distance_mm(cam, PLANE_A)):
-        mag = (dist - cam.main_focal_length_mm) / cam.main_focal_length_mm      # object mm per sensor mm
+        mag = (dist - cam.main_optics.focal_length_mm) / cam.main_optics.focal_length_mm      # object mm per sensor mm
         half_w, half_h = w / 2 * cam.pixel_pitch_mm * mag * 1.02, h / 2 * cam.pixel_pitch_mm * mag * 1.2
         x0 = -half_w + i * half_w / 2
         planes.append(Plane(float(dist), Noise(feature_mm=LENSES_PER_FEATURE * cam.mla_pitch_mm * mag, seed=3 + i,
                                                low=0.1, high=0.9), region_mm=(x0, x0 + half_w / 2, -half_h, half_h)))
     dist = float(geometry.slice_distance_mm(cam, CARD_A))
-    mag = (dist - cam.main_focal_length_mm) / cam.main_focal_length_mm
+    mag = (dist - cam.main_optics.focal_length_mm) / cam.main_optics.focal_length_mm
     cx, size = (-w / 2 + 1.5 * w / 4) * cam.pixel_pitch_mm * mag, w / 16 * cam.pixel_pitch_mm * mag
     planes.append(Plane(dist, Noise(feature_mm=LENSES_PER_FEATURE * cam.mla_pitch_mm * mag, seed=12, low=0.1,
                                     high=0.9), region_mm=(cx - size, cx + size, -2 * size, 2 * size)))

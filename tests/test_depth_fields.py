@@ -14,13 +14,12 @@ from scipy import ndimage
 
 import lfproc
 from lfproc import Camera, LightField, geometry
-from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM
+from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM, MainLens
 from lfproc.depth._metric import metric_depth
 
 from scopefile import TINY_LFM
 
-LENS_CAMERA = Camera(pixel_pitch_mm=0.02, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                     image_distance_mm=50.5, f_number=4.0, name="fields")
+LENS_CAMERA = Camera(0.02, 0.1, 0.4, MainLens(50.0, 50.5, f_number=4.0), name="fields")
 MICROSCOPE = Camera.from_toml_string(TINY_LFM)
 
 CONTRACT = {"mm": ("distance_mm", "near_mm", "far_mm"), "um": ("z_um", "z_near_um", "z_far_um")}
@@ -47,7 +46,7 @@ def estimate(request):
 
 def test_one_set_of_fields_in_the_cameras_space(estimate):
     camera, dm = estimate
-    assert dm.space == camera.object_space
+    assert dm.space == camera.main_optics.object_space
     assert dm.space == (SENSOR_MM if camera is LENS_CAMERA else NATIVE_PLANE_UM)
     assert not hasattr(dm, "microscope")
     mine, other = CONTRACT[dm.space.unit], CONTRACT["um" if dm.space.unit == "mm" else "mm"]
@@ -65,7 +64,7 @@ def test_positions_are_the_geometrys_and_the_bounds_are_ordered(estimate):
     known = np.isfinite(dm.a)
     assert known.mean() > 0.5
     a = dm.a[known].astype(np.float64)
-    if dm.space.from_sensor:          # Eq. 21 of the estimate's a; nearer is less distance from the sensor
+    if camera is LENS_CAMERA:         # Eq. 21 of the estimate's a; nearer is less distance from the sensor
         expected = geometry.slice_distance_mm(camera, a)
         lower, upper = dm.near[known], dm.far[known]
     else:                             # z = a·m̂·f_s·n/M² µm, independently of the ray transfer
@@ -97,13 +96,12 @@ def test_metric_depth_one_path(camera):
     a_low = np.array([[0.2, -np.inf, 0.0, 1.9]])
     a_high = np.array([[0.4, 1.1, 0.0, np.inf]])
     m = metric_depth(camera, a, a_low, a_high, 1.0)
-    assert m.space == camera.object_space
-    assert all(getattr(m, name) is field for name, field in zip(CONTRACT[m.space.unit], (m.depth, m.near, m.far)))
+    assert m.space == camera.main_optics.object_space and not hasattr(m, "distance_mm")   # a private result
     assert np.isnan(m.depth[0, 2]) and np.isnan(m.near[0, 2]) and np.isnan(m.far[0, 2])
     dof = geometry.slice_geometry(camera, np.array([0.3, 1.0, 2.0]), 1.0)   # the DOF of the views summed
     cols = [0, 1, 3]
     np.testing.assert_allclose(m.depth[0, cols], dof.depth, rtol=1e-12)
-    if m.space.from_sensor:
+    if camera is LENS_CAMERA:
         assert np.all(m.near[0, cols] <= dof.near) and np.all(m.far[0, cols] >= dof.far)
         assert m.far[0, 1] == np.inf                                         # a_low = −inf: beyond infinity
         assert m.near[0, 3] == pytest.approx(geometry.front_focal_plane_mm(camera))   # a_high = +inf

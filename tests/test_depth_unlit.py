@@ -8,13 +8,12 @@ import pytest
 
 import lfproc
 from lfproc import geometry, simulate
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.decode import make_decoder
 from lfproc.lightfield import LightField
 from lfproc.simulate import Noise, Plane, Scene
 
-CAM = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-             image_distance_mm=50.0, f_number=4.0, name="unlit-test")
+CAM = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), name="unlit-test")
 
 
 @pytest.fixture(scope="module")

@@ -15,6 +15,7 @@ from lfproc.pipeline import DecodeSetup, load_lightfield
 from lfproc.io import read_capture
 from lfproc.refocus import refocus
 from lfproc.simulate import Checkerboard, Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 from conftest import assert_clean_error, run_cli
 
@@ -24,8 +25,7 @@ NEAR_A, FAR_A = 2.0, 0.8
 @pytest.fixture(scope="module")
 def capture(tmp_path_factory):
     """A mono 9 um / 100 um capture (11.1 px per lens) with a near card on a far textured wall."""
-    cam = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383, name="e2e")
+    cam = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), black_level=64, white_level=16383, name="e2e")
     d_near, d_far = geometry.slice_distance_mm(cam, [NEAR_A, FAR_A])
     scene = Scene((Plane(d_near, Checkerboard(period_mm=2.4, low=0.15, high=0.9), region_mm=(-30, 0, -40, 40)),
                    Plane(d_far, Noise(feature_mm=5.0, seed=5, low=0.1, high=0.9))), background=0.05)

@@ -19,12 +19,11 @@ from lfproc.io import write_image
 from lfproc.pipeline import load_lightfield, prepare_decoding
 from lfproc.refocus import refocus
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 from plainref import measured_shift
 
 EXIT_PUPIL_MM = 45.0
-CAMERA = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383,
-                exit_pupil_distance_mm=EXIT_PUPIL_MM, name="exit-pupil")
+CAMERA = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0, exit_pupil_distance_mm=EXIT_PUPIL_MM), black_level=64, white_level=16383, name="exit-pupil")
 PLANE_A = (1.6, 0.7)          # the slices (of the finite-pupil model) the two planes sit at
 
 
@@ -92,7 +91,7 @@ def sharpest_a(lf, region, a_values):
 
 def test_sharpest_slice_over_each_plane_has_a_dof_holding_its_distance_and_telecentric_misses(decoded):
     sim, lf = decoded["sim"], decoded["lf"]
-    telecentric = dataclasses.replace(CAMERA, exit_pupil_distance_mm=float("inf"))
+    telecentric = CAMERA.with_optics(dataclasses.replace(CAMERA.main_optics, exit_pupil_distance_mm=float("inf")))
     a_values = np.round(np.arange(0.2, 2.41, 0.05), 10)
     for region, truth in zip(plane_regions(sim, lf), decoded["distances"]):
         assert region.sum() > 40

@@ -206,7 +206,7 @@ def test_the_real_data_tests_follow_lfproc_real_data_and_docs_count_them(tmp_pat
 
     root = Path(__file__).resolve().parents[1]
     env = dict(os.environ, LFPROC_REAL_DATA=str(tmp_path / "nowhere"))
-    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-n", "0",
                            "-rs", str(root / "tests" / "real")], capture_output=True, text=True, env=env, cwd=root)
     skipped = re.search(r"(\d+) skipped", proc.stdout)
     assert proc.returncode == 0 and skipped and " passed" not in proc.stdout, proc.stdout[-2000:]

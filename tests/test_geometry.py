@@ -9,8 +9,10 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from focus import focused
 from lfproc import Camera
 from lfproc import geometry as g
+from lfproc.camera import MainLens
 
 CAMERAS = Path(__file__).resolve().parent.parent / "samples" / "cameras"
 
@@ -120,7 +122,7 @@ def trace_pair(cam, a, pixel_a, lens_a, pixel_b, lens_b, border):
     ``border`` = (pixel border, lens border) offsets of each ray in units of a pixel / lens pitch.
     """
     pp, pm, fs, fu, bu = (cam.effective_pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm,
-                          cam.main_focal_length_mm, cam.image_distance_mm)
+                          cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm)
     rays = []
     for i, j, (pb, lb) in ((pixel_a, lens_a, border[0]), (pixel_b, lens_b, border[1])):
         m = (-i + pb) * pp / fs                    # Eq. 24 with Δu = -i
@@ -131,7 +133,7 @@ def trace_pair(cam, a, pixel_a, lens_a, pixel_b, lens_b, border):
     (q1, u1), (q2, u2) = rays                      # Eq. 29: x = q z + U; solve q1 z + u1 = q2 z + u2
     A = np.array([[q1, -1.0], [q2, -1.0]])
     z, _ = np.linalg.solve(A, [-u1, -u2])
-    return cam.sensor_to_main_lens_mm + z
+    return cam.main_optics.sensor_path_mm(cam.mla_path_mm) + z
 
 
 @pytest.mark.parametrize("name", ["paper-f100", "paper-f100-b10", "paper-f200-b10"])
@@ -154,9 +156,9 @@ def test_focus_distance_is_the_slice_at_a0_and_roundtrips():
     cam = load("paper-f100-b10")
     d0 = g.slice_distance_mm(cam, 0.0)
     assert d0 == pytest.approx(1169.282, abs=0.01)
-    refocused = cam.with_focus_distance(d0)
-    assert refocused.image_distance_mm == pytest.approx(cam.image_distance_mm, rel=1e-12)
-    assert cam.with_focus_distance(math.inf).image_distance_mm == cam.main_focal_length_mm
+    refocused = focused(cam, d0)
+    assert refocused.main_optics.image_distance_mm == pytest.approx(cam.main_optics.image_distance_mm, rel=1e-12)
+    assert focused(cam, math.inf).main_optics.image_distance_mm == cam.main_optics.focal_length_mm
 
 
 def test_focus_distance_in_camera_file(tmp_path):
@@ -164,9 +166,9 @@ def test_focus_distance_in_camera_file(tmp_path):
                                                              "focus_distance_mm = 1169.2817")
     path = tmp_path / "cam.toml"
     path.write_text(text)
-    assert Camera.from_toml(path).image_distance_mm == pytest.approx(109.5145, abs=1e-4)
+    assert Camera.from_toml(path).main_optics.image_distance_mm == pytest.approx(109.5145, abs=1e-4)
     path.write_text(text.replace("1169.2817", '"inf"'))
-    assert Camera.from_toml(path).image_distance_mm == 99.5145
+    assert Camera.from_toml(path).main_optics.image_distance_mm == 99.5145
 
 
 # ------------------------------------------------------------------ precision at the extremes
@@ -178,10 +180,10 @@ def test_precision_small_and_large_a():
         assert g.refocus_parameter(cam, d) == pytest.approx(a, rel=1e-9)
     # a -> 0 at b_U = f_U: d grows like 1/a exactly (Newton's form), no loss of digits
     d1, d2 = g.slice_distance_mm(cam, [1e-10, 2e-10])
-    x1, x2 = d1 - cam.sensor_to_main_lens_mm - 99.5145, d2 - cam.sensor_to_main_lens_mm - 99.5145
+    x1, x2 = d1 - cam.main_optics.sensor_path_mm(cam.mla_path_mm) - 99.5145, d2 - cam.main_optics.sensor_path_mm(cam.mla_path_mm) - 99.5145
     assert x1 / x2 == pytest.approx(2.0, rel=1e-12)
     # a -> infinity: slices approach the front focal plane from beyond
-    assert g.slice_distance_mm(cam, 1e12) == pytest.approx(cam.sensor_to_main_lens_mm + 99.5145, rel=1e-12)
+    assert g.slice_distance_mm(cam, 1e12) == pytest.approx(cam.main_optics.sensor_path_mm(cam.mla_path_mm) + 99.5145, rel=1e-12)
 
 
 def test_infinite_and_diverging_slices():
@@ -244,7 +246,7 @@ def test_views_and_aperture():
     mask = g.views_inside_aperture(cam)
     # f/4 on f_U = 99.5: stop radius 12.44 mm, far beyond the corner view (6.14 mm): all views kept
     assert mask.all()
-    narrow = dataclasses.replace(cam, f_number=16.0)  # radius 3.11 mm: a disk of views
+    narrow = cam.with_optics(dataclasses.replace(cam.main_optics, f_number=16.0))  # radius 3.11 mm: a disk of views
     mask = g.views_inside_aperture(narrow)
     assert mask[12, 12] and not mask[0, 0] and mask.sum() < 25 * 25
     pos = g.view_positions_mm(narrow)
@@ -265,22 +267,20 @@ def test_main_lens_airy_radius_uses_the_working_f_number():
     """The cone converging on the MLA has f-number b_U / D, D = f_U / N (issue 30): at a near focus b_U > f_U
     and the Airy disk grows by b_U / f_U over the object-side N's."""
     cam = load("paper-f100-b10")
-    assert cam.image_distance_mm > cam.main_focal_length_mm * 1.01      # focused near: the two differ
-    diameter = cam.main_focal_length_mm / cam.f_number
-    working = cam.image_distance_mm / diameter
+    assert cam.main_optics.image_distance_mm > cam.main_optics.focal_length_mm * 1.01      # focused near: the two differ
+    diameter = cam.main_optics.focal_length_mm / cam.main_optics.f_number
+    working = cam.main_optics.image_distance_mm / diameter
     assert g.working_f_number(cam) == pytest.approx(working, rel=1e-12)
     check = g.diffraction_check(cam, warn=False)
     assert check.main_lens_airy_mm == pytest.approx(1.22 * 550e-6 * working, rel=1e-12)
-    assert check.main_lens_airy_mm > 1.22 * 550e-6 * cam.f_number * 1.01
-    at_infinity = dataclasses.replace(cam, image_distance_mm=cam.main_focal_length_mm)
-    assert g.working_f_number(at_infinity) == pytest.approx(cam.f_number, rel=1e-12)
+    assert check.main_lens_airy_mm > 1.22 * 550e-6 * cam.main_optics.f_number * 1.01
+    at_infinity = cam.with_optics(dataclasses.replace(cam.main_optics, image_distance_mm=cam.main_optics.focal_length_mm))
+    assert g.working_f_number(at_infinity) == pytest.approx(cam.main_optics.f_number, rel=1e-12)
 
 
 # ------------------------------------------------------------------ properties over wide ranges
 cameras = st.builds(
-    lambda pm, ratio, fs, fu, eps, gap_s, gap_u: Camera(
-        pixel_pitch_mm=pm / ratio, mla_pitch_mm=pm, mla_focal_length_mm=fs, main_focal_length_mm=fu,
-        image_distance_mm=fu + eps, mla_principal_plane_gap_mm=gap_s, main_principal_plane_gap_mm=gap_u),
+    lambda pm, ratio, fs, fu, eps, gap_s, gap_u: Camera(pm / ratio, pm, fs, MainLens(fu, fu + eps, principal_plane_gap_mm=gap_u), mla_principal_plane_gap_mm=gap_s),
     pm=st.floats(1e-3, 1.0), ratio=st.floats(3.0, 99.0), fs=st.floats(0.1, 50.0), fu=st.floats(0.1, 1000.0),
     eps=st.one_of(st.just(0.0), st.floats(1e-9, 100.0)), gap_s=st.floats(-1, 1), gap_u=st.floats(-50, 50))
 
@@ -293,11 +293,11 @@ def test_property_order_no_nan_and_inverse(cam, a):
     assert not any(math.isnan(v) for v in values)
     assert geo.near_mm <= geo.distance_mm <= geo.far_mm
     assert geo.dof_mm >= 0
-    assume(geo.distance_mm - cam.sensor_to_main_lens_mm > 0)
+    assume(geo.distance_mm - cam.main_optics.sensor_path_mm(cam.mla_path_mm) > 0)
     if math.isfinite(geo.distance_mm):
         back = g.refocus_parameter(cam, geo.distance_mm)
         # the inverse loses what d - L - f_U loses; bound it by the conditioning of that difference
-        x = geo.distance_mm - cam.sensor_to_main_lens_mm - cam.main_focal_length_mm
+        x = geo.distance_mm - cam.main_optics.sensor_path_mm(cam.mla_path_mm) - cam.main_optics.focal_length_mm
         cond = abs(geo.distance_mm) / abs(x) if x else math.inf
         assert back == pytest.approx(a, rel=1e-12 * cond + 1e-9, abs=1e-9 * cond)
 
@@ -315,7 +315,7 @@ def test_plan_slices_with_allowed_gaps_uses_fewer_and_respects_the_gap():
     full = g.plan_slices(cam, 200.0, 3000.0)
     assert g.uncovered_depths(cam, full, 200.0, 3000.0) == []
     for gap in (5.0, 50.0):
-        fewer = g.plan_slices(cam, 200.0, 3000.0, max_gap_mm=gap)
+        fewer = g.plan_slices(cam, 200.0, 3000.0, max_gap=gap)
         assert len(fewer) < len(full)
         holes = g.uncovered_depths(cam, fewer, 200.0, 3000.0)
         assert holes and all(hi - lo <= gap * (1 + 1e-9) for lo, hi in holes)
@@ -330,7 +330,7 @@ def test_plan_integer_slices():
     assert holes[-1] == pytest.approx((325.596, 3483.222), abs=0.01)  # the paper's gap between a = 0 and 1
     assert holes[0] == pytest.approx((200.0, 203.136), abs=0.01)  # slice 5 ends at 199.241, slice 4 at 203.136
     # with a generous allowed gap, integers are still all it uses, and it never repeats one
-    b = g.plan_slices(cam, 200.0, 400.0, integer=True, max_gap_mm=1e4)
+    b = g.plan_slices(cam, 200.0, 400.0, integer=True, max_gap=1e4)
     assert list(b) == sorted(set(b)) and all(float(x).is_integer() for x in b)
 
 

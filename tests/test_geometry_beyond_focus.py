@@ -6,16 +6,17 @@ import math
 import numpy as np
 import pytest
 
+from focus import focused
 import lfproc
 from lfproc import Camera, LfprocError
 from lfproc import geometry as g
 
 from lfproc import simulate  # noqa: E402
 from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
+from lfproc.camera import MainLens
 
 # Lytro-like, telecentric: 13 px micro images (c = 6), f/2 matched to the micro lenses, focused at 600 mm
-LYTRO = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
-               image_distance_mm=30.0, f_number=2.0, micro_image_px=13).with_focus_distance(600.0)
+LYTRO = focused(Camera(0.0014, 0.0182, 0.0364, MainLens(30.0, 30.0, f_number=2.0), micro_image_px=13), 600.0)
 LENSES = 16
 
 
@@ -23,8 +24,8 @@ def views_of_plane_at(a_z):
     """Ideal views of a noise plane at slice a_z's depth, its texture scaled with the magnification
     (1.5 lens footprints per feature), so that every plane looks alike in focus."""
     d = g.slice_distance_mm(LYTRO, a_z)
-    z = d - LYTRO.sensor_to_main_lens_mm
-    footprint = LYTRO.mla_pitch_mm * abs(1 - z / LYTRO.main_focal_length_mm)
+    z = d - LYTRO.main_optics.sensor_path_mm(LYTRO.mla_path_mm)
+    footprint = LYTRO.mla_pitch_mm * abs(1 - z / LYTRO.main_optics.focal_length_mm)
     views, _, _ = simulate.render_ideal_views(LYTRO, Scene((Plane(d, Noise(1.5 * footprint, seed=3)),)),
                                               (LENSES * 13, LENSES * 13), rim_radius_mm=None)
     return views
@@ -93,9 +94,7 @@ def test_positive_a_in_front_of_the_focus_is_the_paper():
 
 
 # ------------------------------------------------------------------ planning (issue 14)
-ILLUM = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.0406, main_focal_length_mm=77.59,
-               image_distance_mm=77.59, f_number=2.11, grid="hexagonal", exit_pupil_distance_mm=46.05,
-               micro_image_px=13).with_focus_distance(600.0)
+ILLUM = focused(Camera(0.0014, 0.02, 0.0406, MainLens(77.59, 77.59, f_number=2.11, exit_pupil_distance_mm=46.05), grid="hexagonal", micro_image_px=13), 600.0)
 
 
 def check_covers(cam, near, far, a):
@@ -126,7 +125,7 @@ def test_a_plan_over_the_slice_limit_covers_the_far_part_and_names_the_rest():
 
 
 def test_depths_no_slice_can_reach_are_named_not_refused():
-    closest = ILLUM.sensor_to_main_lens_mm + ILLUM.main_focal_length_mm
+    closest = ILLUM.main_optics.sensor_path_mm(ILLUM.mla_path_mm) + ILLUM.main_optics.focal_length_mm
     plan = g.plan_depth_range(ILLUM, 50.0, 2000.0)
     assert len(plan.a) > 1
     reasons = " ".join(why for _, _, why in plan.uncovered)

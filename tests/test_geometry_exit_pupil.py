@@ -7,8 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from focus import focused
 from lfproc import Camera, LfprocError
 from lfproc import geometry as g
+from lfproc.camera import MainLens
 
 # PlenoptiSign is the independent implementation of Hahne et al. (IJCV 2018) that the issue names as
 # the oracle; it is a test dependency (pyproject's [test] extra, pure Python), imported outright so that
@@ -21,8 +23,8 @@ def ps_run(cam, a, gap, dx, df):
     """PlenoptiSign on our camera: its pp is our effective pixel pitch, M our m-hat, distances from H1s."""
     obj = plenoptisign.MainClass(dict(pp=cam.sample_pitch_mm, fs=cam.mla_focal_length_mm,
                                       hh=cam.mla_principal_plane_gap_mm, pm=cam.mla_pitch_mm,
-                                      dA=cam.exit_pupil_distance_mm, fU=cam.main_focal_length_mm,
-                                      HH=cam.main_principal_plane_gap_mm, df=df, M=cam.m_hat, a=a, G=gap, dx=dx))
+                                      dA=cam.main_optics.exit_pupil_distance_mm, fU=cam.main_optics.focal_length_mm,
+                                      HH=cam.main_optics.principal_plane_gap_mm, df=df, M=cam.m_hat, a=a, G=gap, dx=dx))
     obj.refo()
     obj.tria()
     return obj
@@ -34,17 +36,16 @@ def random_camera(rng):
     pm = float(rng.uniform(0.01, 0.2))
     fs = float(rng.uniform(0.02, 3.0))
     fu = float(rng.uniform(10.0, 200.0))
-    return Camera(pixel_pitch_mm=pm / m * 0.999, mla_pitch_mm=pm, mla_focal_length_mm=fs, main_focal_length_mm=fu,
-                  image_distance_mm=fu, mla_principal_plane_gap_mm=float(rng.uniform(-0.1, 0.5)) * fs,
-                  main_principal_plane_gap_mm=float(rng.uniform(-0.5, 0.3)) * fu,
-                  exit_pupil_distance_mm=float(rng.uniform(20.0, 200.0) if rng.random() < 0.85
-                                               else rng.uniform(0.5, 20.0)),
-                  micro_image_px=m)
+    mla_gap = float(rng.uniform(-0.1, 0.5)) * fs          # drawn in this order, as the cameras always were
+    main_gap = float(rng.uniform(-0.5, 0.3)) * fu
+    d_a = float(rng.uniform(20.0, 200.0) if rng.random() < 0.85 else rng.uniform(0.5, 20.0))
+    return Camera(pm / m * 0.999, pm, fs, MainLens(fu, fu, main_gap, exit_pupil_distance_mm=d_a),
+                  mla_principal_plane_gap_mm=mla_gap, micro_image_px=m)
 
 
 def ray_trace_z(cam, rays):
     """z from H1U where two image-side rays (lens height s, slope m) meet in object space (Eqs. 16-20)."""
-    fu, bu = cam.main_focal_length_mm, cam.image_distance_mm
+    fu, bu = cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm
     lines = []
     for s, m in rays:
         u = s + m * bu
@@ -88,16 +89,16 @@ def test_agreement_with_plenoptisign_on_random_cameras():
     compared = {"d": 0, "dof": 0, "B": 0, "phi": 0, "Z": 0}
     for _ in range(250):
         cam0 = random_camera(rng)
-        df = math.inf if rng.random() < 0.25 else float(rng.uniform(5, 50)) * cam0.main_focal_length_mm
+        df = math.inf if rng.random() < 0.25 else float(rng.uniform(5, 50)) * cam0.main_optics.focal_length_mm
         a = float(rng.uniform(-1.0, 5.0))
         gap = int(rng.choice([-6, -3, -1, 1, 2, 5]))
         dx = float(rng.uniform(-5.0, 5.0))
-        probe = plenoptisign.MainClass(dict(fU=cam0.main_focal_length_mm, HH=cam0.main_principal_plane_gap_mm, df=df))
+        probe = plenoptisign.MainClass(dict(fU=cam0.main_optics.focal_length_mm, HH=cam0.main_optics.principal_plane_gap_mm, df=df))
         probe.compute_img_dist()
-        cam = dataclasses.replace(cam0, image_distance_mm=float(probe.bU))   # the same b_U, to the last bit
+        cam = cam0.with_optics(dataclasses.replace(cam0.main_optics, image_distance_mm=float(probe.bU)))   # the same b_U, to the last bit
         ps = ps_run(cam, a, gap, dx, df)
         to_h1s = cam.mla_focal_length_mm + cam.mla_principal_plane_gap_mm
-        fu, eps = cam.main_focal_length_mm, cam.image_distance_mm - cam.main_focal_length_mm
+        fu, eps = cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm - cam.main_optics.focal_length_mm
         geo = g.slice_geometry(cam, a)
         tri = g.triangulate(cam, dx, gap)
         # slice distance: PlenoptiSign calls every slice whose image-side rays meet short of f_U "out of
@@ -105,10 +106,10 @@ def test_agreement_with_plenoptisign_on_random_cameras():
         # there we stay finite, below the front focal plane, and equal to the plain ray trace.
         if math.isinf(ps.d) and math.isfinite(geo.distance_mm):
             assert "out of range" in ps.console_msg
-            assert geo.distance_mm < cam.sensor_to_main_lens_mm + fu
+            assert geo.distance_mm < cam.main_optics.sensor_path_mm(cam.mla_path_mm) + fu
             c_s = cam.mla_pitch_mm * 3.0
             z = ray_trace_z(cam, [(0.0, chief_slope(cam, 0.0, 0)), (-a * cam.mla_pitch_mm, chief_slope(cam, -a * cam.mla_pitch_mm, 1))])
-            assert geo.distance_mm == pytest.approx(cam.sensor_to_main_lens_mm + z, rel=1e-9), c_s
+            assert geo.distance_mm == pytest.approx(cam.main_optics.sensor_path_mm(cam.mla_path_mm) + z, rel=1e-9), c_s
         else:
             assert_same(geo.distance_mm - to_h1s, ps.d)
             compared["d"] += 1
@@ -131,7 +132,7 @@ def test_agreement_with_plenoptisign_on_random_cameras():
             # otherwise for dx < 0 (a finite Z of sign -G, in front of or behind the virtual cameras)
             assert eps == 0.0 and dx < 0
             assert tri.range_mm == pytest.approx(tri.baseline_mm * fu / (dx * cam.mla_pitch_mm
-                                                                         * (1 - eps / cam.exit_pupil_distance_mm)))
+                                                                         * (1 - eps / cam.main_optics.exit_pupil_distance_mm)))
         else:
             assert_same(tri.range_mm, ps.Z)
             compared["Z"] += 1
@@ -150,32 +151,29 @@ def assert_same(ours, theirs, rel=1e-6, floor=0.0):
 @pytest.mark.parametrize("d_a", [46.0, 111.0, 3.0])
 @pytest.mark.parametrize("a", [-0.7, 0.0, 0.4, 2.0])
 def test_central_distance_is_the_ray_intersection_with_drifted_micro_images(d_a, a):
-    cam = Camera(0.0014, 0.02, 0.0406, 30.0, 30.0, exit_pupil_distance_mm=d_a,
-                 micro_image_px=13).with_focus_distance(900.0)
+    cam = focused(Camera(0.0014, 0.02, 0.0406, MainLens(30.0, 30.0, exit_pupil_distance_mm=d_a), micro_image_px=13), 900.0)
     for s0 in (0.0, 1.7, -4.2):                         # any pair of neighbouring views, anywhere on the MLA
         s1 = s0 - a * cam.mla_pitch_mm
         z = ray_trace_z(cam, [(s0, chief_slope(cam, s0, 3)), (s1, chief_slope(cam, s1, 4))])
-        expected = cam.sensor_to_main_lens_mm + z if z > 0 else math.inf
+        expected = cam.main_optics.sensor_path_mm(cam.mla_path_mm) + z if z > 0 else math.inf
         assert g.slice_distance_mm(cam, a) == pytest.approx(expected, rel=1e-9)
 
 
 def test_triangulated_point_is_where_the_two_views_rays_meet():
-    cam = Camera(0.0014, 0.02, 0.0406, 30.0, 30.0, exit_pupil_distance_mm=46.0,
-                 micro_image_px=13).with_focus_distance(700.0)
+    cam = focused(Camera(0.0014, 0.02, 0.0406, MainLens(30.0, 30.0, exit_pupil_distance_mm=46.0), micro_image_px=13), 700.0)
     for gap, dx in ((1, -0.3), (-6, 0.8), (4, 1.6), (2, 0.0)):
         s_first, s_second = 0.6, 0.6 + dx * cam.mla_pitch_mm      # view i under one lens, view i+G dx lenses on
         z = ray_trace_z(cam, [(s_first, chief_slope(cam, s_first, -2)), (s_second, chief_slope(cam, s_second, -2 + gap))])
         tri = g.triangulate(cam, dx, gap)
-        assert tri.distance_mm == pytest.approx(cam.sensor_to_main_lens_mm + z, rel=1e-9)
+        assert tri.distance_mm == pytest.approx(cam.main_optics.sensor_path_mm(cam.mla_path_mm) + z, rel=1e-9)
         # the virtual cameras: two rays of one view meet at the plane and lateral position given
         zc = ray_trace_z(cam, [(0.0, chief_slope(cam, 0.0, gap)), (0.3, chief_slope(cam, 0.3, gap))])
-        assert g.virtual_camera_plane_mm(cam) == pytest.approx(cam.sensor_to_main_lens_mm + zc, rel=1e-9)
+        assert g.virtual_camera_plane_mm(cam) == pytest.approx(cam.main_optics.sensor_path_mm(cam.mla_path_mm) + zc, rel=1e-9)
         assert g.view_positions_mm(cam, [gap])[0] == pytest.approx(tri.baseline_mm, rel=1e-12)
 
 
 def test_triangulation_of_a_slice_disparity_is_the_slice_distance():
-    cam = Camera(0.0014, 0.02, 0.0406, 30.0, 30.0, exit_pupil_distance_mm=46.0,
-                 micro_image_px=13).with_focus_distance(700.0)
+    cam = focused(Camera(0.0014, 0.02, 0.0406, MainLens(30.0, 30.0, exit_pupil_distance_mm=46.0), micro_image_px=13), 700.0)
     a = np.linspace(-2.0, 3.0, 41)
     for gap in (1, 3, -5):
         np.testing.assert_array_equal(g.triangulate(cam, 0.0, gap, a=a).distance_mm, g.slice_distance_mm(cam, a))
@@ -186,7 +184,7 @@ def test_triangulation_of_a_slice_disparity_is_the_slice_distance():
 # ------------------------------------------------------------------ telecentric: exactly the 2014 numbers
 def old_formulas(cam, a):
     """The telecentric closed forms as they were before the exit pupil (plain numpy, same operation order)."""
-    fu, eps, pm = cam.main_focal_length_mm, cam.image_distance_mm - cam.main_focal_length_mm, cam.mla_pitch_mm
+    fu, eps, pm = cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm - cam.main_optics.focal_length_mm, cam.mla_pitch_mm
     delta = (pm / cam.m_hat) / cam.mla_focal_length_mm
 
     def d(x):
@@ -194,7 +192,7 @@ def old_formulas(cam, a):
         with np.errstate(all="ignore"):
             z = fu + fu * fu * delta / denom
         meets = (denom > 0) | ((denom < 0) & (z > 0))
-        return cam.sensor_to_main_lens_mm + np.where(meets & np.isfinite(z), z, np.inf)
+        return cam.main_optics.sensor_path_mm(cam.mla_path_mm) + np.where(meets & np.isfinite(z), z, np.inf)
 
     c = cam.center_index
     return d(a), d((2.0 * a * c + 1.0) / (2.0 * c - 1.0)), d((2.0 * a * c - 1.0) / (2.0 * c + 1.0)), delta
@@ -214,20 +212,18 @@ def test_telecentric_results_are_bit_for_bit_the_2014_closed_forms(name):
     np.testing.assert_array_equal(geo.near_mm[finite], near[finite])
     np.testing.assert_array_equal(geo.far_mm[finite], far[finite])
     i = g.view_offsets(cam)
-    np.testing.assert_array_equal(g.view_positions_mm(cam, i), (-i * delta + 0.0) * cam.main_focal_length_mm)
-    assert g.baseline_mm(cam, 3) == 3.0 * delta * cam.main_focal_length_mm
+    np.testing.assert_array_equal(g.view_positions_mm(cam, i), (-i * delta + 0.0) * cam.main_optics.focal_length_mm)
+    assert g.baseline_mm(cam, 3) == 3.0 * delta * cam.main_optics.focal_length_mm
     dist = d[np.isfinite(d) & (a > 0)]
-    x = dist - cam.sensor_to_main_lens_mm - cam.main_focal_length_mm
-    eps = cam.image_distance_mm - cam.main_focal_length_mm
+    x = dist - cam.main_optics.sensor_path_mm(cam.mla_path_mm) - cam.main_optics.focal_length_mm
+    eps = cam.main_optics.image_distance_mm - cam.main_optics.focal_length_mm
     np.testing.assert_array_equal(g.refocus_parameter(cam, dist),
-                                  delta * (cam.main_focal_length_mm ** 2 * (1.0 / x) - eps) / cam.mla_pitch_mm)
+                                  delta * (cam.main_optics.focal_length_mm ** 2 * (1.0 / x) - eps) / cam.mla_pitch_mm)
 
 
 # ------------------------------------------------------------------ extremes
 def illum_like(d_a=46.048875898122787, focus=1000.0):
-    return Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.0406, main_focal_length_mm=77.59,
-                  image_distance_mm=77.59, f_number=2.11, grid="hexagonal", exit_pupil_distance_mm=d_a,
-                  micro_image_px=13).with_focus_distance(focus)
+    return focused(Camera(0.0014, 0.02, 0.0406, MainLens(77.59, 77.59, f_number=2.11, exit_pupil_distance_mm=d_a), grid="hexagonal", micro_image_px=13), focus)
 
 
 def test_exit_pupil_towards_infinity_converges_to_telecentric():
@@ -243,7 +239,7 @@ def test_exit_pupil_towards_infinity_converges_to_telecentric():
 def test_exit_pupil_towards_the_mla_collapses_every_slice_onto_the_focus_distance():
     focus = illum_like(math.inf, 1000.0)
     for d_a in (1e-3, 1e-6, 1e-9, 1e-12):
-        cam = dataclasses.replace(focus, exit_pupil_distance_mm=d_a)
+        cam = focus.with_optics(dataclasses.replace(focus.main_optics, exit_pupil_distance_mm=d_a))
         with np.errstate(all="raise", under="ignore"):
             geo = g.slice_geometry(cam, np.array([-1.5, 0.5, 2.0]))
             tri = g.triangulate(cam, np.array([-1.0, 0.0, 2.0]), 1)
@@ -300,8 +296,7 @@ def test_wide_random_cameras_with_exit_pupils_give_no_nan_and_ordered_limits():
         pixel, lens = sorted((log_uniform(1e-3, 1.0), log_uniform(1e-3, 1.0)))
         fu = log_uniform(0.1, 1000.0)
         eps = 0.0 if rng.random() < 0.2 else log_uniform(1e-12, 1e3)
-        cam = Camera(pixel, lens, log_uniform(0.1, 1000.0), fu, fu + eps,
-                     exit_pupil_distance_mm=log_uniform(1e-9, 1e12))
+        cam = Camera(pixel, lens, log_uniform(0.1, 1000.0), MainLens(fu, fu + eps, exit_pupil_distance_mm=log_uniform(1e-9, 1e12)))
         a = np.concatenate([rng.uniform(-50, 50, 20), [0.0, -1.0, 1.0, g.infinity_parameter(cam)]])
         with np.errstate(all="raise", under="ignore"):
             geo = g.slice_geometry(cam, a)

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from focus import focused
 from lfproc import LfprocError
 from lfproc import geometry as g
 from lfproc.camera import NATIVE_PLANE_UM, SENSOR_MM, Camera, MainLens, MainOptics, Microscope
@@ -53,7 +54,7 @@ def _c_na(camera, m_obj, na):
 def _microscope_closed_form(camera, a, extent=None):
     """(z, z_near, z_far, dof) in µm: z = a·m̂·f_s·n/M², the paper's bounding border-ray pairs over c views
     (c = c_NA, at least 1, unless the views summed are named), the wave term λ·n/NA² split evenly."""
-    scope = camera.microscope
+    scope = camera.main_optics
     m_obj, na, n = scope.objective_magnification, scope.numerical_aperture, scope.immersion_index
     wavelength_um = (550.0 if scope.wavelength_nm is None else scope.wavelength_nm) * 1e-3
     zeta = camera.m_hat * camera.mla_focal_length_mm * 1e3 * n / m_obj ** 2
@@ -90,7 +91,7 @@ def test_microscope_slices_are_the_closed_form_and_the_previous_dof(name, extent
 def test_the_microscope_dof_has_the_wave_term_and_the_na_views():
     # an objective filling only some views: the DOF of slice 0 is the border rays' 2·z(1)/(2·c_NA − 1) + λn/NA²
     camera = SCOPES["10x-air-narrow"]
-    scope = camera.microscope
+    scope = camera.main_optics
     wave = scope.wavelength_mm * 1e3 * scope.immersion_index / scope.numerical_aperture ** 2
     c_na = _c_na(camera, scope.objective_magnification, scope.numerical_aperture)
     assert g.na_views(camera) == c_na and 1 <= c_na < camera.center_index
@@ -109,7 +110,7 @@ OPTICS = {
     "main lens, finite exit pupil": _camera("illum-like").main_optics,
     "main lens without f-number": MainLens(50.0, 52.5, principal_plane_gap_mm=-3.0),
     "main lens with a prescription": _lens_with_prescription().main_optics,
-    "main lens with a prescription, focused near": _lens_with_prescription().with_focus_distance(900.0).main_optics,
+    "main lens with a prescription, focused near": focused(_lens_with_prescription(), 900.0).main_optics,
     "microscope 20x": SCOPES["lfm-20x"].main_optics,
     "microscope 60x water": SCOPES["lfm-60x-water"].main_optics,
     "microscope with relay": SCOPES["40x-relay"].main_optics,
@@ -122,7 +123,7 @@ def _transfer_position(optics, w_mm, mla_path_mm):
     front of it is at −s), or µm from the native object plane, positive towards the objective (+s)."""
     t = optics.transfer()
     s = t.index * (t.B + w_mm * t.D) / (t.A + w_mm * t.C)
-    if optics.object_space.from_sensor:
+    if isinstance(optics, MainLens):
         return mla_path_mm + optics.image_distance_mm + optics.principal_plane_gap_mm - s
     return s * optics.object_space.per_mm
 
@@ -135,16 +136,17 @@ def test_every_main_optics_implements_the_interface(name):
     space = optics.object_space
     assert space in (SENSOR_MM, NATIVE_PLANE_UM)
     assert space.position_key == space.keys[0] and len(space.keys) == 4
-    assert space.per_mm == (1.0 if space.from_sensor else 1000.0)
+    assert space.per_mm == (1000.0 if isinstance(optics, Microscope) else 1.0)
     # the aperture as a sine at the MLA: 1/(2N) of a lens (None without N), NA/M of an objective
+    camera = SCOPES["lfm-20x"] if isinstance(optics, Microscope) else _camera("paper-f100")
     if isinstance(optics, Microscope):
         assert optics.image_aperture_sine == optics.numerical_aperture / optics.objective_magnification
-        assert optics.views_are_orthographic and math.isinf(optics.exit_pupil_distance_mm)
+        assert optics.place_views(camera, [1.0]).orthographic and math.isinf(optics.exit_pupil_distance_mm)
         assert optics.wave_depth_of_field() > 0
     else:
         expected = None if optics.f_number is None else 1.0 / (2.0 * optics.f_number)
         assert optics.image_aperture_sine == expected
-        assert not optics.views_are_orthographic and optics.relay_magnification == 1.0
+        assert not optics.place_views(camera, [1.0]).orthographic and optics.relay_magnification == 1.0
         assert optics.wave_depth_of_field() == 0.0
     assert optics.relay_magnification > 0
     assert isinstance(optics.describe(), str) and optics.describe()
@@ -157,7 +159,7 @@ def test_object_position_is_the_transfers_conjugate(name):
     optics = OPTICS[name]
     mla_path = 2.437
     slope_gap = 0.0123
-    if optics.object_space.from_sensor:       # real conjugates in front of the lens: w > −(b_U − f_U)
+    if isinstance(optics, MainLens):          # real conjugates in front of the lens: w > −(b_U − f_U)
         eps = optics.image_distance_mm - optics.focal_length_mm
         w_values = [0.02, 0.3, 1.7, 12.0, 150.0] + ([-0.5 * eps] if eps > 0 else [])
     else:                                     # every depth, either side of the native object plane
@@ -182,8 +184,8 @@ def test_slice_geometry_asks_the_optics_where_the_rays_meet(name):
     expected = optics.object_position(a, camera.mla_pitch_mm, slope_gap, camera.mla_path_mm)
     geo = g.slice_geometry(camera, a)
     np.testing.assert_array_equal(geo.depth, expected)
-    assert geo.space == camera.object_space
-    assert list(geo.records()[0]) == ["a", *camera.object_space.keys]
+    assert geo.space == camera.main_optics.object_space
+    assert list(geo.records()[0]) == ["a", *camera.main_optics.object_space.keys]
 
 
 # ------------------------------------------------------------------ the converted geometry functions
@@ -193,14 +195,18 @@ def test_usable_range_follows_the_object_space():
     low, high = g.usable_a_range(lens)
     assert low == float(g.infinity_parameter(lens)) and high == math.inf
     z1 = float(g.slice_geometry(scope, 1.0).depth)
-    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.4g} µm) to +1 (z = {z1:+.4g} µm)"
-    text = g.usable_range_text(lens)
-    assert text.startswith(f"a from {g.format_a(low, +1)} (infinity) to +inf (approaching the front focal plane")
+    assert g.usable_range_text(scope, -1.0, 1.0) == f"a from -1 (z = {-z1:+.2f} µm) to +1 (z = {z1:+.2f} µm)"
+    front = g.front_focal_plane_mm(lens)
+    assert g.usable_range_text(lens) == f"a from {g.format_a(low, +1)} (infinity) to +inf (approaching the main lens's front focal plane at {front:.1f} mm)"
+    # in positions (the argument a user gave), low to high, each end with its a
+    assert g.usable_range_text(scope, -1.0, 1.0, "z_um") == f"z_um from {-z1:+.2f} µm to {z1:+.2f} µm (a from -1 to +1)"
+    assert g.usable_range_text(lens, None, 2.0, "distance_mm").endswith(f" mm to infinity (a from +2 to "
+                                                                        f"{g.format_a(low, +1)})")
 
 
 def test_views_inside_the_aperture_follow_the_optics():
     scope = SCOPES["lfm-60x-water"]
-    np.testing.assert_array_equal(g.views_inside_aperture(scope), g.views_inside_na(scope))
+    np.testing.assert_array_equal(g.views_inside_aperture(scope), scope.main_optics.inside_aperture(scope))
     # orthographic views: the sine of each view's image-side ray within NA/M (plain loop)
     c, p, f_s = scope.center_index, scope.sample_pitch_mm, scope.mla_focal_length_mm
     sine = scope.main_optics.image_aperture_sine
@@ -209,14 +215,14 @@ def test_views_inside_the_aperture_follow_the_optics():
                           for kx in range(scope.m_hat)] for ky in range(scope.m_hat)])
     np.testing.assert_array_equal(g.views_inside_aperture(scope), expected)
     lens = _camera("paper-f100")
-    radius = lens.main_focal_length_mm / (2 * lens.f_number)
+    radius = lens.main_optics.focal_length_mm / (2 * lens.main_optics.f_number)
     pos = g.view_positions_mm(lens)
     np.testing.assert_array_equal(g.views_inside_aperture(lens),
                                   pos[:, None] ** 2 + pos[None, :] ** 2 <= radius ** 2 * (1 + 1e-12))
 
 
 def test_apertures_of_orthographic_views_are_sines():
-    scope = SCOPES["lfm-20x"].microscope
+    scope = SCOPES["lfm-20x"].main_optics
     camera = SCOPES["lfm-20x"]
     widest, _ = g.aperture_limits(camera)
     assert widest == pytest.approx(scope.objective_magnification / (2 * scope.numerical_aperture), rel=1e-15)
@@ -225,16 +231,17 @@ def test_apertures_of_orthographic_views_are_sines():
     assert g.equivalent_numerical_aperture(camera) == scope.numerical_aperture   # capped at the objective's
     assert g.aperture_text(camera, 2.0).startswith("NA ")
     assert g.aperture_text(_camera("paper-f100"), 2.0).startswith("f/")
-    with pytest.raises(LfprocError, match="equivalent numerical aperture needs a microscope"):
+    with pytest.raises(LfprocError, match="equivalent numerical aperture needs object-side telecentric optics"):
         g.equivalent_numerical_aperture(_camera("paper-f100"))
 
 
 def test_virtual_cameras_and_triangulation_refuse_orthographic_views():
     camera = SCOPES["lfm-20x"]
-    for call in (lambda: g.view_positions_mm(camera), lambda: g.baseline_mm(camera), lambda: g.view_tilts_deg(camera),
-                 lambda: g.triangulate(camera, [0.5], 1)):
+    for call in (lambda: g.view_positions_mm(camera), lambda: g.baseline_mm(camera), lambda: g.view_tilts_deg(camera)):
         with pytest.raises(LfprocError, match="orthographic"):
             call()
+    with pytest.raises(LfprocError, match="needs a main lens"):
+        g.triangulate(camera, [0.5], 1)
 
 
 def test_integer_gaps_and_uncovered_depths_in_either_object_space():
@@ -274,7 +281,7 @@ def test_calibration_blames_the_relay_of_an_afocal_objective_not_an_exit_pupil()
 def test_the_lens_renderer_refuses_a_microscope_and_the_microscope_renderer_a_lens():
     from lfproc.simulate import render_microscope_views
     from lfproc.simulate._checks import _require_f_number
-    with pytest.raises(LfprocError, match="needs a main lens"):
+    with pytest.raises(LfprocError, match="traces a main lens"):
         _require_f_number(SCOPES["lfm-20x"])
     with pytest.raises(LfprocError, match="needs a microscope camera"):
         render_microscope_views(_camera("paper-f100"), None, (2, 2))   # refused before the scene is read

@@ -8,6 +8,7 @@ bounds of `usable_a_range`; and the refusals' wording (the whole range, low to h
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -49,7 +50,7 @@ def test_refusals_name_the_whole_range_low_to_high():
     camera = CAMERAS["sample (at infinity)"]()
     front = geometry.front_focal_plane_mm(camera)
     assert geometry.usable_a_range(camera) == (0.0, math.inf) and front == pytest.approx(100.4)
-    whole = "usable: a from +0 (infinity) to +inf (approaching the front focal plane at 100.4 mm)"
+    whole = "usable: a from +0 (infinity) to +inf (approaching the main lens's front focal plane at 100.4 mm)"
     with pytest.raises(LfprocError, match="beyond infinity") as info:
         geometry.check_usable_a(camera, -5.0, "a")
     assert str(info.value).startswith("a: a=-5 ") and str(info.value).endswith(whole)
@@ -86,3 +87,61 @@ def test_refocus_refuses_a_depth_range_before_the_front_focal_plane_with_the_ran
     assert_clean_error(proc, "--depth-range 95:400", "95 mm", "usable: distances beyond 100.4 mm",
                        "a from +0 (infinity)")
     assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------------------- one capture, one range (issue 38)
+@pytest.fixture(scope="module")
+def sample_lf():
+    import lfproc
+    sample = SAMPLES / "sample"
+    return lfproc.read_light_field(str(sample / "capture.png"), str(sample / "camera.toml"),
+                                   white=str(sample / "white.png"))
+
+
+def _refusal(call) -> str:
+    with pytest.raises(LfprocError) as info:
+        call()
+    message = str(info.value)
+    assert "\n" not in message
+    return message
+
+
+def test_every_refusal_of_one_capture_states_its_one_range_low_to_high(sample_lf):
+    """Issue 38: ``a=-17`` said "usable: a from +0 (infinity) to +inf" and ``a=400`` on the same capture
+    "+0 (infinity) to +7.499 (176.2 mm)". Both now state the capture's one range: the optics' real slices
+    (from infinity) narrowed to those whose refocused area covers half the capture, low to high."""
+    import lfproc
+    from lfproc.refocus import usable_a_bound
+    bound = usable_a_bound(sample_lf.view_mask, sample_lf.lens_shape)
+    printed = math.floor(bound * 1000 + 1e-6) / 1000
+    near = float(geometry.slice_distance_mm(sample_lf.camera, printed))
+    one = f"usable: a from +0 (infinity) to {printed:+.3f}".rstrip("0") + f" ({near:.1f} mm)"
+    too_near = _refusal(lambda: lfproc.focal_stack(sample_lf, a=[-17.0]))
+    too_far = _refusal(lambda: lfproc.focal_stack(sample_lf, a=[400.0]))
+    beyond = _refusal(lambda: lfproc.focal_stack(sample_lf, a=[-0.5, 1.0]))
+    assert "a=-17 focuses 67.0 mm from the sensor, nearer than the main lens's front focal plane" in too_near
+    assert "at a=400 only 0 %" in too_far and "a=-0.5 focuses beyond infinity" in beyond
+    for message in (too_near, too_far, beyond):
+        assert message.endswith(one), message
+    # asked in mm from the sensor: refused in mm, the same range in distances, low to high
+    by_distance = _refusal(lambda: lfproc.focal_stack(sample_lf, distance_mm=[150.0]))
+    assert "at distance_mm=150 mm only 0 %" in by_distance
+    assert by_distance.endswith(f"usable: distance_mm from {near:.1f} mm to infinity (a from {printed:+.3f} to +0)"
+                                .replace(f"{printed:+.3f}", f"{printed:+.3f}".rstrip("0")))
+
+
+def test_a_microscope_capture_is_refused_in_the_unit_asked(tmp_path):
+    """Issue 38: ``z_um=[5000]`` was refused "at a=41.2045 only 0 % ... usable: a from -11.666 (z = -1416 um)";
+    asked in µm it is refused in µm, with the range in µm (µm in the text, ``z_um`` as the argument)."""
+    import lfproc
+    from scopefile import write_tiny_lfm
+    folder = write_tiny_lfm(tmp_path)
+    lf = lfproc.read_light_field(str(folder / "capture.tif"), str(folder / "lfm.toml"), white=str(folder / "white.tif"))
+    message = _refusal(lambda: lfproc.focal_stack(lf, z_um=[5000.0]))
+    assert "at z_um=5000 µm only 0 %" in message and "a=" not in message.split("usable:")[0]
+    low, high, a_low, a_high = re.search(r"usable: z_um from ([+-][\d.]+) µm to ([+-][\d.]+) µm \(a from "
+                                         r"([+-][\d.]+) to ([+-][\d.]+)\)$", message).groups()
+    assert float(low) == -float(high) and float(high) > 0 and float(a_low) == -float(a_high)
+    # the same capture asked in a: the same range, in a with each end's z
+    in_a = _refusal(lambda: lfproc.focal_stack(lf, a=[400.0]))
+    assert in_a.endswith(f"usable: a from {a_low} (z = {low} µm) to {a_high} (z = {high} µm)"), in_a

@@ -2,21 +2,22 @@
 
 import pytest
 
+from focus import focused
 from lfproc import Camera
 from lfproc import geometry as g
 
 from lfproc import simulate  # noqa: E402
 from lfproc.simulate import Noise, Plane, Scene  # noqa: E402
+from lfproc.camera import MainLens
 from plainref import measured_shift  # noqa: E402
 
-CAMERA = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0182, mla_focal_length_mm=0.0364, main_focal_length_mm=30.0,
-                image_distance_mm=30.0, f_number=2.0, micro_image_px=13).with_focus_distance(600.0)
+CAMERA = focused(Camera(0.0014, 0.0182, 0.0364, MainLens(30.0, 30.0, f_number=2.0), micro_image_px=13), 600.0)
 
 
 @pytest.mark.parametrize("distance_mm", [520.0, 760.0])
 def test_views_parallax_triangulates_to_the_plane(distance_mm):
-    z = distance_mm - CAMERA.sensor_to_main_lens_mm
-    footprint = CAMERA.mla_pitch_mm * abs(1 - z / CAMERA.main_focal_length_mm)
+    z = distance_mm - CAMERA.main_optics.sensor_path_mm(CAMERA.mla_path_mm)
+    footprint = CAMERA.mla_pitch_mm * abs(1 - z / CAMERA.main_optics.focal_length_mm)
     views, _, _ = simulate.render_ideal_views(CAMERA, Scene((Plane(distance_mm, Noise(3.0 * footprint, seed=5)),)),
                                               (24 * 13, 28 * 13), rim_radius_mm=None)
     c, gap = CAMERA.center_index, 4

@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 from conftest import SAMPLES, assert_clean_error, run_cli
+from lfproc.camera import MainLens
 
 SAMPLE = SAMPLES / "sample"
 CAMERA = SAMPLE / "camera.toml"
@@ -73,10 +74,8 @@ def test_the_exit_pupil_scale_is_part_of_the_predicted_pitch(tmp_path):
     from lfproc.inputs import GridRecord, check_grid_fits_camera
     from lfproc.errors import LfprocError
 
-    near = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=2.0, grid="hexagonal", exit_pupil_distance_mm=20.0)
-    far = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=2.0, grid="hexagonal")
+    near = Camera(0.0014, 0.02, 0.4, MainLens(50.0, 50.0, f_number=2.0, exit_pupil_distance_mm=20.0), grid="hexagonal")
+    far = Camera(0.0014, 0.02, 0.4, MainLens(50.0, 50.0, f_number=2.0), grid="hexagonal")
     scale = (20.0 + 0.4) / 20.0                                      # 2 % wider micro image lattice
     record = GridRecord("g.json", LensGrid("hexagonal", near.pitch_px * scale, 0.0, (5.0, 5.0), 10, 10),
                         made_from=None, pitch_sigma_px=1e-4)

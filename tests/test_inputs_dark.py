@@ -9,13 +9,11 @@ import pytest
 from conftest import assert_clean_error, run_cli
 from PIL import Image
 
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.pipeline import load_lightfield, prepare_decoding
 
 # an 8-bit monochrome camera (the sample's optics): a pedestal of 16-24 DN is 6-9 % of its range
-CAM = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-             image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="none", black_level=0, white_level=255,
-             micro_image_px=11)
+CAM = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="none", black_level=0, white_level=255, micro_image_px=11)
 
 
 @pytest.fixture(scope="module")

@@ -2,10 +2,11 @@
 camera file states none (the issue's case: nominal 46.5 px gives 45, the white image measures 48.2 px: 47)."""
 
 from lfproc.camera import Camera
+from lfproc.camera import MainLens
 from lfproc.inputs import measured_m_hat
 
-NOMINAL = dict(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0014 * 46.5, mla_focal_length_mm=0.025, main_focal_length_mm=6.45,
-               image_distance_mm=6.5, f_number=2.0, grid="hexagonal")
+NOMINAL = dict(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0014 * 46.5, mla_focal_length_mm=0.025,
+               main_optics=MainLens(6.45, 6.5, f_number=2.0), grid="hexagonal")
 
 
 def test_m_hat_follows_the_measured_pitch_unless_the_camera_file_states_it():

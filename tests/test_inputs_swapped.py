@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, assert_clean_error, run_cli
 
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.decode import make_decoder
 from lfproc.errors import LfprocError
 from lfproc.inputs import WHITE_FLATNESS, check_capture_is_not_white, check_white_is_white, lens_flatness
@@ -37,9 +37,7 @@ def test_sample_white_as_capture_and_capture_as_white_are_refused(sample_grid, t
     assert not any(tmp_path.glob("[abc]/*"))
 
 
-CAM = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-             image_distance_mm=50.0, f_number=4.0, grid="rectangular", cfa="RGGB", black_level=64,
-             white_level=16383, micro_image_px=11)
+CAM = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="RGGB", black_level=64, white_level=16383, micro_image_px=11)
 
 
 def _render(texture, distance_mm, noise=None, seed=0):

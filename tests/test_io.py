@@ -20,7 +20,7 @@ from hypothesis.extra import numpy as hnp
 from PIL import Image
 
 from lfproc import io as lio
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.errors import LfprocError
 
 # DNG CFAPattern codes: 0 = red, 1 = green, 2 = blue
@@ -53,8 +53,7 @@ def write_dng(path, mosaic, cfa_codes=BAYER_CODES["RGGB"], black=(64,), white=40
 
 
 def make_camera(**levels):
-    return Camera(pixel_pitch_mm=0.01, mla_pitch_mm=0.25, mla_focal_length_mm=2.749, main_focal_length_mm=99.5,
-                  image_distance_mm=100.0, **levels)
+    return Camera(0.01, 0.25, 2.749, MainLens(99.5, 100.0), **levels)
 
 
 def oiio_write(path, pixels, type_name):

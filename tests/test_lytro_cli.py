@@ -82,11 +82,11 @@ def test_camera_file_from_metadata(tmp_path, illum_file):
     assert cam.pixel_pitch_mm == pytest.approx(devices["sensor"]["pixelPitch"] * 1e3, rel=1e-12)
     assert cam.mla_pitch_mm == pytest.approx(devices["mla"]["lensPitch"] * 1e3, rel=1e-12)
     assert cam.mla_focal_length_mm == pytest.approx(devices["mla"]["sensorOffset"]["z"] * 1e3, rel=1e-12)
-    assert cam.main_focal_length_mm == pytest.approx(devices["lens"]["focalLength"] * 1e3, rel=1e-12)
-    assert cam.f_number == pytest.approx(devices["lens"]["fNumber"])
-    assert cam.exit_pupil_distance_mm == pytest.approx(devices["lens"]["exitPupilOffset"]["z"] * 1e3)
+    assert cam.main_optics.focal_length_mm == pytest.approx(devices["lens"]["focalLength"] * 1e3, rel=1e-12)
+    assert cam.main_optics.f_number == pytest.approx(devices["lens"]["fNumber"])
+    assert cam.main_optics.exit_pupil_distance_mm == pytest.approx(devices["lens"]["exitPupilOffset"]["z"] * 1e3)
     assert (cam.grid, cam.cfa, cam.black_level, cam.white_level) == ("hexagonal", "GRBG", 64, 1023)
-    assert cam.image_distance_mm == cam.main_focal_length_mm     # default: focused at infinity
+    assert cam.main_optics.image_distance_mm == cam.main_optics.focal_length_mm     # default: focused at infinity
     assert cam.m_hat == 13                                       # 20 um / 1.4 um = 14.29 -> 13
     assert provenance["main_lens.image_distance_mm"].startswith("default: focused at infinity")
     assert provenance["mla.focal_length_mm"].startswith("metadata: devices.mla.sensorOffset.z")
@@ -98,13 +98,13 @@ def test_camera_focus_distance_flag_and_telecentric_f01(tmp_path, illum_file, f0
     assert run_cli("camera", illum_file, "-o", out, "--focus-distance", "1000").returncode == 0
     cam = Camera.from_toml(out)
     provenance = dict(cam.provenance)
-    f_u, b_u = cam.main_focal_length_mm, cam.image_distance_mm
+    f_u, b_u = cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm
     z = 1000 - cam.mla_focal_length_mm - b_u                    # object distance from the (thin) main lens
     assert 1 / f_u == pytest.approx(1 / b_u + 1 / z, rel=1e-12)
     assert provenance["main_lens.image_distance_mm"].startswith("flag: --focus-distance 1000")
     assert run_cli("camera", f01_pair, "-o", out).returncode == 0
     cam = Camera.from_toml(out)
-    assert math.isinf(cam.exit_pupil_distance_mm) and cam.cfa == "BGGR" and cam.m_hat == 9
+    assert math.isinf(cam.main_optics.exit_pupil_distance_mm) and cam.cfa == "BGGR" and cam.m_hat == 9
 
 
 def test_camera_of_a_non_lytro_file_is_a_clean_error(tmp_path):
@@ -244,6 +244,6 @@ def test_camera_file_numbers_carry_no_binary_noise(tmp_path):
                  "exit_pupil_distance_mm = 70.0\n", "infinityLambda = 7.3\n"):
         assert line in text, (line, text)
     cam = Camera.from_toml(out)
-    assert cam.main_focal_length_mm == pytest.approx(0.0064499998092651363 * 1e3, rel=1e-15)
+    assert cam.main_optics.focal_length_mm == pytest.approx(0.0064499998092651363 * 1e3, rel=1e-15)
     assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.009, 0.06, 0.03)
     assert "0000000" not in proc.stdout and "9999999" not in proc.stdout

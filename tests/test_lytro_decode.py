@@ -28,15 +28,12 @@ from lfproc.io import write_image
 from lfproc.cli.lytro_defaults import camera_for_captures
 from lfproc.pipeline import load_lightfield, prepare_decoding
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 MODELS = {
     # name: (camera, sensor shape (H, W), bits, endianness)
-    "illum": (Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.020, mla_focal_length_mm=0.0406,
-                     main_focal_length_mm=77.59, image_distance_mm=77.59, f_number=2.11, grid="hexagonal",
-                     cfa="GRBG", black_level=64, white_level=1023), (180, 240), 10, "little"),
-    "f01": (Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.0139, mla_focal_length_mm=0.025,
-                   main_focal_length_mm=6.45, image_distance_mm=6.45, f_number=1.91, grid="hexagonal",
-                   cfa="BGGR", black_level=168, white_level=4095), (160, 200), 12, "big"),
+    "illum": (Camera(0.0014, 0.020, 0.0406, MainLens(77.59, 77.59, f_number=2.11), grid="hexagonal", cfa="GRBG", black_level=64, white_level=1023), (180, 240), 10, "little"),
+    "f01": (Camera(0.0014, 0.0139, 0.025, MainLens(6.45, 6.45, f_number=1.91), grid="hexagonal", cfa="BGGR", black_level=168, white_level=4095), (160, 200), 12, "big"),
 }
 
 
@@ -100,7 +97,7 @@ def test_camera_from_metadata_decodes_too(written):
     folder = written["folder"]
     cam = camera_for_captures(None, [str(folder / "capture.LFR")])
     assert cam.grid == "hexagonal" and cam.m_hat == written["camera"].m_hat
-    if math.isinf(cam.exit_pupil_distance_mm):
+    if math.isinf(cam.main_optics.exit_pupil_distance_mm):
         views = decoded(cam, folder / "capture.LFR", white_dir=folder / "caldata")
     else:
         # the Illum fixture's metadata says 46 mm, but the simulated white is telecentric: calibration says so

@@ -16,6 +16,7 @@ import pytest
 import lytrogen
 from lfproc import io as lio
 from lfproc.errors import LfprocError
+from lfproc.camera import MainLens
 
 
 # ============================================================================ packings
@@ -262,8 +263,7 @@ def test_metadata_that_is_not_json(tmp_path):
 def test_camera_file_levels_are_not_used_for_lytro_files(tmp_path):
     from lfproc.camera import Camera
     path, dn = small_illum(tmp_path)
-    cam = Camera(pixel_pitch_mm=0.0014, mla_pitch_mm=0.02, mla_focal_length_mm=0.04, main_focal_length_mm=77.0,
-                 image_distance_mm=77.0, cfa="RGGB", black_level=0, white_level=65535)
+    cam = Camera(0.0014, 0.02, 0.04, MainLens(77.0, 77.0), cfa="RGGB", black_level=0, white_level=65535)
     capture = lio.read_capture(path, cam)
     assert capture.cfa == "GRBG"
     np.testing.assert_allclose(capture.data, (dn - 64.0) / 959.0, rtol=1e-6)

@@ -65,8 +65,8 @@ def test_illum_schema_info_and_camera_file(tmp_path, capsys, illum):
     status, _, err = cli(capsys, "camera", path, "-o", out)
     assert status == 0, err
     cam = Camera.from_toml(out)
-    assert cam.main_focal_length_mm == pytest.approx(lens["focalLength"] * 1e3, rel=1e-12)
-    assert cam.f_number == lens["fNumber"] and cam.cfa == "GRBG" and cam.black_level == 64
+    assert cam.main_optics.focal_length_mm == pytest.approx(lens["focalLength"] * 1e3, rel=1e-12)
+    assert cam.main_optics.f_number == lens["fNumber"] and cam.cfa == "GRBG" and cam.black_level == 64
     tables = tomllib.loads(out.read_text())
     numbers = {f"{t}.{k}" for t, table in tables.items() if t != "provenance" and isinstance(table, dict)
                for k in table}
@@ -149,8 +149,8 @@ def test_export_camera_file_for_a_picture_without_metadata(tmp_path, capsys, foc
     extra = [] if focus is None else ["--focus-distance", focus]
     status, _, err = cli(capsys, "export", pic, "--camera", cam_path, *extra, "-o", tmp_path / "out")
     assert status == 0, err
-    f_u, n, p_m, f_s = cam.main_focal_length_mm, cam.f_number, cam.mla_pitch_mm, cam.mla_focal_length_mm
-    b_u = cam.image_distance_mm if focus is None else image_distance_for_focus(f_u, focus, f_s, "test")
+    f_u, n, p_m, f_s = cam.main_optics.focal_length_mm, cam.main_optics.f_number, cam.mla_pitch_mm, cam.mla_focal_length_mm
+    b_u = cam.main_optics.image_distance_mm if focus is None else image_distance_for_focus(f_u, focus, f_s, "test")
     for k, lam in enumerate((-8.92, -5.78, -2.6)):
         sidecar = json.loads((tmp_path / "out" / f"IMG-stk_stack_{k:02d}.json").read_text())
         assert sidecar["distance_mm"] == pytest.approx(newton_distance(lam, f_u=f_u, n=n, p_m=p_m, f_s=f_s, b_u=b_u),
@@ -173,7 +173,7 @@ def test_export_focus_distance_needs_a_camera(tmp_path, capsys):
                      '[microscope]\nobjective_magnification = 20\nnumerical_aperture = 0.5\nimmersion_index = 1.33\n'
                      'tube_lens_focal_length_mm = 200\n')
     status, _, err = cli(capsys, "export", pic, "--camera", scope, "-o", tmp_path / "out")
-    assert status == 2 and len(err) == 1 and "microscope" in err[0] and not (tmp_path / "out").exists()
+    assert status == 2 and len(err) == 1 and "objective, not a Lytro camera" in err[0] and not (tmp_path / "out").exists()
 
 
 def test_export_focus_distance_overrides_the_lambda_reading(tmp_path, capsys):
@@ -308,7 +308,7 @@ def test_napari_metadata_gives_a_microscope_camera_file(tmp_path, capsys):
     status, _, err = cli(capsys, "camera", meta, "-o", out)
     assert status == 0, err
     cam = Camera.from_toml(out)
-    scope = cam.microscope
+    scope = cam.main_optics
     assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.0065, 0.15, 2.9)
     assert (scope.objective_magnification, scope.numerical_aperture, scope.immersion_index) == (40, 0.8, 1.33)
     assert (scope.tube_lens_focal_length_mm, scope.relay_magnification, scope.wavelength_nm) == (180, 1, 520)
@@ -330,7 +330,7 @@ def test_export_camera_file_overrides_the_pictures_metadata(tmp_path, capsys):
     assert status == 0, err
     sidecar = json.loads((tmp_path / "out" / "I_stack_00.json").read_text())
     assert sidecar["camera_model"] == "B01" and sidecar["camera"]["from"] == f"camera file {cam_path}"
-    assert sidecar["camera"]["f_number"] == cam.f_number and sidecar["camera"]["focus_distance_mm"] == pytest.approx(800)
-    expected = newton_distance(-15.0, f_u=cam.main_focal_length_mm, n=cam.f_number, p_m=cam.mla_pitch_mm,
-                               f_s=cam.mla_focal_length_mm, b_u=cam.image_distance_mm)
+    assert sidecar["camera"]["f_number"] == cam.main_optics.f_number and sidecar["camera"]["focus_distance_mm"] == pytest.approx(800)
+    expected = newton_distance(-15.0, f_u=cam.main_optics.focal_length_mm, n=cam.main_optics.f_number, p_m=cam.mla_pitch_mm,
+                               f_s=cam.mla_focal_length_mm, b_u=cam.main_optics.image_distance_mm)
     assert sidecar["lambda"] == -15.0 and sidecar["distance_mm"] == pytest.approx(expected, rel=1e-9)

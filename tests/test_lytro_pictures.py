@@ -121,7 +121,7 @@ def test_infinity_lambda_maps_to_the_slice_at_infinity(kind):
     assert math.isinf(mapping.distance_mm(meta.infinity_lambda))
     assert math.isinf(mapping.distance_mm(meta.infinity_lambda + 3))            # beyond infinity
     assert math.isfinite(geometry.slice_distance_mm(cam, mapping.a(meta.infinity_lambda - 1e-3)))
-    assert cam.image_distance_mm - cam.main_focal_length_mm == pytest.approx(
+    assert cam.main_optics.image_distance_mm - cam.main_optics.focal_length_mm == pytest.approx(
         meta.infinity_lambda * meta.f_number * meta.lens_pitch_m * 1e3, rel=1e-12)
     assert dict(cam.provenance)["main_lens.image_distance_mm"].startswith("derived from lambda")
 
@@ -264,7 +264,7 @@ def test_camera_file_from_an_illum_picture(tmp_path, capsys, pictures):
     cam = Camera.from_toml(out)
     devices = lytrogen.fixture("illum-white-image.TXT")["master"]["picture"]["frameArray"][0]["frame"]["metadata"][
         "devices"]
-    assert cam.main_focal_length_mm == pytest.approx(devices["lens"]["focalLength"] * 1e3, rel=1e-12)
+    assert cam.main_optics.focal_length_mm == pytest.approx(devices["lens"]["focalLength"] * 1e3, rel=1e-12)
     assert cam.mla_focal_length_mm == pytest.approx(devices["mla"]["sensorOffset"]["z"] * 1e3, rel=1e-12)
     assert dict(cam.provenance) == tomllib.loads(out.read_text())["provenance"]
     assert dict(cam.provenance)["mla.pitch_mm"] == "metadata: devices.mla.lensPitch"

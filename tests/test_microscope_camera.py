@@ -21,7 +21,7 @@ def _cam(text):
 def test_contract_example_parses_with_the_relay():
     cam = _cam(CONTRACT)
     assert isinstance(cam.main_optics, Microscope) and cam.telecentric
-    scope = cam.microscope
+    scope = cam.main_optics
     assert (scope.objective_magnification, scope.numerical_aperture, scope.immersion_index) == (20.0, 0.5, 1.33)
     # the pixel at the lenslet focal plane is 6.5 um / 1.4286 = 4.55 um: 125 / 4.55 = 27.47 px per lens
     assert cam.lenslet_pixel_pitch_mm == pytest.approx(0.0065 / 1.4286, rel=1e-15)
@@ -38,16 +38,16 @@ def test_sample_cameras_parse_and_round_trip():
         cam = Camera.from_toml(SAMPLES / name)
         assert isinstance(cam.main_optics, Microscope)
         again = Camera.from_toml_string(cam.to_toml())
-        assert again == cam and again.microscope == cam.microscope
+        assert again == cam and again.main_optics == cam.main_optics
     assert Camera.from_toml(SAMPLES / "lfm-20x.toml") == _cam(CONTRACT)
 
 
 def test_relay_defaults_to_one_and_wavelength_to_none():
     text = CONTRACT.replace("relay_magnification = 1.4286\n", "").replace("wavelength_nm = 510\n", "")
     cam = _cam(text)
-    assert cam.relay_magnification == 1.0 and cam.microscope.wavelength_nm is None
+    assert cam.main_optics.relay_magnification == 1.0 and cam.main_optics.wavelength_nm is None
     assert cam.m_hat == 19                       # 125 / 6.5 = 19.23
-    assert cam.microscope.wavelength_mm == pytest.approx(550e-6)
+    assert cam.main_optics.wavelength_mm == pytest.approx(550e-6)
 
 
 @pytest.mark.parametrize("edit, mention", [
@@ -90,27 +90,26 @@ def test_microscope_that_is_not_a_table_is_refused():
         _cam(text)
 
 
-def test_constructor_refuses_a_main_lens_beside_a_microscope():
+def test_a_camera_has_one_main_optics():
     cam = _cam(CONTRACT)
-    with pytest.raises(LfprocError, match="not both"):
-        Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm, 100.0, 100.0,
-               microscope=cam.microscope)
-    with pytest.raises(LfprocError, match="needs a main lens"):
-        Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm)
+    assert isinstance(cam.main_optics, Microscope)
+    with pytest.raises(LfprocError, match="needs main optics"):
+        Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm, None)
 
 
 def test_main_lens_quantities_refuse_on_a_microscope():
+    from lfproc import geometry
     cam = _cam(CONTRACT)
-    with pytest.raises(LfprocError, match=r"needs a main lens \(\[main_lens\]\).*microscope"):
-        cam.sensor_to_main_lens_mm
-    with pytest.raises(LfprocError, match="needs a main lens"):
-        cam.with_focus_distance(1000.0)
+    with pytest.raises(LfprocError, match=r"needs a main lens \(\[main_lens\]\).*objective"):
+        geometry.virtual_camera_plane_mm(cam)
+    with pytest.raises(LfprocError, match="in mm from the sensor; this camera's optics"):
+        geometry.slice_distance_mm(cam, 1.0)
 
 
 def test_aplanatic_switch_parses():
     on = _cam(CONTRACT + "aplanatic = true\n")
     off = _cam(CONTRACT + "aplanatic = false\n")
-    assert on.microscope.aplanatic is True and off.microscope.aplanatic is False
-    assert _cam(CONTRACT).microscope.aplanatic is None
-    assert Camera.from_toml_string(on.to_toml()).microscope.aplanatic is True
-    assert math.isinf(on.exit_pupil_distance_mm)
+    assert on.main_optics.aplanatic is True and off.main_optics.aplanatic is False
+    assert _cam(CONTRACT).main_optics.aplanatic is None
+    assert Camera.from_toml_string(on.to_toml()).main_optics.aplanatic is True
+    assert math.isinf(on.main_optics.exit_pupil_distance_mm)

@@ -63,7 +63,7 @@ def test_a_z_step_far_finer_than_the_dof_is_warned_with_a_sensible_step():
     from lfproc import geometry
     cam_path = SAMPLES / "cameras" / "lfm-20x.toml"
     cam = Camera.from_toml(cam_path)
-    ends = geometry.slice_geometry(cam, [geometry.refocus_parameter_z(cam, z) for z in (-10.0, 10.0)])
+    ends = geometry.slice_geometry(cam, [geometry.position_parameter(cam, z) for z in (-10.0, 10.0)])
     dof = float(min(ends.z_near_um - ends.z_far_um))          # the thinnest DOF over the range, from its limits
     fine = dof / 40
     proc = run_cli("geometry", "--camera", cam_path, "--z-range", f"-10:10:{fine:.6g}", "--json")
@@ -80,7 +80,7 @@ def test_bad_depth_options_are_one_line_errors(lfm):
     assert_clean_error(run_cli("refocus", *_inputs(lfm), "--depth-range", "100:200", "-o", lfm / "x"),
                        "--z-range")
     assert_clean_error(run_cli("geometry", "--camera", SAMPLES / "cameras" / "paper-f100.toml", "--z-range", "0:5"),
-                       "needs a microscope camera")
+                       "--z-range", "µm from the native object plane", "--depth-range")
     assert_clean_error(run_cli("geometry", "--camera", lfm / "lfm.toml", "--disparity", "1"), "--disparity")
     assert_clean_error(run_cli("geometry", "--camera", lfm / "lfm.toml", "--z-range", "0:x"), "--z-range")
     assert not (lfm / "x").exists()

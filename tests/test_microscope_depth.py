@@ -21,7 +21,7 @@ from test_microscope_imaging_sim import LFM_60X
 def test_depth_of_a_textured_sheet_at_na_1_2(a_true):
     camera = LFM_60X
     assert geometry.uses_aplanatic(camera)
-    lat, zpa = geometry.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
+    lat, zpa = camera.main_optics.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
     sheet = Sheet(z_um=a_true * zpa, period_um=4.0 * lat, seed=3)
     views, _ = render_microscope_views(camera, MicroscopeScene(sheets=(sheet,)), (24, 24), pixel_samples=2,
                                        aperture_samples=2)

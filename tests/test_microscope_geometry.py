@@ -41,7 +41,7 @@ def _trace_to_mla(camera, z_um, angle):
     the medium), stop at its back focal plane, tube lens f_tube one f_obj + f_tube behind it, MLA at
     the tube lens's back focal plane. Returns (height, slope) at the MLA, lengths in mm.
     """
-    scope = camera.microscope
+    scope = camera.main_optics
     n, f_obj, f_tube = scope.immersion_index, scope.objective_focal_length_mm, scope.tube_lens_focal_length_mm
     y, u = 0.0, angle                             # physical slope in the medium
     y += (n * f_obj - z_um * 1e-3) * u            # to the objective (the native plane is n·f_obj in front)
@@ -61,13 +61,13 @@ def test_slice_depth_matches_a_plain_ray_trace(camera, z_um):
     a = w * camera.sample_pitch_mm / (camera.mla_pitch_mm * camera.mla_focal_length_mm)   # paper: w = a·p_m/δ
     geo = g.slice_geometry(camera, a)
     assert geo.z_um == pytest.approx(z_um, rel=1e-9, abs=1e-9)
-    assert g.refocus_parameter_z(camera, z_um) == pytest.approx(a, rel=1e-9, abs=1e-12)
+    assert g.position_parameter(camera, z_um) == pytest.approx(a, rel=1e-9, abs=1e-12)
 
 
 def test_contract_formula_and_transfer():
     # z_um = a·m̂·f_s·n/M² (f_s in µm), the relay entering only through m̂
     for cam in (LFM20, LFM60):
-        scope = cam.microscope
+        scope = cam.main_optics
         expected = cam.m_hat * cam.mla_focal_length_mm * 1e3 * scope.immersion_index / scope.objective_magnification ** 2
         assert g.z_per_a_um(cam) == pytest.approx(expected, rel=1e-12)
         s = g.main_optics_transfer(cam)                 # built lens by lens: afocal and imaging
@@ -83,14 +83,14 @@ def test_thin_lens_transfer_is_the_papers_distance():
     for a in (0.5, 1.0, 3.0, 5.0):
         w = a * cam.mla_pitch_mm * cam.mla_focal_length_mm / cam.sample_pitch_mm
         z = -g.main_optics_transfer(cam).object_offset_mm(w)
-        assert cam.sensor_to_main_lens_mm + z == pytest.approx(g.slice_distance_mm(cam, a), rel=1e-12)
+        assert cam.main_optics.sensor_path_mm(cam.mla_path_mm) + z == pytest.approx(g.slice_distance_mm(cam, a), rel=1e-12)
 
 
 def test_lateral_sampling_and_levoy_dof():
     # Levoy et al. 2006: one output pixel per lenslet, the lenslet pitch / M in the sample; the microscope's DOF
     # D_tot = λn/NA² + n·e/(M·NA) (Inoué & Spring; verified on MicroscopyU's page, docs/microscope.md), e = pitch
-    assert g.lateral_sampling_um(LFM20) == pytest.approx(125 / 20)
-    assert g.lateral_sampling_um(LFM60) == pytest.approx(100 / 60)
+    assert LFM20.main_optics.lateral_sampling_um(LFM20) == pytest.approx(125 / 20)
+    assert LFM60.main_optics.lateral_sampling_um(LFM60) == pytest.approx(100 / 60)
     wave = 0.51 * 1.33 / 0.25
     geo = g.slice_geometry(LFM20, 0.0)
     c_na = g.na_views(LFM20)
@@ -101,7 +101,7 @@ def test_lateral_sampling_and_levoy_dof():
     ratios = []
     for pixel in (0.0125, 0.0025, 0.0005):
         cam = _scope_camera(20.0, 20 * 0.125 / (2 * 2.5) * 0.999, 1.33, 180.0, 0.125, 2.5, pixel, 1.0, 1e-6)
-        levoy = 1.33 * 125 / (20 * cam.microscope.numerical_aperture)
+        levoy = 1.33 * 125 / (20 * cam.main_optics.numerical_aperture)
         ratios.append((g.slice_geometry(cam, 0.0).dof_um) / levoy)
     assert ratios[0] > ratios[1] > ratios[2] > 1.0 and ratios[2] < 1.01
 
@@ -132,11 +132,11 @@ def test_dof_limits_bracket_the_slice():
 def test_aplanatic_shifts_match_an_exact_sine_condition_trace():
     # an aplanatic objective maps the native-plane point x to −M·x and directions by n·sinθ = M·sinθ'
     cam = LFM60
-    scope = cam.microscope
+    scope = cam.main_optics
     m, n = scope.objective_magnification, scope.immersion_index
     sigma_y, sigma_x = g.refocus_slopes(cam, aplanatic=True)
     c, p = cam.center_index, cam.sample_pitch_mm
-    inside = g.views_inside_na(cam)
+    inside = g.views_inside_aperture(cam)
     a = 0.4
     z_mm = g.slice_geometry(cam, a).z_um * 1e-3
     for ky in range(cam.m_hat):
@@ -178,9 +178,10 @@ def test_aplanatic_default_follows_paraxial_error_against_dof():
 
 
 def test_views_angles_and_na():
-    views = g.microscope_views(LFM60)
-    scope = LFM60.microscope
-    inside = views.inside_na
+    views = g.view_geometry(LFM60)
+    scope = LFM60.main_optics
+    assert views.baseline_mm is None                                       # orthographic: directions
+    inside = views.inside
     sines = np.sin(np.radians(views.angle_deg[inside]))
     assert np.all(np.abs(sines) <= scope.numerical_aperture / scope.immersion_index + 1e-12)
     assert views.angle_deg[LFM60.center_index] == 0.0
@@ -191,23 +192,25 @@ def test_views_angles_and_na():
 
 def test_z_range_planning_covers_and_steps():
     for cam in (LFM20, LFM60):
-        a = g.plan_z_range(cam, -40.0, 25.0)
+        a = g.plan_slices(cam, 25.0, -40.0)                   # from its end nearer the objective to the farther
         geo = g.slice_geometry(cam, a)
         assert geo.z_far_um[0] <= -40.0 and geo.z_near_um[-1] >= 25.0
         assert np.all(geo.z_far_um[1:] <= geo.z_near_um[:-1])                       # no gap
         assert geo.z_far_um[0] == pytest.approx(-40.0, abs=1e-6)                    # the first one starts there
-        fewer = g.plan_z_range(cam, -40.0, 25.0)[:-1]
+        fewer = g.plan_slices(cam, 25.0, -40.0)[:-1]
         assert g.slice_geometry(cam, fewer).z_near_um[-1] < 25.0                    # one fewer does not reach
-    stack = g.plan_z_range(LFM20, -10.0, 10.0, 2.5)
+    stack = g.plan_slices(LFM20, 10.0, -10.0, step=2.5)
     assert np.allclose(g.slice_geometry(LFM20, stack).z_um, np.arange(-10.0, 10.01, 2.5))
     with pytest.raises(LfprocError, match="step"):
-        g.plan_z_range(LFM20, -10.0, 10.0, 0.0)
+        g.plan_slices(LFM20, 10.0, -10.0, step=0.0)
+    with pytest.raises(LfprocError, match="not a valid range"):
+        g.plan_slices(LFM20, -10.0, 10.0)                      # NEAR (nearer the objective) first
 
 
 def test_main_lens_functions_refuse_a_microscope():
     for call in (lambda: g.slice_distance_mm(LFM20, 1.0), lambda: g.refocus_parameter(LFM20, 300.0),
                  lambda: g.infinity_parameter(LFM20)):
-        with pytest.raises(LfprocError, match="needs a main lens"):
+        with pytest.raises(LfprocError, match="mm from the sensor|no slice at infinity"):
             call()
     with pytest.raises(LfprocError, match="microscope camera"):
         g.z_per_a_um(Camera.from_toml(SAMPLES / "paper-f100.toml"))
@@ -236,7 +239,7 @@ def test_aplanatic_shifts_around_an_off_centre_disc_match_the_trace():
     u = (k − c + centre)·p_p; their shifts relative to the central view are those of an exact sine-condition
     trace of those rays."""
     cam = LFM60
-    m, n = cam.microscope.objective_magnification, cam.microscope.immersion_index
+    m, n = cam.main_optics.objective_magnification, cam.main_optics.immersion_index
     centre = (-0.6, 0.9)
     sigma_y, sigma_x = g.refocus_slopes(cam, aplanatic=True, centre=centre)
     c, p = cam.center_index, cam.sample_pitch_mm
@@ -250,7 +253,7 @@ def test_aplanatic_shifts_around_an_off_centre_disc_match_the_trace():
         return m * z_mm * sy / cz / cam.mla_pitch_mm, m * z_mm * sx / cz / cam.mla_pitch_mm
 
     y0, x0 = lens_offset(c, c)
-    inside = g.views_inside_na(cam)
+    inside = g.views_inside_aperture(cam)
     for ky, kx in zip(*np.nonzero(inside)):
         ly, lx = lens_offset(ky, kx)
         assert 0.3 * sigma_x[ky, kx] == pytest.approx(-(lx - x0), abs=1e-9)

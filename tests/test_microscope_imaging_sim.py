@@ -42,7 +42,7 @@ LFM_60X = microscope(60, 1.2, 1.333, 0.1, 2.5, 15)            # aplanatic regime
 
 
 def beads_at(camera, a_values):
-    lat, zpa = geometry.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
+    lat, zpa = camera.main_optics.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
     corners = [(-5, -5), (5, -5), (-5, 5), (5, 5)]
     return tuple(Bead(x * lat, y * lat, a * zpa, radius_um=0.5 * lat) for (x, y), a in zip(corners, a_values))
 
@@ -67,7 +67,7 @@ A_SWEEP = np.round(np.arange(-0.7, 0.7001, 0.01), 6)
 def test_each_bead_in_focus_at_its_depth(camera, a_true):
     beads = beads_at(camera, a_true)
     views, fraction = render_microscope_views(camera, MicroscopeScene(beads=beads), LENSES)
-    inside = geometry.views_inside_na(camera)           # the views whose centre ray is inside the NA
+    inside = geometry.views_inside_aperture(camera)           # the views whose centre ray is inside the NA
     assert np.all(inside[fraction == 1.0]) and np.all(fraction[inside] > 0)
     for bead, (z, dof) in zip(beads, sharpest_bead_depths(camera, beads, views, A_SWEEP)):
         assert abs(z - bead.z_um) <= dof / 2, (bead.z_um, z, dof)
@@ -88,7 +88,7 @@ def test_high_na_render_is_not_paraxial():
 
 def test_textured_sheet_is_sharpest_at_its_depth():
     camera = LFM_20X
-    lat, zpa = geometry.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
+    lat, zpa = camera.main_optics.lateral_sampling_um(camera), geometry.z_per_a_um(camera)
     sheet = Sheet(z_um=0.15 * zpa, period_um=3.0 * lat, seed=4)
     views, _ = render_microscope_views(camera, MicroscopeScene(sheets=(sheet,)), LENSES)
     stack = lfproc.refocus(LightField.from_views(views, camera), A_SWEEP, interpolation="cubic-spline")
@@ -133,7 +133,7 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
     pixel_um = camera.lenslet_pixel_pitch_mm * 1000
     for bead in beads:
         # the bead's image on the sensor: −M·(x, y) from the axis (the sensor centre), in lenslet-plane pixels
-        xy = (size - 1) / 2 - camera.microscope.objective_magnification * np.array([bead.x_um, bead.y_um]) / pixel_um
+        xy = (size - 1) / 2 - camera.main_optics.objective_magnification * np.array([bead.x_um, bead.y_um]) / pixel_um
         r, q = np.unravel_index(np.argmin(np.hypot(*(centres - xy).transpose(2, 0, 1))), lf.lens_shape)
         i = int(np.argmax(stack[:, r - 1:r + 2, q - 1:q + 2, 0].max(axis=(1, 2))))
         assert abs(geo.z_um[i] - bead.z_um) <= geo.dof_um[i] / 2, (bead.z_um, geo.z_um[i], geo.dof_um[i])

@@ -10,6 +10,7 @@ import tifffile
 import lfproc
 
 from lfproc import Camera, LightField
+from lfproc.camera import NATIVE_PLANE_UM
 from lfproc.outputs import lateral_um_per_lens, write_focal_stack
 
 from conftest import SAMPLES, run_cli
@@ -36,7 +37,7 @@ def test_lateral_sampling_is_pitch_over_magnification():
 def test_imagej_hyperstack_has_micron_spacing(tmp_path, upsample):
     z = [-4.0, -2.0, 0.0, 2.0, 4.0]
     images = slices(5)
-    path = write_focal_stack(str(tmp_path / "s_stack.tif"), images[::-1], microscope_records(z[::-1]),
+    path = write_focal_stack(str(tmp_path / "s_stack.tif"), images[::-1], microscope_records(z[::-1]), NATIVE_PLANE_UM,
                              kind="imagej", lens_um=6.25, upsample=upsample)
     with tifffile.TiffFile(path) as tif:
         meta = tif.imagej_metadata
@@ -58,7 +59,7 @@ def test_imagej_hyperstack_has_micron_spacing(tmp_path, upsample):
 def test_ome_tiff_has_physical_sizes_and_plane_positions(tmp_path):
     z = [0.0, 1.5, 3.0]
     images = slices(3, c=3)
-    path = write_focal_stack(str(tmp_path / "s_stack.ome.tif"), images, microscope_records(z), kind="ome",
+    path = write_focal_stack(str(tmp_path / "s_stack.ome.tif"), images, microscope_records(z), NATIVE_PLANE_UM, kind="ome",
                              lens_um=6.25, upsample=2)
     with tifffile.TiffFile(path) as tif:
         assert tif.is_ome
@@ -116,7 +117,7 @@ def test_microscope_stack_is_to_scale(tmp_path):
     views = np.random.default_rng(2).random((m, m, 10, 11, 1)).astype(np.float32)
     a = [0.1, -0.1, 0.0]
     stack = lfproc.refocus(views, a, upsample=2)
-    path = write_focal_stack(str(tmp_path / "lfm_stack.tif"), stack, slice_metadata("lfm", camera, a),
+    path = write_focal_stack(str(tmp_path / "lfm_stack.tif"), stack, slice_metadata("lfm", camera, a), camera.main_optics.object_space,
                              kind="imagej", lens_um=lateral_um_per_lens(camera), upsample=2)
     with tifffile.TiffFile(path) as tif:
         meta = tif.imagej_metadata

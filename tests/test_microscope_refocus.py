@@ -63,7 +63,7 @@ def _sine_condition_light_field(camera, a0, size=48):
     for ky in range(m):
         for kx in range(m):
             views[ky, kx, :, :, 0] = texture(jy - a0 * sigma_y[ky, kx], jx - a0 * sigma_x[ky, kx])
-    mask = g.views_inside_na(camera)
+    mask = g.views_inside_aperture(camera)
     views[~mask] = 0.0
     return LightField.from_views(views, camera=camera, view_mask=mask), texture(jy, jx)
 

@@ -159,7 +159,7 @@ def test_focal_stack_holds_one_set_of_tags_in_its_cameras_object_space(sample_ap
     from lfproc.camera import SENSOR_MM
 
     fs = sample_api["fs"]
-    assert fs.space == SENSOR_MM == sample_api["lf"].camera.object_space
+    assert fs.space == SENSOR_MM == sample_api["lf"].camera.main_optics.object_space
     for name, field in zip(SENSOR_MM.keys, ("depth", "near", "far", "dof")):
         assert getattr(fs, name) is getattr(fs, field)
         assert [r[name] for r in fs.records()] == getattr(fs, field).tolist()
@@ -324,7 +324,7 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert fs.space == NATIVE_PLANE_UM and fs.z_um is fs.depth and fs.dof_um is fs.dof
     assert all(getattr(fs, name) is None for name in ("distance_mm", "near_mm", "far_mm", "dof_mm"))
     assert np.all(fs.z_near_um >= fs.z_um) and np.all(fs.z_far_um <= fs.z_um)   # signed z: near is more
-    assert " µm," in repr(fs) and "from the sensor" not in repr(fs)
+    assert " µm from the native object plane" in repr(fs) and "from the sensor" not in repr(fs)
     np.testing.assert_allclose(by_depth.a, a_values, rtol=1e-9, atol=1e-12)
     for i, name in enumerate(p.stem for p in slice_files(tmp_path / "cli", a_values, lf.camera)):
         sidecar = read_json(tmp_path / "cli" / f"{name}.json")

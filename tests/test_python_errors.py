@@ -126,10 +126,11 @@ def test_aperture_and_range_errors_name_python_arguments(cam):
 
 def test_microscope_depth_errors_name_python_arguments():
     scope = lfproc.Camera.from_toml(CAMERAS / "lfm-20x.toml")
-    error_of(lambda: geometry.plan_z_range(scope, 0.0, float("inf")), "z_range_um=0.0:inf")
-    error_of(lambda: geometry.plan_z_range(scope, 0.0, 10.0, -1.0), "z_range_um=")
-    error_of(lambda: geometry.plan_z_range(scope, -1e9, 1e9, 1e-3), "z_range_um=")
+    error_of(lambda: geometry.plan_slices(scope, float("inf"), 0.0, what="z_range_um="), "z_range_um=inf:0.0")
+    error_of(lambda: geometry.plan_slices(scope, 10.0, 0.0, step=-1.0, what="z_range_um="), "z_range_um=")
+    error_of(lambda: geometry.plan_slices(scope, 1e9, -1e9, step=1e-3, what="z_range_um="), "z_range_um=")
     lf = lfproc.LightField.from_views(np.zeros((scope.m_hat, scope.m_hat, 4, 4, 1), np.float32), scope)
+    error_of(lambda: lfproc.depth_map(lf, z_range_um=(0.0, float("inf"))), "z_range_um=")
     error_of(lambda: lfproc.depth_map(lf, depth_range_mm=(100.0, 200.0)), "z_range_um=")
 
 

@@ -34,7 +34,7 @@ def metadata(tmp_path):
 
 def test_napari_metadata_reads_as_lfproc_camera_writes_it_with_m_hat_left_to_the_measurement(tmp_path, metadata):
     camera = lfproc.read_camera(metadata)
-    assert camera.microscope is not None and camera.source == str(metadata)
+    assert camera.main_optics.wave_depth_of_field() > 0 and camera.source == str(metadata)   # an objective
     assert camera.pixel_pitch_mm == 0.0074 and camera.mla_pitch_mm == 0.125 and camera.mla_focal_length_mm == 2.433
     assert camera.m_hat == 15 and not camera.micro_image_px_given         # 125 / 7.4 = 16.89 px, nominal only
     proc = run_cli("camera", metadata, "-o", tmp_path / "lfm.toml")
@@ -77,7 +77,7 @@ def test_a_lytro_file_reads_with_one_warning_about_its_focus(tmp_path):
         warnings.simplefilter("always")
         camera = lfproc.read_camera(path)
     assert [w.category for w in caught] == [LfprocWarning]
-    assert "focused at infinity" in str(caught[0].message) and "with_focus_distance" in str(caught[0].message)
+    assert "focused at infinity" in str(caught[0].message) and "focused_at" in str(caught[0].message)
     assert camera == lytro_camera(read_lytro_metadata(str(path))).camera
     assert not camera.micro_image_px_given
 

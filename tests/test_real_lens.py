@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from conftest import SAMPLES, assert_clean_error, run_cli
 
+from focus import focused
 from lfproc import LfprocError
 from lfproc import geometry as g
 from lfproc.camera import Camera, LensPrescription, Surface, read_zmx
@@ -41,7 +42,7 @@ def _cameras():
     for path in (DG, TELE):
         cam = Camera.from_toml(path)
         for extra in (0.0, 10.0, 20.0):
-            out.append(cam.with_main_lens(cam.main_lens_prescription, cam.main_focal_length_mm + extra))
+            out.append(cam.with_optics(cam.main_optics.with_prescription(cam.main_optics.prescription, cam.main_optics.focal_length_mm + extra)))
     return out
 
 
@@ -75,23 +76,23 @@ def test_cardinal_points_agree_with_optilands_paraxial_analysis_and_table_1():
     assert lens.focal_length_mm == pytest.approx(99.515, rel=5e-3)
     assert lens.principal_plane_gap_mm == pytest.approx(-33.184, rel=0.1)
     # and the inline sample camera is that lens
-    inline = Camera.from_toml(DG).main_lens_prescription
+    inline = Camera.from_toml(DG).main_optics.prescription
     assert inline.focal_length_mm == pytest.approx(lens.focal_length_mm, rel=1e-12)
-    assert Camera.from_toml(DG_ZMX).exit_pupil_distance_mm == pytest.approx(
-        Camera.from_toml(DG).exit_pupil_distance_mm, rel=1e-12)
+    assert Camera.from_toml(DG_ZMX).main_optics.exit_pupil_distance_mm == pytest.approx(
+        Camera.from_toml(DG).main_optics.exit_pupil_distance_mm, rel=1e-12)
 
 
-@pytest.mark.parametrize("camera", _cameras(), ids=lambda c: f"{c.name}-bU{c.image_distance_mm:.1f}")
+@pytest.mark.parametrize("camera", _cameras(), ids=lambda c: f"{c.name}-bU{c.main_optics.image_distance_mm:.1f}")
 def test_a_prescription_camera_equals_the_camera_typed_by_hand(camera):
     hand = Camera.from_toml_string(_camera_text(
-        f"focal_length_mm = {camera.main_focal_length_mm!r}\n"
-        f"principal_plane_gap_mm = {camera.main_principal_plane_gap_mm!r}\n"
-        f"image_distance_mm = {camera.image_distance_mm!r}\n"
-        + ("" if camera.telecentric else f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}\n")))
+        f"focal_length_mm = {camera.main_optics.focal_length_mm!r}\n"
+        f"principal_plane_gap_mm = {camera.main_optics.principal_plane_gap_mm!r}\n"
+        f"image_distance_mm = {camera.main_optics.image_distance_mm!r}\n"
+        + ("" if camera.telecentric else f"exit_pupil_distance_mm = {camera.main_optics.exit_pupil_distance_mm!r}\n")))
     lens_only = Camera.from_toml_string(_camera_text("\n".join(     # the surfaces and b_U only
         line for line in _surfaces_text(camera).splitlines()
         if not line.startswith(("focal_length_mm", "principal_plane_gap_mm", "exit_pupil_distance_mm", "f_number")))))
-    assert lens_only.main_lens_prescription is not None and hand.main_lens_prescription is None
+    assert lens_only.main_optics.prescription is not None and hand.main_optics.prescription is None
     a = np.arange(-1.0, 6.01, 0.25)
     for one, two in ((g.slice_geometry(lens_only, a), g.slice_geometry(hand, a)),
                      (g.view_geometry(lens_only), g.view_geometry(hand))):
@@ -107,9 +108,9 @@ def test_a_prescription_camera_equals_the_camera_typed_by_hand(camera):
 def test_hand_written_values_must_agree_with_the_prescription():
     surfaces = _surfaces_text(Camera.from_toml(DG)).split("wavelength_nm")[1]
     body = "focus_distance_mm = inf\nwavelength_nm" + surfaces
-    f_u = Camera.from_toml(DG).main_focal_length_mm
+    f_u = Camera.from_toml(DG).main_optics.focal_length_mm
     ok = Camera.from_toml_string(_camera_text(f"focal_length_mm = {f_u * 1.0005!r}\n" + body))
-    assert ok.main_focal_length_mm == f_u                      # the lens's own value is used
+    assert ok.main_optics.focal_length_mm == f_u                      # the lens's own value is used
     for key, value, named in (("focal_length_mm", f_u * 1.003, "paraxial focal length"),
                               ("principal_plane_gap_mm", -33.184, "principal plane gap"),
                               ("exit_pupil_distance_mm", "inf", "exit pupil")):
@@ -124,9 +125,9 @@ def test_hand_written_values_must_agree_with_the_prescription():
 def test_prescription_camera_round_trips_and_refocuses_with_its_own_exit_pupil():
     cam = Camera.from_toml(DG)
     assert Camera.from_toml_string(cam.to_toml()) == cam
-    near = cam.with_focus_distance(600.0)
-    assert near.exit_pupil_distance_mm == pytest.approx(
-        cam.exit_pupil_distance_mm + near.image_distance_mm - cam.image_distance_mm, rel=1e-12)
+    near = focused(cam, 600.0)
+    assert near.main_optics.exit_pupil_distance_mm == pytest.approx(
+        cam.main_optics.exit_pupil_distance_mm + near.main_optics.image_distance_mm - cam.main_optics.image_distance_mm, rel=1e-12)
 
 
 def test_missing_lens_extra_is_one_line(monkeypatch, tmp_path):
@@ -142,7 +143,7 @@ def test_missing_lens_extra_is_one_line(monkeypatch, tmp_path):
 
 
 # ----------------------------------------------------------------- the rays are the model's
-@pytest.mark.parametrize("camera", _cameras()[::2], ids=lambda c: f"{c.name}-bU{c.image_distance_mm:.1f}")
+@pytest.mark.parametrize("camera", _cameras()[::2], ids=lambda c: f"{c.name}-bU{c.main_optics.image_distance_mm:.1f}")
 def test_the_traced_rays_meet_where_the_paraxial_model_says(camera):
     """Traced paraxially (the prescription's own matrices), the rays give slice_geometry and the views."""
     from lfproc.geometry._real_rays import slice_rays, view_rays
@@ -150,7 +151,7 @@ def test_the_traced_rays_meet_where_the_paraxial_model_says(camera):
     a = np.array([0.5, 1.0, 2.0, 3.0, 5.0])
     y0, mu = slice_rays(camera, a)
     y_h, u_h = s.D * y0 - s.B * mu, -s.C * y0 + s.A * mu      # back to H1U: the inverse of S (det 1)
-    d = camera.sensor_to_main_lens_mm + y_h / u_h
+    d = camera.main_optics.sensor_path_mm(camera.mla_path_mm) + y_h / u_h
     geo = g.slice_geometry(camera, a)
     np.testing.assert_allclose(d[:3], [geo.distance_mm, geo.near_mm, geo.far_mm], rtol=1e-9)
     i = np.arange(-12, 13)
@@ -166,9 +167,9 @@ def _reversed_optiland(camera):
     """The main lens in optiland, reversed: light from the MLA towards the object."""
     from optiland import optic
     from optiland.materials import IdealMaterial
-    lens = camera.main_lens_prescription
+    lens = camera.main_optics.prescription
     surf, before = list(lens.surfaces), lens.indices_before()
-    z_mla = lens.rear_principal_plane_mm + camera.image_distance_mm
+    z_mla = lens.rear_principal_plane_mm + camera.main_optics.image_distance_mm
     rev = optic.Optic()
     rev.surfaces.add(index=0, radius=np.inf, thickness=z_mla - lens.length_mm)
     for j, k in enumerate(range(len(surf) - 1, -1, -1), 1):
@@ -190,21 +191,21 @@ def _optiland_object_rays(camera, y0, mu):
     norm = np.sqrt(1.0 + mu * mu)
     z0 = float(np.ravel(rev.surfaces.positions)[0])
     rays = RealRays(0 * y0, y0, np.full_like(y0, z0), 0 * y0, -mu / norm, 1.0 / norm, 1.0 + 0 * y0,
-                    np.full_like(y0, camera.main_lens_prescription.wavelength_nm / 1000.0))
+                    np.full_like(y0, camera.main_optics.prescription.wavelength_nm / 1000.0))
     rev.surfaces.trace(rays)
     z, y, m, n = (np.asarray(v, dtype=np.float64) for v in (rays.z, rays.y, rays.M, rays.N))
-    lens = camera.main_lens_prescription
+    lens = camera.main_optics.prescription
     return lens.length_mm - z, y, -n, m        # mirror z back: reversed z' = last vertex − z
 
 
-@pytest.mark.parametrize("camera", _cameras(), ids=lambda c: f"{c.name}-bU{c.image_distance_mm:.1f}")
+@pytest.mark.parametrize("camera", _cameras(), ids=lambda c: f"{c.name}-bU{c.main_optics.image_distance_mm:.1f}")
 def test_real_ray_distances_match_optilands_exact_trace(camera):
     import optiland  # noqa: F401  (the test extra installs it: the independent reference must not be skipped)
     from lfproc.geometry._real_rays import slice_rays
     a = np.array([0.25, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0])
     y0, mu = slice_rays(camera, a)
     z, y, dz, dy = _optiland_object_rays(camera, y0, mu)
-    z_sensor = (camera.main_lens_prescription.rear_principal_plane_mm + camera.image_distance_mm
+    z_sensor = (camera.main_optics.prescription.rear_principal_plane_mm + camera.main_optics.image_distance_mm
                 + camera.mla_focal_length_mm + camera.mla_principal_plane_gap_mm)
     ref = (z_sensor - (z - y / dy * dz)).reshape(y0.shape)
     real = g.real_ray_slices(camera, a)
@@ -238,7 +239,7 @@ def test_the_telecentric_experiment_shows_the_papers_pattern_and_nulls_inside_th
     records = g.real_ray_slices(own, [-0.5, 1, 4]).records()
     assert records[0]["distance_mm"] is None                     # beyond infinity: no crossing in front
     assert records[1]["distance_mm"] == pytest.approx(g.slice_distance_mm(own, 1.0), rel=2e-3)
-    first_vertex = own.sensor_to_main_lens_mm + own.main_lens_prescription.front_principal_plane_mm
+    first_vertex = own.main_optics.sensor_path_mm(own.mla_path_mm) + own.main_optics.prescription.front_principal_plane_mm
     assert g.slice_distance_mm(own, 4.0) < first_vertex                          # paraxially inside the lens
     assert records[2] == dict(distance_mm=None, near_mm=None, far_mm=None, spread_mm=None)
 

@@ -8,8 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from focus import focused
 from lfproc import geometry, simulate
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.errors import LfprocError
 from lfproc.grid import LensGrid
 from lfproc.simulate import (Checkerboard, ImageTexture, Noise, Plane, Scene, Sinusoid, Uniform, load_scene_file,
@@ -23,10 +24,8 @@ F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main len
 
 def camera(m=9, pixel_mm=None, grid="rectangular", f_number=4.0, focus_mm=math.inf, cfa="none", **kw):
     """The paper's camera scaled down to m̂ = m px per micro lens (p_m = 0.25 mm)."""
-    cam = Camera(pixel_pitch_mm=pixel_mm or 0.25 / m, mla_pitch_mm=0.25, mla_focal_length_mm=F_S,
-                 main_focal_length_mm=F_U, image_distance_mm=F_U, mla_principal_plane_gap_mm=H_S,
-                 main_principal_plane_gap_mm=H_U, f_number=f_number, grid=grid, cfa=cfa, **kw)
-    return cam if math.isinf(focus_mm) else cam.with_focus_distance(focus_mm)
+    cam = Camera(pixel_mm or 0.25 / m, 0.25, F_S, MainLens(F_U, F_U, principal_plane_gap_mm=H_U, f_number=f_number), mla_principal_plane_gap_mm=H_S, grid=grid, cfa=cfa, **kw)
+    return cam if math.isinf(focus_mm) else focused(cam, focus_mm)
 
 
 # ---------------------------------------------------------------------------- plain-numpy references
@@ -46,9 +45,9 @@ def chief_ray_plane_xy(cam, grid, shape, distance_mm):
     off = (k[None, :, None] * u + k[:, None, None] * v) * cam.effective_pixel_pitch_mm  # (ky, kx, 2)
     x = s[None, None] + off[:, :, None, None]
     slope = (s[None, None] - x) / cam.mla_focal_length_mm  # Eq. 13
-    at_lens = s[None, None] + slope * cam.image_distance_mm  # Eq. 16 (chief ray: t = s)
-    q = (slope * cam.main_focal_length_mm - at_lens) / cam.main_focal_length_mm  # Eqs. 17-18
-    hit = at_lens + q * (distance_mm - cam.sensor_to_main_lens_mm)  # Eq. 19
+    at_lens = s[None, None] + slope * cam.main_optics.image_distance_mm  # Eq. 16 (chief ray: t = s)
+    q = (slope * cam.main_optics.focal_length_mm - at_lens) / cam.main_optics.focal_length_mm  # Eqs. 17-18
+    hit = at_lens + q * (distance_mm - cam.main_optics.sensor_path_mm(cam.mla_path_mm))  # Eq. 19
     return -hit  # plane coordinates are "as seen in the capture" (inverted heights)
 
 
@@ -60,7 +59,7 @@ def test_refocus_is_sharpest_at_the_geometry_parameter(focus_mm, target):
     cam = camera(m=9, focus_mm=focus_mm)
     d = geometry.slice_distance_mm(cam, target[1]) if target[0] == "a" else target[1]
     a_true = geometry.refocus_parameter(cam, d)
-    z = d - cam.sensor_to_main_lens_mm
+    z = d - cam.main_optics.sensor_path_mm(cam.mla_path_mm)
     lens_on_plane = 0.25 * abs(1 - z / F_U)  # mm of plane per lens, central view
     views, weight, grid = simulate.render_ideal_views(cam, Scene((Plane(d, Noise(2.0 * lens_on_plane, seed=1)),)),
                                                        (400, 400), rim_radius_mm=None)
@@ -167,7 +166,7 @@ def test_vignetting_matches_a_monte_carlo_aperture_fraction():
         x = s + rng.uniform(-0.125, 0.125, (n, 2))  # sensor point in the cell
         t = s + rng.uniform(-0.125, 0.125, (n, 2))  # micro lens aperture point
         slope = (s - x) / F_S
-        at_lens = t + slope * cam.image_distance_mm
+        at_lens = t + slope * cam.main_optics.image_distance_mm
         passes = (np.hypot(*slope.T) <= 1 / (2 * 7.0)) & (np.hypot(*at_lens.T) <= rim)
         reference.append(passes.mean())
         cx, cy = np.rint(grid.lens_xy(row, col)).astype(int)
@@ -463,7 +462,7 @@ def test_documented_example_scene_parses(tmp_path):
     (cams / "paper-f100.toml").write_text((ROOT / "samples" / "cameras" / "paper-f100.toml").read_text())
     (tmp_path / "scene.toml").write_text(example)
     parsed = load_scene_file(tmp_path / "scene.toml")
-    assert len(parsed.scene.planes) >= 3 and parsed.camera.f_number is not None
+    assert len(parsed.scene.planes) >= 3 and parsed.camera.main_optics.f_number is not None
 
 
 BAD_SCENES = [
@@ -489,7 +488,7 @@ def test_bad_scene_files_raise_lfproc_error(tmp_path, text, message):
 
 
 def test_render_rejects_impossible_setups():
-    no_stop = replace(camera(m=7), f_number=None)
+    no_stop = camera(m=7).with_optics(replace(camera(m=7).main_optics, f_number=None))
     with pytest.raises(LfprocError, match="f_number"):
         simulate.render(no_stop, Scene(), (50, 50))
     with pytest.raises(LfprocError, match="not in front of the main lens"):

@@ -122,7 +122,7 @@ def test_exit_pupil_and_tilt_reach_the_outputs(tmp_path):
     axis = np.array([(160 - 1) / 2, (120 - 1) / 2])
     np.testing.assert_allclose(grid.centers_xy_px() - axis, scale * (lenses.centers_xy_px() - axis), atol=1e-9)
     assert truth["planes"][0]["tilt_deg"] == [40.0, -10.0]
-    assert Camera.from_toml(tmp_path / "out" / "camera.toml").exit_pupil_distance_mm == 30.0
+    assert Camera.from_toml(tmp_path / "out" / "camera.toml").main_optics.exit_pupil_distance_mm == 30.0
     depth = np.load(tmp_path / "out" / "ground_truth.npz")["depth_mm"]
     assert depth.shape == (grid.rows, grid.cols) and np.ptp(depth) > 10.0  # the tilted plane's depth varies
 

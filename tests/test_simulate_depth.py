@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from lfproc import geometry, simulate
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.errors import LfprocError
 from lfproc.simulate import Noise, Plane, Scene, Sinusoid, Uniform, parse_scene_dict
 from plainref import shifted_views
@@ -17,9 +17,7 @@ F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main len
 
 def camera(m=9, f_number=4.0, **kw):
     """The paper's camera scaled down to m̂ = m px per micro lens (p_m = 0.25 mm), focused at infinity."""
-    return Camera(pixel_pitch_mm=0.25 / m, mla_pitch_mm=0.25, mla_focal_length_mm=F_S, main_focal_length_mm=F_U,
-                  image_distance_mm=F_U, mla_principal_plane_gap_mm=H_S, main_principal_plane_gap_mm=H_U,
-                  f_number=f_number, **kw)
+    return Camera(0.25 / m, 0.25, F_S, MainLens(F_U, F_U, principal_plane_gap_mm=H_U, f_number=f_number), mla_principal_plane_gap_mm=H_S, **kw)
 
 
 def rotation(tx_deg, ty_deg):
@@ -34,13 +32,13 @@ def central_chief_rays(cam, grid, shape):
     """Telecentric central-view chief rays through each lens centre (Eqs. 16-19, m = 0): U and q, (rows, cols, 2)."""
     axis = np.array([(shape[1] - 1) / 2, (shape[0] - 1) / 2])
     u = (grid.centers_xy_px() - axis) * cam.pixel_pitch_mm
-    return u, -u / cam.main_focal_length_mm
+    return u, -u / cam.main_optics.focal_length_mm
 
 
 def hit_on_tilted_plane(cam, grid, shape, distance_mm, tx_deg, ty_deg):
     """Where each central chief ray meets the plane depth = D + x·tan tx + y·tan ty / cos tx: (x, y, depth)."""
     u, q = central_chief_rays(cam, grid, shape)
-    big_l = cam.sensor_to_main_lens_mm
+    big_l = cam.main_optics.sensor_path_mm(cam.mla_path_mm)
     kx, ky = math.tan(math.radians(tx_deg)), math.tan(math.radians(ty_deg)) / math.cos(math.radians(tx_deg))
     # plane coordinates are the ray heights negated: x = −(U + q·z); depth = z + L
     z = (distance_mm - big_l - u[..., 0] * kx - u[..., 1] * ky) / (1 + q[..., 0] * kx + q[..., 1] * ky)

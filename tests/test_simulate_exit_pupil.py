@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from lfproc import geometry, simulate
-from lfproc.camera import Camera
+from lfproc.camera import Camera, MainLens
 from lfproc.errors import LfprocError
 from lfproc.simulate import Noise, Plane, Scene, Uniform, parse_scene_dict
 from plainref import shifted_views
@@ -18,11 +18,10 @@ from plainref import shifted_views
 F_U, H_U, F_S, H_S = 99.5145, -33.184, 2.749, 0.374  # the paper's f100 main lens and micro lens
 
 
-def camera(pixel_mm=0.009, f_number=13.0, grid="rectangular", **kw):
+def camera(pixel_mm=0.009, f_number=13.0, grid="rectangular", exit_pupil_distance_mm=float("inf"), **kw):
     """The paper's camera (p_m = 0.25 mm), focused at infinity."""
-    return Camera(pixel_pitch_mm=pixel_mm, mla_pitch_mm=0.25, mla_focal_length_mm=F_S, main_focal_length_mm=F_U,
-                  image_distance_mm=F_U, mla_principal_plane_gap_mm=H_S, main_principal_plane_gap_mm=H_U,
-                  f_number=f_number, grid=grid, **kw)
+    return Camera(pixel_mm, 0.25, F_S, MainLens(F_U, F_U, H_U, f_number, exit_pupil_distance_mm),
+                  mla_principal_plane_gap_mm=H_S, grid=grid, **kw)
 
 
 def centroids(white, expected_xy, radius_px):
@@ -107,7 +106,7 @@ def test_infinite_exit_pupil_is_todays_render_bit_for_bit():
     assert base.lens_grid == base.grid and base.options["exit_pupil_distance_mm"] == math.inf
     assert digest(simulate.render(cam, scene, (90, 120), exit_pupil_distance_mm=math.inf, **options)) == digest(base)
     finite = simulate.render(cam, scene, (90, 120), exit_pupil_distance_mm=40.0, **options)
-    assert finite.camera.exit_pupil_distance_mm == 40.0 and finite.lens_grid != finite.grid
+    assert finite.camera.main_optics.exit_pupil_distance_mm == 40.0 and finite.lens_grid != finite.grid
     assert not np.array_equal(finite.white, base.white)
     assert digest(simulate.render(finite.camera, scene, (90, 120), **options)) == digest(finite)  # from the camera
     back = simulate.render(finite.camera, scene, (90, 120), exit_pupil_distance_mm=math.inf, **options)
@@ -125,9 +124,9 @@ def test_depth_and_ideal_views_follow_the_tilted_chief_rays():
     axis = np.array([(shape[1] - 1) / 2, (shape[0] - 1) / 2])
     s = (cap.lens_grid.centers_xy_px() - axis) * cam.pixel_pitch_mm
     slope = -s / d_a
-    u = s + slope * cam.image_distance_mm
+    u = s + slope * cam.main_optics.image_distance_mm
     q = slope - u / F_U
-    big_l = cam.sensor_to_main_lens_mm
+    big_l = cam.main_optics.sensor_path_mm(cam.mla_path_mm)
     kx = math.tan(math.radians(tilt[0]))
     ky = math.tan(math.radians(tilt[1])) / math.cos(math.radians(tilt[0]))
     z = (d - big_l - u[..., 0] * kx - u[..., 1] * ky) / (1 + q[..., 0] * kx + q[..., 1] * ky)
@@ -219,10 +218,8 @@ def test_sharpest_refocus_with_an_exit_pupil_matches_plenoptisign(d_a):
     telecentric a = 1.5 of the same plane."""
     from scipy.optimize import brentq
 
-    cam = Camera(pixel_pitch_mm=0.25 / 9, mla_pitch_mm=0.25, mla_focal_length_mm=F_S, main_focal_length_mm=F_U,
-                 image_distance_mm=F_U, mla_principal_plane_gap_mm=H_S, main_principal_plane_gap_mm=H_U,
-                 f_number=4.0, micro_image_px=9, exit_pupil_distance_mm=d_a)
-    d = geometry.slice_distance_mm(replace(cam, exit_pupil_distance_mm=math.inf), 1.5)  # telecentric a = 1.5
+    cam = Camera(0.25 / 9, 0.25, F_S, MainLens(F_U, F_U, principal_plane_gap_mm=H_U, f_number=4.0, exit_pupil_distance_mm=d_a), mla_principal_plane_gap_mm=H_S, micro_image_px=9)
+    d = geometry.slice_distance_mm(cam.with_optics(replace(cam.main_optics, exit_pupil_distance_mm=math.inf)), 1.5)  # telecentric a = 1.5
     assert plenoptisign_distance_mm(1.5, math.inf, 9) == pytest.approx(d, rel=1e-9)  # the two conventions agree
     a_expected = brentq(lambda a: plenoptisign_distance_mm(a, d_a, 9) - d, 0.3, 1.49)
     views, weight, grid = simulate.render_ideal_views(cam, Scene((Plane(d, Noise(1.5, seed=4)),)), (420, 420),

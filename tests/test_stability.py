@@ -28,10 +28,12 @@ import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
+from focus import focused
 from lfproc import Camera, LensGrid, LfprocError, LightField
 from test_refocus import _bspline, _spline_filter
 from lfproc import geometry as g
 from lfproc.decode import decode, make_decoder
+from lfproc.camera import MainLens
 
 rf = importlib.import_module("lfproc.refocus")   # the module (``lfproc.refocus`` may be bound to the function)
 
@@ -81,8 +83,7 @@ def cameras(draw, min_ratio=1.0):
     eps = draw(st.one_of(st.just(0.0), log_uniform(1e-12, 1e3)))
     gap_s = fs * draw(st.one_of(st.just(0.0), st.floats(-0.5, 0.5)))
     gap_u = fu * draw(st.one_of(st.just(0.0), st.floats(-0.5, 0.5)))
-    return Camera(pixel_pitch_mm=pixel, mla_pitch_mm=lens, mla_focal_length_mm=fs, main_focal_length_mm=fu,
-                  image_distance_mm=fu + eps, mla_principal_plane_gap_mm=gap_s, main_principal_plane_gap_mm=gap_u)
+    return Camera(pixel, lens, fs, MainLens(fu, fu + eps, principal_plane_gap_mm=gap_u), mla_principal_plane_gap_mm=gap_s)
 
 
 a_values = st.one_of(st.just(0.0), log_uniform(1e-12, 1e-3), log_uniform(1e-3, 1e4), st.integers(0, 50).map(float))
@@ -99,10 +100,10 @@ class Exact:
         self.cam = cam
         self.pm = Fr(cam.mla_pitch_mm)
         self.pp = self.pm / cam.m_hat                     # effective pixel pitch, exactly p_m / m-hat
-        self.fs, self.fu, self.bu = Fr(cam.mla_focal_length_mm), Fr(cam.main_focal_length_mm), Fr(cam.image_distance_mm)
-        self.L = self.fs + Fr(cam.mla_principal_plane_gap_mm) + self.bu + Fr(cam.main_principal_plane_gap_mm)
+        self.fs, self.fu, self.bu = Fr(cam.mla_focal_length_mm), Fr(cam.main_optics.focal_length_mm), Fr(cam.main_optics.image_distance_mm)
+        self.L = self.fs + Fr(cam.mla_principal_plane_gap_mm) + self.bu + Fr(cam.main_optics.principal_plane_gap_mm)
         self.L_terms = (abs(cam.mla_focal_length_mm) + abs(cam.mla_principal_plane_gap_mm)
-                        + cam.image_distance_mm + abs(cam.main_principal_plane_gap_mm))
+                        + cam.main_optics.image_distance_mm + abs(cam.main_optics.principal_plane_gap_mm))
         self.delta = self.pp / self.fs
         self.eps = self.bu - self.fu
         self.c = cam.center_index
@@ -180,9 +181,9 @@ def assert_within(actual, exact, bound, what):
 
 @fast(300)
 @given(cam=cameras(), a=a_values)
-@example(cam=Camera(1e-3, 1.0, 0.1, 1000.0, 1000.0 + 1e-12), a=1e-12)
-@example(cam=Camera(1.0, 1.0, 1000.0, 0.1, 0.1), a=1e4)
-@example(cam=Camera(0.01, 0.25, 2.749, 99.5145, 99.5145), a=0.0)
+@example(cam=Camera(1e-3, 1.0, 0.1, MainLens(1000.0, 1000.0 + 1e-12)), a=1e-12)
+@example(cam=Camera(1.0, 1.0, 1000.0, MainLens(0.1, 0.1)), a=1e4)
+@example(cam=Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145)), a=0.0)
 def test_slice_geometry_is_exact_to_rounding_over_the_whole_range(cam, a):
     """d, near and far against the exact ray trace: no NaN, no negatives, order, and only rounding errors."""
     with strict_floats():
@@ -210,8 +211,8 @@ def test_slice_geometry_is_exact_to_rounding_over_the_whole_range(cam, a):
 
 @fast(300)
 @given(cam=cameras(), a=a_values)
-@example(cam=Camera(1e-3, 1.0, 0.1, 1000.0, 1000.0 + 1e-12), a=1e-12)
-@example(cam=Camera(1e-3, 1e-3, 1000.0, 0.1, 0.1 + 1e-12), a=1e4)
+@example(cam=Camera(1e-3, 1.0, 0.1, MainLens(1000.0, 1000.0 + 1e-12)), a=1e-12)
+@example(cam=Camera(1e-3, 1e-3, 1000.0, MainLens(0.1, 0.1 + 1e-12)), a=1e4)
 def test_inverse_round_trip_within_the_propagated_bound(cam, a):
     """refocus_parameter(slice_distance(a)) == a up to the propagated rounding.
 
@@ -226,12 +227,12 @@ def test_inverse_round_trip_within_the_propagated_bound(cam, a):
         a_inf = g.infinity_parameter(cam)
     assert math.isfinite(back) and not math.isnan(d)
     if math.isinf(d):                       # a = 0 with b_U = f_U: the slice at infinity, and back
-        assert a == 0.0 and cam.image_distance_mm == cam.main_focal_length_mm and back == a_inf == 0.0
+        assert a == 0.0 and cam.main_optics.image_distance_mm == cam.main_optics.focal_length_mm and back == a_inf == 0.0
         return
     ex = Exact(cam)
     x = float(ex.central_z(a) - ex.fu)
     forward = ex.error_bound(a, 0.0)
-    bound = 2.0 * (a + abs(a_inf)) * ((forward + 4 * U * (d + ex.L_terms + cam.main_focal_length_mm)) / x + 8 * U)
+    bound = 2.0 * (a + abs(a_inf)) * ((forward + 4 * U * (d + ex.L_terms + cam.main_optics.focal_length_mm)) / x + 8 * U)
     assert abs(back - a) <= bound, (back, a, bound)
 
 
@@ -239,7 +240,7 @@ def test_round_trip_bound_is_not_vacuous():
     """The bound above stays small for the paper's camera: ~1e-13 of a where x is large, and no more than
     the unavoidable u·d/x conditioning (tens of ulps) at a = 1e4, where the slice is 0.014 mm from the
     front focal plane and d ≈ 200 mm carries only ~12 digits of x."""
-    cam = Camera(0.01, 0.25, 2.749, 99.5145, 99.5145 + 10.0, 0.374, -33.184)
+    cam = Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145 + 10.0, principal_plane_gap_mm=-33.184), mla_principal_plane_gap_mm=0.374)
     ex = Exact(cam)
     for a, relative in ((1e-12, 1e-13), (1e-6, 1e-13), (1.0, 1e-13), (1e4, 1e-10)):
         d = g.slice_distance_mm(cam, a)
@@ -273,8 +274,8 @@ def test_every_real_a_gives_ordered_non_negative_limits(cam, a):
         assert not np.isnan(arr).any() and (arr >= 0).all()
     assert (geo.near_mm <= geo.distance_mm).all() and (geo.distance_mm <= geo.far_mm).all()
     # a_∞ is the slice at infinity; its float value leaves |D| <= 4U·δε, so d is inf or >= f_U²/(8Uε)
-    eps = cam.image_distance_mm - cam.main_focal_length_mm
-    assert math.isinf(geo.distance_mm[1]) or geo.distance_mm[1] >= cam.main_focal_length_mm ** 2 / (8 * U * eps)
+    eps = cam.main_optics.image_distance_mm - cam.main_optics.focal_length_mm
+    assert math.isinf(geo.distance_mm[1]) or geo.distance_mm[1] >= cam.main_optics.focal_length_mm ** 2 / (8 * U * eps)
 
 
 @fast(100)
@@ -282,10 +283,10 @@ def test_every_real_a_gives_ordered_non_negative_limits(cam, a):
 def test_b_u_approaching_f_u_from_above_is_continuous(fu, scale):
     """ε = b_U - f_U → 0: a_∞ → 0, d(0) = L + f_U + f_U²/ε, tilts → 0 with the sign of F_i, and
     d(a > 0) → its ε = 0 value."""
-    base = Camera(1e-3 * 7, 0.25, 2.0, fu, fu)
+    base = Camera(1e-3 * 7, 0.25, 2.0, MainLens(fu, fu))
     eps_target = scale * fu
-    cam = Camera(base.pixel_pitch_mm, 0.25, 2.0, fu, fu + eps_target)
-    eps = Fr(cam.image_distance_mm) - Fr(fu)                      # the ε the float b_U actually carries
+    cam = Camera(base.pixel_pitch_mm, 0.25, 2.0, MainLens(fu, fu + eps_target))
+    eps = Fr(cam.main_optics.image_distance_mm) - Fr(fu)                      # the ε the float b_U actually carries
     assume(eps > 0)
     ex = Exact(cam)
     with strict_floats():
@@ -299,7 +300,7 @@ def test_b_u_approaching_f_u_from_above_is_continuous(fu, scale):
     assert np.all(np.isfinite(tilts)) and np.all(np.sign(tilts) == np.sign(pos))
     assert np.all(np.abs(tilts) <= np.degrees(np.abs(pos) * float(eps) / fu ** 2) * (1 + 1e-12))
     # continuity: d(1) moves by f_U²δ·δε/(p_m + δε)/p_m ≈ X·δε/p_m between ε = 0 and ε
-    x1 = d1_flat - base.sensor_to_main_lens_mm - fu
+    x1 = d1_flat - base.main_optics.sensor_path_mm(base.mla_path_mm) - fu
     # (plus ε itself, by which L moves, plus a few ulps of d from each evaluation)
     assert abs(d1 - d1_flat) <= x1 * float(ex.delta * eps / ex.pm) + float(eps) + 16 * U * d1
 
@@ -310,16 +311,15 @@ def test_views_at_the_extremes(cam):
     """Eqs. 17, 33, 34: finite, antisymmetric positions, baseline δ·f_U, tilts zero exactly when b_U = f_U."""
     with strict_floats():
         vg = g.view_geometry(cam)
-        mask = g.views_inside_aperture(Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm,
-                                              cam.main_focal_length_mm, cam.image_distance_mm, f_number=2.0))
+        mask = g.views_inside_aperture(Camera(cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm, MainLens(cam.main_optics.focal_length_mm, cam.main_optics.image_distance_mm, f_number=2.0)))
     c = cam.center_index
     assert list(vg.i) == list(range(-c, c + 1))
     assert np.all(np.isfinite(vg.position_mm)) and np.all(np.isfinite(vg.tilt_deg))
     np.testing.assert_array_equal(vg.position_mm, -vg.position_mm[::-1])
     assert np.all(np.abs(vg.tilt_deg) < 90.0)
-    expected_baseline = Fr(cam.mla_pitch_mm) / cam.m_hat / Fr(cam.mla_focal_length_mm) * Fr(cam.main_focal_length_mm)
+    expected_baseline = Fr(cam.mla_pitch_mm) / cam.m_hat / Fr(cam.mla_focal_length_mm) * Fr(cam.main_optics.focal_length_mm)
     assert abs(Fr(vg.baseline_mm) - expected_baseline) <= 4 * U * expected_baseline
-    if cam.image_distance_mm == cam.main_focal_length_mm:
+    if cam.main_optics.image_distance_mm == cam.main_optics.focal_length_mm:
         assert np.all(vg.tilt_deg == 0.0)
     assert mask.shape == (cam.m_hat, cam.m_hat) and mask[c, c]
 
@@ -336,9 +336,9 @@ def test_focus_distance_to_b_u_round_trip(fu, fixed, factor):
     k = 4.0 * fu * factor
     focus = k + fixed
     with strict_floats():
-        b_u = Camera(0.01, 0.25, fixed, fu, fu).with_focus_distance(focus).image_distance_mm
+        b_u = focused(Camera(0.01, 0.25, fixed, MainLens(fu, fu)), focus).main_optics.image_distance_mm
     assert b_u >= fu
-    cam = Camera(0.01, 0.25, fixed, fu, b_u)
+    cam = Camera(0.01, 0.25, fixed, MainLens(fu, b_u))
     eps = b_u - fu
     assume(eps > 0)
     with strict_floats():
@@ -350,8 +350,8 @@ def test_focus_distance_to_b_u_round_trip(fu, fixed, factor):
 
 def test_focus_distance_beyond_double_resolution_is_infinity_not_nan():
     for focus in (1e18, 1e100, 1e300, math.inf):
-        cam = Camera(0.01, 0.25, 2.749, 99.5145, 99.5145).with_focus_distance(focus)
-        assert cam.image_distance_mm >= 99.5145
+        cam = focused(Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145)), focus)
+        assert cam.main_optics.image_distance_mm >= 99.5145
         with strict_floats():
             d0 = g.slice_distance_mm(cam, 0.0)
         assert d0 >= min(focus, 1e15) and not math.isnan(d0)
@@ -374,10 +374,10 @@ def check_plan(cam, near, far, a):
 @fast(150)
 @given(cam=cameras(min_ratio=3.0), start=log_uniform(1e-12, 1e3),
        width=st.one_of(st.just(0.0), log_uniform(1e-12, 1e6), st.just(math.inf)))
-@example(cam=Camera(0.01, 0.25, 2.749, 99.5145, 99.5145), start=1e-6, width=math.inf)
-@example(cam=Camera(0.01, 0.25, 2.749, 99.5145, 109.5145), start=1.0, width=0.0)
+@example(cam=Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145)), start=1e-6, width=math.inf)
+@example(cam=Camera(0.01, 0.25, 2.749, MainLens(99.5145, 109.5145)), start=1.0, width=0.0)
 def test_plan_slices_covers_extreme_ranges_or_says_why(cam, start, width):
-    closest = cam.sensor_to_main_lens_mm + cam.main_focal_length_mm
+    closest = cam.main_optics.sensor_path_mm(cam.mla_path_mm) + cam.main_optics.focal_length_mm
     near = closest * (1.0 + start)
     far = near * (1.0 + width)
     assume(near > closest)
@@ -397,7 +397,7 @@ def test_plan_slices_covers_extreme_ranges_or_says_why(cam, start, width):
 
 
 def test_plan_slices_tiny_range_is_one_slice_and_infinite_range_reaches_infinity():
-    cam = Camera(0.01, 0.25, 2.749, 99.5145, 99.5145)
+    cam = Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145))
     for near, far in ((250.0, 250.0), (250.0, 250.0 * (1 + 1e-15)), (250.0, math.inf), (210.0, math.inf),
                       (math.inf, math.inf)):
         a = g.plan_slices(cam, near, far)
@@ -414,7 +414,7 @@ def test_plan_slices_tiny_range_is_one_slice_and_infinite_range_reaches_infinity
     (500.0, 300.0, "not a valid range"), (-1.0, 300.0, "not a valid range"),
     (150.0, 300.0, "larger NEAR"), (201.0, 300.0, "larger NEAR")])
 def test_plan_slices_rejects_impossible_ranges(near, far, words):
-    cam = Camera(0.01, 0.25, 2.749, 99.5145, 99.5145)
+    cam = Camera(0.01, 0.25, 2.749, MainLens(99.5145, 99.5145))
     with pytest.raises(LfprocError) as excinfo:
         g.plan_slices(cam, near, far)
     one_line_error(excinfo, words)
@@ -422,7 +422,7 @@ def test_plan_slices_rejects_impossible_ranges(near, far, words):
 
 def test_plan_slices_needs_three_pixel_micro_images():
     with pytest.raises(LfprocError) as excinfo:
-        g.plan_slices(Camera(0.1, 0.25, 2.0, 100.0, 100.0), 300.0, 400.0)    # m-hat = 1
+        g.plan_slices(Camera(0.1, 0.25, 2.0, MainLens(100.0, 100.0)), 300.0, 400.0)    # m-hat = 1
     one_line_error(excinfo, "micro_image_px")
 
 
@@ -881,14 +881,11 @@ def test_even_non_square_or_empty_view_counts_are_user_errors(shape):
 
 def test_camera_with_another_m_hat_is_a_user_error():
     with pytest.raises(LfprocError) as excinfo:
-        LightField.from_views(np.zeros((3, 3, 2, 2, 1)), Camera(0.01, 0.25, 2.749, 99.5, 99.5))
+        LightField.from_views(np.zeros((3, 3, 2, 2, 1)), Camera(0.01, 0.25, 2.749, MainLens(99.5, 99.5)))
     one_line_error(excinfo, "micro_image_px")
 
 
-EXTREME_CAMERA = Camera(pixel_pitch_mm=1e-3, mla_pitch_mm=1.0, mla_focal_length_mm=0.1, main_focal_length_mm=1000.0,
-                        image_distance_mm=1000.0 + 1e-12, mla_principal_plane_gap_mm=-0.05,
-                        main_principal_plane_gap_mm=-499.999999, f_number=1e-3, micro_image_px=99,
-                        name='we"ird \\ name ü', cfa="GBRG", black_level=-1e-300, white_level=1e300)
+EXTREME_CAMERA = Camera(1e-3, 1.0, 0.1, MainLens(1000.0, 1000.0 + 1e-12, principal_plane_gap_mm=-499.999999, f_number=1e-3), mla_principal_plane_gap_mm=-0.05, micro_image_px=99, name='we"ird \\ name ü', cfa="GBRG", black_level=-1e-300, white_level=1e300)
 
 
 @pytest.mark.parametrize("shape", [(1, 1, 1, 1, 1), (99, 99, 1, 2, 1), (1, 1, 1, 600, 3), (3, 3, 300, 1, 2),
@@ -911,7 +908,7 @@ def test_save_load_round_trip_of_extreme_shapes(tmp_path, shape):
     np.testing.assert_array_equal(back.views.view(np.uint32), lf.views.view(np.uint32))   # bit-exact, NaN too
     assert back.camera == camera and back.grid == grid
     if camera is not None:
-        assert back.camera.image_distance_mm - back.camera.main_focal_length_mm == pytest.approx(1e-12, rel=0.2)
+        assert back.camera.main_optics.image_distance_mm - back.camera.main_optics.focal_length_mm == pytest.approx(1e-12, rel=0.2)
         assert back.camera.name == camera.name
 
 

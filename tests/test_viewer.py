@@ -317,12 +317,12 @@ def test_default_sweep_starts_at_infinity_and_stays_where_views_overlap():
     cam = scene_camera()                                   # focused at infinity: a_inf = 0, c = 5
     assert sweep_range(cam, (200, 300)) == (0.0, 3.0)
     assert sweep_range(cam, (27, 37)) == (0.0, pytest.approx(27 / 15))   # outer views shift <= 9 of 27 lenses
-    near_focus = dataclasses.replace(cam, image_distance_mm=51.0)        # a_inf = -delta (b_U - f_U) / p_m
+    near_focus = cam.with_optics(dataclasses.replace(cam.main_optics, image_distance_mm=51.0))        # a_inf = -delta (b_U - f_U) / p_m
     a_inf = geometry.infinity_parameter(near_focus)
     assert a_inf == pytest.approx(-(0.1 / 11 / 0.4) * 1.0 / 0.1)
     assert sweep_range(near_focus, (200, 300)) == (pytest.approx(a_inf), pytest.approx(a_inf + 3.0))
     assert sweep_range(near_focus, (9, 9)) == (pytest.approx(a_inf), pytest.approx(0.6))  # 9 / (3 c)
-    far_focus = dataclasses.replace(cam, image_distance_mm=60.0)          # a_inf = -2.27, beyond the reach
+    far_focus = cam.with_optics(dataclasses.replace(cam.main_optics, image_distance_mm=60.0))          # a_inf = -2.27, beyond the reach
     assert sweep_range(far_focus, (9, 9)) == (pytest.approx(-0.6), pytest.approx(0.6))
 
 

@@ -7,6 +7,7 @@ import pytest
 
 from lfproc import Camera, LfprocError, LightField, geometry, viewpoints
 from lfproc.viewpoints import aperture_mask, circular_walk, mosaic, viewpoint_geometry
+from lfproc.camera import MainLens
 
 from conftest import SAMPLES
 
@@ -41,8 +42,7 @@ def test_mosaic_layout_is_block_ky_kx():
 
 
 def test_inside_aperture_blacks_out_views_outside_the_stop():
-    cam = Camera(pixel_pitch_mm=0.01, mla_pitch_mm=0.11, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                 image_distance_mm=50.0, f_number=6.0)
+    cam = Camera(0.01, 0.11, 0.4, MainLens(50.0, 50.0, f_number=6.0))
     views = np.ones((11, 11, 2, 2, 1), np.float32)
     lf = LightField.from_views(views, cam)
     kept = viewpoints(lf, inside_aperture=True)

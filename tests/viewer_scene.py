@@ -9,13 +9,13 @@ from scipy import ndimage
 from lfproc import Camera, geometry, simulate
 from lfproc.io import write_image
 from lfproc.simulate import Noise, Plane, Scene
+from lfproc.camera import MainLens
 
 NEAR_A, FAR_A = 1.3, 0.4
 
 
 def camera():
-    return Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
-                  image_distance_mm=50.0, f_number=4.0, black_level=64, white_level=16383, name="viewer-test")
+    return Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), black_level=64, white_level=16383, name="viewer-test")
 
 
 def render_capture(folder: Path, seed: int = 7, flip: bool = False) -> dict:

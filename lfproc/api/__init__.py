@@ -19,7 +19,7 @@ white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (
 (depth maps). Importing this package is light (numpy only).
 """
 
-from ._checks import check_refocused_area, check_slice_meaning, check_view_coverage, check_z_step, lowest_meaningful_a
+from ._checks import check_slices, check_view_coverage, check_z_step
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
@@ -29,4 +29,4 @@ from ._views import ViewStack, view_stack
 __all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
            "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
            # the checks the commands share (worded with their flags there)
-           "check_refocused_area", "check_slice_meaning", "check_view_coverage", "check_z_step", "lowest_meaningful_a"]
+           "check_slices", "check_view_coverage", "check_z_step"]

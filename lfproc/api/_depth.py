@@ -7,6 +7,8 @@ import math
 import os
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import LfprocError
 
 
@@ -108,6 +110,7 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
     DepthResult
     """
     from .. import geometry
+    from ..camera import NATIVE_PLANE_UM
     from ..depth import MIN_CONFIDENCE, depth
     from ..lightfield import LightField
     from ..provenance import provenance
@@ -125,15 +128,15 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
     if z_range_um is not None:
         if depth_range_mm is not None:
             raise LfprocError("give depth_range_mm= (cameras) or z_range_um= (microscopes), not both")
-        if camera.object_space.unit != "um":
-            raise LfprocError("z_range_um= (micrometres) needs a microscope camera; give depth_range_mm=")
+        geometry.require_space(camera, NATIVE_PLANE_UM, "z_range_um= (micrometres)")
         z0, z1 = (float(v) for v in z_range_um)
         if not (math.isfinite(z0) and math.isfinite(z1)) or z0 == z1:
             raise LfprocError(f"z_range_um= must be two different finite depths in um, got {z_range_um!r}")
-        zeta = geometry.z_per_a_um(camera)
-        options["a_range"] = (min(z0, z1) / zeta, max(z0, z1) / zeta)
-        if z_step_um is not None:
-            options["step"] = float(z_step_um) / zeta
+        a0, a1 = (float(a) for a in geometry.position_parameter(camera, np.array([z0, z1])))
+        options["a_range"] = (min(a0, a1), max(a0, a1))
+        if z_step_um is not None:   # a step in z as a step in a (z is linear in a through the native object plane)
+            options["step"] = float(geometry.position_parameter(camera, float(z_step_um))) - \
+                float(geometry.position_parameter(camera, 0.0))
     lf = with_aperture(lf, aperture)
     dm = depth(lf, depth_range_mm=depth_range_mm, camera=camera, min_confidence=min_confidence, **options)
     source = None if lf.source is None else os.path.abspath(lf.source)

@@ -8,28 +8,26 @@ aperture): the attributes, ``records()`` and the files of ``save()`` hold the sa
 from __future__ import annotations
 
 import copy
+import math
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import ObjectSpace, SliceNames
+from ..camera import ObjectSpace
 from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
 
-#: what each way of naming slices refuses in the other object space (keyed by the argument given)
-_OTHER_SPACE = {"z_um": "z_um= (micrometres from the native object plane) needs a microscope camera; give "
-                        "distance_mm= or a=",
-                "distance_mm": "a microscope's depths are micrometres from the native object plane; give z_um= "
-                               "instead of distance_mm="}
+#: the positions focal_stack takes besides a: the record keys of the built-in object spaces
+POSITION_ARGUMENTS = ("distance_mm", "z_um")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class FocalStack(SliceNames):
+class FocalStack:
     """Refocused slices of one light field and their geometry.
 
     One set of tags for any main optics, in the unit and from the origin of ``space`` (the camera's
-    :attr:`~lfproc.camera.Camera.object_space`), as :class:`lfproc.geometry.SliceGeometry` holds them.
+    :attr:`~lfproc.camera.MainOptics.object_space`), as :class:`lfproc.geometry.SliceGeometry` holds them.
 
     Attributes
     ----------
@@ -78,6 +76,46 @@ class FocalStack(SliceNames):
     view_mask: np.ndarray | None
     _records: tuple
 
+    @property
+    def distance_mm(self):
+        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
+        return self.space.named("distance_mm", self.depth)
+
+    @property
+    def near_mm(self):
+        """``near`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("near_mm", self.near)
+
+    @property
+    def far_mm(self):
+        """``far`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("far_mm", self.far)
+
+    @property
+    def dof_mm(self):
+        """``dof`` in mm (Eq. 23); ``None`` in another space."""
+        return self.space.named("dof_mm", self.dof)
+
+    @property
+    def z_um(self):
+        """``depth`` in µm from the native object plane; ``None`` in another space."""
+        return self.space.named("z_um", self.depth)
+
+    @property
+    def z_near_um(self):
+        """``near`` (the larger z) in µm; ``None`` in another space."""
+        return self.space.named("z_near_um", self.near)
+
+    @property
+    def z_far_um(self):
+        """``far`` (the smaller z) in µm; ``None`` in another space."""
+        return self.space.named("z_far_um", self.far)
+
+    @property
+    def dof_um(self):
+        """``dof`` in µm; ``None`` in another space."""
+        return self.space.named("dof_um", self.dof)
+
     def records(self) -> list[dict]:
         """One dict per slice: the keys and values of ``lfproc refocus``'s sidecar (``inf`` for JSON's null)."""
         return copy.deepcopy(list(self._records))
@@ -101,7 +139,7 @@ class FocalStack(SliceNames):
             written += list(write_slice_previews(outdir, stem, self.images, self.camera, list(self.a), preview,
                                                  view_mask=self.view_mask) or [])
         if stack:
-            written.append(write_focal_stack(stack_path(outdir, stem, stack), self.images, self.records(),
+            written.append(write_focal_stack(stack_path(outdir, stem, stack), self.images, self.records(), self.space,
                                              kind=stack, lens_um=lateral_um_per_lens(self.camera),
                                              upsample=self.upsample))
         return written
@@ -128,10 +166,7 @@ class FocalStack(SliceNames):
 
     def __repr__(self) -> str:
         k, ny, nx, c = self.images.shape
-        if self.space.from_sensor:
-            where = f"{_span(self.depth)} {self.space.symbol} {self.space.origin}"
-        else:
-            where = f"z {_span(self.depth)} {self.space.symbol}"
+        where = f"{self.space.name or ''}{_span(self.depth)} {self.space.symbol} {self.space.origin.split(',')[0]}"
         return (f"<FocalStack of {k} slice(s) {ny}x{nx}x{c}, a {_span(self.a)}, {where}, "
                 f"{self.views_summed} views summed>")
 
@@ -150,7 +185,8 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     distance_mm : float or sequence of float, optional
         Distances from the sensor to focus at (a photographic camera; Eq. 21 inverted).
     z_um : float or sequence of float, optional
-        Depths from the native object plane in µm, positive towards the objective (a microscope).
+        Depths from the native object plane in µm, positive towards the objective (a microscope). Positions
+        are the optics' own: the one of ``distance_mm`` and ``z_um`` that is their object space's position key.
     aperture : float, optional
         A synthetic aperture f-number: average only the views inside it (:func:`lfproc.with_aperture`).
     interpolation : {"nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"}
@@ -165,8 +201,10 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     Raises
     ------
     LfprocError
-        No camera, not exactly one of ``a``/``distance_mm``/``z_um``, slices nearer than the main lens's
-        front focal plane, or slices whose refocused area is under half the image.
+        No camera, not exactly one of ``a``/``distance_mm``/``z_um``, positions in another object space than the
+        optics', slices that image no real object (beyond infinity, nearer than a main lens's front focal
+        plane), or slices whose refocused area is under half the image; each states the light field's one
+        usable range, in the terms of the argument given.
 
     Warns
     -----
@@ -179,25 +217,23 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     from ..provenance import provenance
     from ..refocus import refocus
     from ..viewpoints import with_aperture
-    from ._checks import check_slice_meaning, check_view_coverage, check_z_step
+    from ._checks import check_view_coverage, check_z_step
 
     if not isinstance(lf, LightField) or lf.camera is None:
         raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
                           "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
     camera = lf.camera
-    a_values = _parameters(camera, a, distance_mm, z_um)
-    if camera.object_space.from_sensor:   # no slice nearer than the front focal plane (signed z has none)
-        check_slice_meaning(camera, a_values, "a" if a is not None else "distance_mm")
+    a_values, what, asked = _parameters(camera, a, distance_mm, z_um)
     if int(upsample) != upsample or upsample < 1:
         raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
     lf = with_aperture(lf, aperture)
     source = None if lf.source is None else os.path.abspath(lf.source)
-    check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask)
+    check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask, what, asked)
     check_z_step(camera, a_values)
     images = refocus(lf, a_values, interpolation=interpolation, upsample=int(upsample))
     prov = provenance(lf.inputs)
     records = slice_metadata(source, camera, a_values, lf.view_mask, int(upsample), prov)
-    space = camera.object_space
+    space = camera.main_optics.object_space
     columns = [np.array([r[key] for r in records], dtype=np.float64) for key in ("a",) + tuple(space.keys)]
     summed = records[0].get("views_summed", lf.m_hat ** 2)
     return FocalStack(images, *columns, space, views_summed=int(summed),
@@ -206,26 +242,32 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
                       view_mask=lf.view_mask, _records=tuple(records))
 
 
-def _parameters(camera, a, distance_mm, z_um) -> list[float]:
-    """The slices' a from exactly one of ``a``, ``distance_mm`` (Eq. 21 inverted) and ``z_um``."""
+def _parameters(camera, a, distance_mm, z_um):
+    """(the slices' a, the argument given, the positions as given or None) from exactly one of ``a``,
+    ``distance_mm`` and ``z_um``: positions are the optics' own (the one that is their position key), turned
+    into a by the optics (Eq. 21 inverted for a main lens)."""
     from .. import geometry
 
-    given = [name for name, value in (("a", a), ("distance_mm", distance_mm), ("z_um", z_um)) if value is not None]
+    given = [name for name, value in zip(("a",) + POSITION_ARGUMENTS, (a, distance_mm, z_um)) if value is not None]
     if len(given) != 1:
         raise LfprocError(f"give exactly one of a=, distance_mm= or z_um=, got {', '.join(given) or 'none'}")
     name = given[0]
+    space = camera.main_optics.object_space
     values = np.atleast_1d(np.asarray({"a": a, "distance_mm": distance_mm, "z_um": z_um}[name], dtype=np.float64))
-    if values.ndim != 1 or values.size == 0 or not np.all(np.isfinite(values) | (name == "distance_mm")):
+    if name != "a" and name != space.position_key:   # positions in another object space than the optics'
+        own = f"{space.position_key}= or " if space.position_key in POSITION_ARGUMENTS else ""
+        raise LfprocError(f"{name}= names positions the optics of this camera ({camera.main_optics.describe()}) do not "
+                          f"use: they place slices in {space.symbol} {space.origin}; give {own}a=")
+    # positions may be infinite where the optics have a slice at infinity (distances); a never
+    finite = np.isfinite(values) if name == "a" else np.array([math.isfinite(v) or space.holds(v) for v in values.ravel()])
+    if values.ndim != 1 or values.size == 0 or not np.all(finite):
         raise LfprocError(f"{name}= must be one number or a non-empty sequence of finite numbers")
-    if name != "a" and name != camera.object_space.position_key:   # positions in the other object space
-        raise LfprocError(_OTHER_SPACE[name])
-    if name == "z_um":
-        values = np.atleast_1d(geometry.refocus_parameter_z(camera, values))
-    elif name == "distance_mm":
-        values = np.atleast_1d(geometry.refocus_parameter(camera, values))
+    asked = None
+    if name != "a":
+        asked, values = values, np.atleast_1d(geometry.position_parameter(camera, values))
     if len(set(values.tolist())) != len(values):
         raise LfprocError(f"{name}= asks for the same slice twice; give each once")
-    return [float(v) for v in values]
+    return [float(v) for v in values], name, asked
 
 
 def _stem(stem, source) -> str:

@@ -153,8 +153,7 @@ def micro_image_scale(camera) -> float:
     try:
         from ..geometry import micro_image_scale as scale
     except ImportError:
-        d_a = float(getattr(camera, "exit_pupil_distance_mm", math.inf))
-        return 1.0 if math.isinf(d_a) else (d_a + camera.mla_focal_length_mm) / d_a
+        return float(camera.micro_image_scale)
     return float(scale(camera))
 
 
@@ -188,8 +187,8 @@ def _afocal(camera) -> bool:
     (object-side telecentric) through a stop at infinity on the image side, as an objective + tube lens. Their
     micro images sit under their lenslets whatever the camera file says, so a pitch off the file's is the pixel
     size at the lenslets, not an exit pupil."""
-    optics = getattr(camera, "main_optics", None)
-    return (optics is not None and bool(optics.views_are_orthographic)
+    optics = getattr(camera, "main_optics", None)    # object-side telecentric: one lateral scale for every depth
+    return (optics is not None and optics.lateral_sampling_um(camera) is not None
             and math.isinf(optics.exit_pupil_distance_mm))
 
 
@@ -199,7 +198,7 @@ def microscope_pitch_warning(source: str, estimate: ExitPupilEstimate, camera) -
     if not estimate.contradicts_camera:
         return None
     ratio = estimate.scale
-    relay = camera.relay_magnification
+    relay = camera.main_optics.relay_magnification
     m_hat = (f"decoding uses the camera file's m̂ {camera.m_hat}" if camera.micro_image_px_given else
              "decoding takes m̂ from the measured pitch")
     return (f"{source}: warning: the micro images are {ratio * camera.pitch_px:.4f} px apart but the camera file "
@@ -215,7 +214,8 @@ def exit_pupil_warning(source: str, estimate: ExitPupilEstimate, camera_distance
     :func:`microscope_pitch_warning` (no exit pupil to blame)."""
     if _afocal(camera_distance_mm):
         return microscope_pitch_warning(source, estimate, camera_distance_mm)
-    camera_distance_mm = getattr(camera_distance_mm, "exit_pupil_distance_mm", camera_distance_mm)
+    if hasattr(camera_distance_mm, "main_optics"):
+        camera_distance_mm = camera_distance_mm.main_optics.exit_pupil_distance_mm
     if not estimate.contradicts_camera:
         return None
     given = "infinite (telecentric)" if math.isinf(camera_distance_mm) else f"{camera_distance_mm:.1f} mm"

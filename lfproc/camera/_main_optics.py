@@ -2,108 +2,122 @@
 
 The paper's ray model (Eqs. 13–31) follows chief-ray pairs from the sensor through the micro lens array
 to the point w behind the MLA where they meet (:mod:`lfproc.geometry`). Everything in front of the MLA
-enters only through the *main optics*: where the object point conjugate to that image point lies, in which
-unit and from which origin it is reported, and the optics' aperture. Two kinds implement the interface:
+enters only through the *main optics*, which are asked to do things, never what kind they are: where the
+object point conjugate to an image point lies, and back (in their own unit, from their own origin:
+:class:`~._space.ObjectSpace`), which slices image real objects and why the others do not, how the views
+are placed (virtual cameras at positions, or directions), which views lie inside their stop, how many views
+their aperture fills, the diffraction term of the depth of field, and how the camera file writes them.
 
-* :class:`MainLens`, a photographic main lens: f_U, H1U–H2U, b_U, f-number and exit pupil (the
-  ``[main_lens]`` table), optionally its surfaces (a :class:`~._lens.LensPrescription`). Distances are
-  millimetres from the sensor (the paper's Eq. 21 and 31).
-* :class:`~._microscope.Microscope`, an objective + tube lens (+ relay) of a light-field microscope (the
-  ``[microscope]`` table). Depths are micrometres from the native object plane, positive towards the
-  objective.
-
-The interface (:class:`MainOptics`) is what the geometry, the outputs and the commands may ask; nothing
-outside :mod:`lfproc.camera` and the optics' own geometry module branches on which kind it is.
+Two kinds are built in: :class:`~._main_lens.MainLens` (``[main_lens]``, distances in mm from the sensor)
+and :class:`~._microscope.Microscope` (``[microscope]``, depths in µm from the native object plane). Any
+other class with the members of :class:`MainOptics` works the same (``tests/test_third_optics.py`` writes
+one); nothing outside :mod:`lfproc.camera` and the optics' own geometry modules asks which kind it is.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ._lens import LensPrescription
-from ._transfer import RayTransfer, gap, lens, prescription_transfer
+from ._space import ObjectSpace
+from ._transfer import RayTransfer
 
 
 @dataclass(frozen=True)
-class ObjectSpace:
-    """The unit and origin in which the main optics report object-space positions of slices and depths.
+class UsableRange:
+    """The refocus parameters of real slices and where their ends focus.
 
     Attributes
     ----------
-    unit : {"mm", "um"}
-    origin : str
-        Where 0 is, and which way is positive (words for labels and sidecars).
-    keys : tuple of str
-        The contract's record keys of (position, near limit, far limit, depth of field), in this unit.
-    per_mm : float
-        Units per millimetre (1 or 1000).
+    low, high : float
+        The lowest and highest ``a`` whose slice images a real object (``-inf``/``inf`` where unbounded).
+    low_position, high_position : float
+        Where the slices at ``low`` and ``high`` focus, in the optics' object space (the limits as ``a``
+        tends to an unbounded end).
+    high_name : str
+        What the near end is, for messages (``"the main lens's front focal plane"``); empty where it is only a
+        position.
     """
 
-    unit: str
-    origin: str
-    keys: tuple
-    per_mm: float
+    low: float
+    high: float
+    low_position: float
+    high_position: float
+    high_name: str = ""
+
+    def near_end(self, space) -> str:
+        """The near end in words: ``"the main lens's front focal plane (100.4 mm)"``, or its position."""
+        where = space.text(self.high_position)
+        return f"{self.high_name} ({where})" if self.high_name else where
+
+
+@dataclass(frozen=True, eq=False)
+class ViewPlacement:
+    """Where the views along one axis look from, or along.
+
+    Attributes
+    ----------
+    offset : ndarray
+        View offsets i (in view steps from the central view; fractional where the decoder read the views
+        off the lens centres).
+    position_mm : ndarray
+        Where each view's rays cross the optics' pupil: a virtual camera's optical centre F_i (Eq. 17), or
+        for orthographic views the height in the objective's back focal plane.
+    tilt_deg : ndarray
+        The view's axis to the optical axis: Φ_i (Eq. 33), or an orthographic view's object-space angle
+        (NaN where no ray has that direction).
+    baseline_mm : float or None
+        ΔB between neighbouring views (Eq. 34); ``None`` for orthographic views, which are directions:
+        every view sees every point from the same place.
+    """
+
+    offset: np.ndarray
+    position_mm: np.ndarray
+    tilt_deg: np.ndarray
+    baseline_mm: float | None
 
     @property
-    def position_key(self) -> str:
-        """The record key of a slice's (or a depth's) position: ``distance_mm`` or ``z_um``."""
-        return self.keys[0]
-
-    @property
-    def from_sensor(self) -> bool:
-        """True for distances from the sensor (positive, ``inf`` at infinity); False for signed depths."""
-        return self.unit == "mm"
-
-    @property
-    def symbol(self) -> str:
-        """The unit as people read it (``"mm"``, ``"µm"``); ``unit`` is the one of file names and record keys."""
-        return "µm" if self.unit == "um" else self.unit
+    def orthographic(self) -> bool:
+        """Whether the views are directions (no baseline, no virtual camera positions)."""
+        return self.baseline_mm is None
 
 
-def _in_space(unit: str, name: str, doc: str) -> property:
-    """A contract name that reads the field ``name`` where the result is in ``unit``, else ``None``."""
-    return property(lambda self: getattr(self, name) if self.space.unit == unit else None, doc=doc)
+@dataclass(frozen=True, eq=False)
+class ViewPupil:
+    """The views as cells of a pupil, for synthetic apertures (:mod:`lfproc.geometry`'s ``_aperture``).
 
+    Attributes
+    ----------
+    coordinates : ndarray (m̂,)
+        Each view offset's coordinate in the pupil along an axis.
+    cell : float
+        The width of one view's cell, in the same unit.
+    length : float
+        An aperture f/F is a disc of diameter ``length / F`` in those coordinates.
+    widest : float or None
+        The optics' own f-number (the widest synthetic aperture), ``None`` where the camera file gives none.
+    """
 
-class PositionNames:
-    """The contract's names of a result's one set of positions ``depth``, ``near``, ``far`` in its ``space``:
-    ``distance_mm``, ``near_mm``, ``far_mm`` (mm from the sensor) and ``z_um``, ``z_near_um``, ``z_far_um``
-    (µm from the native object plane), each ``None`` in the other space. Read-only; a mixin for the frozen
-    results (depth maps)."""
-
-    distance_mm = _in_space("mm", "depth", "distance from the sensor in mm (Eq. 21); None for a microscope")
-    near_mm = _in_space("mm", "near", "the nearer limit in mm from the sensor (Eq. 31); None for a microscope")
-    far_mm = _in_space("mm", "far", "the farther limit in mm from the sensor (Eq. 31); None for a microscope")
-    z_um = _in_space("um", "depth", "z in µm from the native object plane; None for a camera")
-    z_near_um = _in_space("um", "near", "the limit nearer the objective (larger z), µm; None for a camera")
-    z_far_um = _in_space("um", "far", "the limit farther from the objective (smaller z), µm; None for a camera")
-
-
-class SliceNames(PositionNames):
-    """:class:`PositionNames` and the depth of field ``dof`` as ``dof_mm`` / ``dof_um`` (slices, focal stacks)."""
-
-    dof_mm = _in_space("mm", "dof", "the depth of field in mm (Eq. 23); None for a microscope")
-    dof_um = _in_space("um", "dof", "the depth of field in µm; None for a camera")
-
-
-#: a photographic camera's object space: millimetres from the sensor (the paper's Eqs. 21, 31)
-SENSOR_MM = ObjectSpace("mm", "from the sensor", ("distance_mm", "near_mm", "far_mm", "dof_mm"), 1.0)
-#: a microscope's object space: micrometres from the native object plane, positive towards the objective
-NATIVE_PLANE_UM = ObjectSpace("um", "from the native object plane, positive towards the objective",
-                              ("z_um", "z_near_um", "z_far_um", "dof_um"), 1000.0)
+    coordinates: np.ndarray
+    cell: float
+    length: float
+    widest: float | None
 
 
 @runtime_checkable
 class MainOptics(Protocol):
-    """What the ray model and the outputs ask of the optics in front of the micro lens array."""
+    """What the ray model, the outputs and the commands ask of the optics in front of the micro lens array.
+
+    Methods that take ``camera`` read the micro lens array and sensor behind the optics from it (pitches,
+    f_s, m̂: the :class:`~lfproc.camera.Camera` the optics sit in). ``wave_optics`` (the objective's wave
+    description for deconvolution, ``None`` without an objective) belongs here too.
+    """
 
     @property
     def object_space(self) -> ObjectSpace:
-        """Unit and origin of the positions :meth:`object_position` returns."""
+        """Unit, origin and direction of the positions :meth:`object_position` returns."""
 
     @property
     def exit_pupil_distance_mm(self) -> float:
@@ -118,10 +132,8 @@ class MainOptics(Protocol):
         """The sine of the marginal ray's angle at the MLA (1/(2N) of a lens, NA/M of an objective); ``None``
         when the camera file does not say."""
 
-    @property
-    def views_are_orthographic(self) -> bool:
-        """True where every view looks along one direction from all lenses (an object-side telecentric
-        objective: views have angles); False where each view is a pinhole camera at a position on the lens."""
+    def validate(self, where: str) -> None:
+        """Raise `LfprocError` (one line naming the camera-file key, ``where`` the file) for impossible values."""
 
     def transfer(self) -> RayTransfer:
         """The paraxial transfer from the object-side reference plane to the MLA (reduced angles)."""
@@ -132,87 +144,50 @@ class MainOptics(Protocol):
         w = shift·pitch / slope_gap behind it, and the object point is that image point's conjugate
         (``mla_path_mm`` = f_s + H1s–H2s, the sensor to the MLA's H1s)."""
 
+    def refocus_parameter(self, camera, position):
+        """The ``a`` whose slice (the central ray pair, Eqs. 13–21) is centred at ``position``, in
+        :attr:`object_space` units; `LfprocError` for a position no slice can focus on."""
+
+    def usable_range(self, camera) -> UsableRange:
+        """The ``a`` of the slices that image real objects, and where those ends focus."""
+
+    def refusal(self, camera, a: float) -> str:
+        """Why slice ``a`` (outside :meth:`usable_range`) images no real object, in words."""
+
     def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
         """r, the half-extent in view steps of the views the optics fill: the DOF's views when none are named."""
 
     def wave_depth_of_field(self) -> float:
         """The diffraction term added to every slice's geometric DOF, in :attr:`object_space` units."""
 
+    def place_views(self, camera, offsets) -> ViewPlacement:
+        """The views at ``offsets`` (view steps from the central one) along one axis."""
+
+    def inside_aperture(self, camera) -> np.ndarray:
+        """``(m̂, m̂)`` booleans: the views inside the optics' stop (all where the camera file gives none)."""
+
+    def view_pupil(self, camera) -> ViewPupil:
+        """The views as cells of a pupil, for synthetic apertures."""
+
+    def lateral_sampling_um(self, camera) -> float | None:
+        """The object-space size of one lens in µm where it is one for every depth (object-side telecentric
+        optics); ``None`` where it changes with depth (perspective views)."""
+
+    def summary(self, camera) -> dict:
+        """The numbers that describe the optics in this camera, JSON-ready (``lfproc geometry --json``)."""
+
     def describe(self) -> str:
         """A short human description (``f/4 main lens, f_U 100 mm`` / ``20x/0.5 objective``)."""
 
+    def toml_lines(self) -> list:
+        """The optics' table of the camera file (``[main_lens]`` …), full precision."""
 
-@dataclass(frozen=True)
-class MainLens:
-    """A photographic main lens in front of the micro lens array (the camera file's ``[main_lens]``).
 
-    Parameters
-    ----------
-    focal_length_mm : float
-        f_U.
-    image_distance_mm : float
-        b_U, H2U to the MLA's H1s; at least f_U.
-    principal_plane_gap_mm : float
-        H1U–H2U (negative where the planes are interchanged).
-    f_number : float or None
-        For the Airy limit (Eq. 22) and aperture checks.
-    exit_pupil_distance_mm : float
-        d_A; ``inf`` (image-side telecentric) is the 2014 paper's model.
-    prescription : LensPrescription or None
-        The lens's surfaces, where given: f_U, H1U–H2U and d_A are then its cardinal points.
-    """
+def slope_step(camera) -> float:
+    """δ = p_p / f_s: the image-side slope step between neighbouring views (Eq. 13 for Δu = 1)."""
+    return camera.sample_pitch_mm / camera.mla_focal_length_mm
 
-    focal_length_mm: float
-    image_distance_mm: float
-    principal_plane_gap_mm: float = 0.0
-    f_number: float | None = None
-    exit_pupil_distance_mm: float = math.inf
-    prescription: LensPrescription | None = None
 
-    object_space = SENSOR_MM
-    relay_magnification = 1.0
-    views_are_orthographic = False
-
-    @property
-    def image_aperture_sine(self) -> float | None:
-        """1/(2N) for the f-number N (paraxial), ``None`` without one."""
-        return None if self.f_number is None else 1.0 / (2.0 * self.f_number)
-
-    def transfer(self) -> RayTransfer:
-        """S from H1U to the MLA: T(b_U)·L(f_U), or the prescription's own surfaces (``camera._transfer``)."""
-        if self.prescription is not None:
-            return prescription_transfer(self.prescription, self.image_distance_mm)
-        return gap(self.image_distance_mm) @ lens(self.focal_length_mm)
-
-    def object_position(self, shift, pitch_mm: float, slope_gap, mla_path_mm: float):
-        """Distance from the sensor where two rays meet in front of the lens (Eqs. 18–21).
-
-        Rays g = ``shift``·``pitch_mm`` apart at the MLA with image-side slopes differing by N = ``slope_gap``
-        meet w = g/N behind the MLA; in Newton's form its conjugate is x = f_U²·N/(g + N·ε) from the front focal
-        plane (ε = b_U − f_U), so d = L + f_U + x with L = f_s + H1sH2s + b_U + H1UH2U: the transfer's
-        s = n·(B + w·D)/(A + w·C) without cancellation at infinity (the tests check they agree).
-        ``inf`` where the conjugate lies behind H1U or at infinity; never negative, never NaN.
-        """
-        f_u = self.focal_length_mm
-        g = np.asarray(shift, dtype=np.float64) * pitch_mm
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            z = f_u + f_u * f_u * slope_gap / (g + slope_gap * (self.image_distance_mm - f_u))
-        z = np.where((z > 0) & np.isfinite(z), z, np.inf)
-        return self.sensor_path_mm(mla_path_mm) + z
-
-    def sensor_path_mm(self, mla_path_mm: float) -> float:
-        """L = f_s + H1sH2s + b_U + H1UH2U: the sensor to H1U (Eqs. 21, 31)."""
-        return mla_path_mm + self.image_distance_mm + self.principal_plane_gap_mm
-
-    def lit_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index) -> float:
-        """c, the full micro image (the paper's DOF: a main lens matched to the lenslets fills it)."""
-        return float(center_index)
-
-    def wave_depth_of_field(self) -> float:
-        """0: a camera's diffraction limit is the Airy check of Eq. 22, not a DOF term."""
-        return 0.0
-
-    def describe(self) -> str:
-        stop = "" if self.f_number is None else f"f/{self.f_number:g} "
-        return f"{stop}main lens, f_U {self.focal_length_mm:g} mm"
-
+def pupil_curvature(exit_pupil_distance_mm: float) -> float:
+    """κ = 1/d_A in 1/mm; exactly 0.0 for image-side telecentric optics (d_A = ∞)."""
+    return 0.0 if np.isinf(exit_pupil_distance_mm) else 1.0 / exit_pupil_distance_mm

@@ -6,6 +6,15 @@ doubly telecentric relay: the aperture stop sits in the objective's back focal p
 tube lens's front focal plane, so every micro image is centred under its own lenslet (the paper's
 telecentric case) and the native object plane is imaged onto the micro lens array with lateral
 magnification M and axial magnification M²/n (n the immersion index).
+
+Views are directions (object-side telecentric): view i samples the image-side direction sine
+u/|(u, f_s)|, u = i·p_p under its lens, which the Abbe sine condition n·sin θ = M·sin θ' turns into the
+object-space angle θ_i; its rays cross the objective's back focal plane (its pupil) at −f_tube·sin θ'.
+
+The objective may be given by its surfaces (``objective``, a :class:`~._lens.LensPrescription` whose
+object side is the immersion medium): its focal length, NA (the stop's marginal ray from the front focal
+point) and native object plane (the front focal plane) are then those of its paraxial trace
+(docs/microscope.md, "An objective by its surfaces").
 """
 
 from __future__ import annotations
@@ -16,7 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import LfprocError
-from ._main_optics import NATIVE_PLANE_UM
+from ._lens import PRESCRIPTION_TOLERANCE, LensPrescription, surfaces_to_toml
+from ._main_optics import UsableRange, ViewPlacement, ViewPupil, slope_step
+from ._space import NATIVE_PLANE_UM
 from ._transfer import RayTransfer, gap, lens
 
 #: camera-file key of each Microscope field (error messages)
@@ -46,6 +57,10 @@ class Microscope:
     aplanatic : bool or None
         Refocus with per-view shifts from the sine condition (True), paraxial shifts a·(c − k)
         (False), or decide from the camera (None, the default; see ``lfproc.geometry``).
+    objective : LensPrescription or None
+        The objective's surfaces, sample side first (its ``object_index`` is ``immersion_index``); M, NA
+        and the native object plane are then its paraxial trace's (:meth:`prescribed`), and
+        :meth:`transfer` traces its surfaces.
     """
 
     objective_magnification: float
@@ -55,6 +70,16 @@ class Microscope:
     relay_magnification: float = 1.0
     wavelength_nm: float | None = None
     aplanatic: bool | None = None
+    objective: LensPrescription | None = None
+
+    @classmethod
+    def prescribed(cls, objective: LensPrescription, tube_lens_focal_length_mm: float = 200.0,
+                   **settings) -> "Microscope":
+        """The microscope of an objective given by its surfaces: M = f_tube/f_obj from its focal length,
+        NA from its stop (:attr:`LensPrescription.numerical_aperture`), n its object-side index.
+        ``settings``: ``relay_magnification``, ``wavelength_nm``, ``aplanatic``."""
+        return cls(tube_lens_focal_length_mm / objective.focal_length_mm, objective.numerical_aperture,
+                   objective.object_index, tube_lens_focal_length_mm, objective=objective, **settings)
 
     def validate(self, where: str) -> None:
         """Raise `LfprocError` with one line naming the ``microscope.`` key for an impossible value."""
@@ -71,6 +96,22 @@ class Microscope:
                               f"microscope.immersion_index {self.immersion_index!r} (NA = n·sin θ); check both")
         if self.aplanatic is not None and not isinstance(self.aplanatic, bool):
             raise LfprocError(f"{where}: microscope.aplanatic must be true or false, got {self.aplanatic!r}")
+        if self.objective is not None:
+            self._validate_objective(where)
+
+    def _validate_objective(self, where: str) -> None:
+        """M, NA and n of a prescribed objective are its trace's (within 0.1 %)."""
+        objective = self.objective
+        if not isinstance(objective, LensPrescription):
+            raise LfprocError(f"{where}: microscope objective must be a LensPrescription, got {objective!r}")
+        for key, value, traced in (
+                ("objective_magnification", self.objective_magnification,
+                 self.tube_lens_focal_length_mm / objective.focal_length_mm),
+                ("numerical_aperture", self.numerical_aperture, objective.numerical_aperture),
+                ("immersion_index", self.immersion_index, objective.object_index)):
+            if abs(value - traced) > PRESCRIPTION_TOLERANCE * abs(traced):
+                raise LfprocError(f"{where}: microscope.{key} = {value} disagrees with the objective's surfaces "
+                                  f"({traced:.6g}, more than 0.1 %); remove it or fix the surfaces")
 
     @property
     def objective_focal_length_mm(self) -> float:
@@ -96,8 +137,6 @@ class Microscope:
     object_space = NATIVE_PLANE_UM
     #: the aperture stop in the objective's back focal plane: image-side telecentric, no exit pupil to place
     exit_pupil_distance_mm = math.inf
-    #: object-side telecentric too: a view is one direction through every lens
-    views_are_orthographic = True
 
     @property
     def image_aperture_sine(self) -> float:
@@ -106,9 +145,19 @@ class Microscope:
 
     def transfer(self) -> RayTransfer:
         """S from the native object plane (in immersion n) to the MLA, built from its lenses:
-        T(f_tube)·L(f_tube)·T(f_obj + f_tube)·L(f_obj)·T(f_obj) = [[−M, 0], [0, −1/M]] (``._transfer``)."""
-        f_obj, f_tube = self.objective_focal_length_mm, self.tube_lens_focal_length_mm
-        s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
+        T(f_tube)·L(f_tube)·T(f_obj + f_tube)·L(f_obj)·T(f_obj) = [[−M, 0], [0, −1/M]] (``._transfer``).
+        A prescribed objective: its surfaces from its front focal plane to its back focal plane, the tube
+        lens f_tube behind that (afocal and imaging paraxially, whatever the surfaces)."""
+        f_tube = self.tube_lens_focal_length_mm
+        if self.objective is not None:
+            o = self.objective
+            a, b, c, d = o.matrix()
+            to_first = gap((o.vertex_mm(0) - o.front_focal_plane_mm) / o.object_index)
+            to_back_focus = gap(o.rear_principal_plane_mm + o.focal_length_mm - o.length_mm)
+            s = gap(f_tube) @ lens(f_tube) @ gap(f_tube) @ to_back_focus @ RayTransfer(a, b, c, d) @ to_first
+        else:
+            f_obj = self.objective_focal_length_mm
+            s = gap(f_tube) @ lens(f_tube) @ gap(f_obj + f_tube) @ lens(f_obj) @ gap(f_obj)
         return RayTransfer(s.A, s.B, s.C, s.D, float(self.immersion_index))
 
     def object_position(self, shift, pitch_mm: float, slope_gap, mla_path_mm: float = 0.0):
@@ -121,6 +170,27 @@ class Microscope:
                                    dtype=np.float64) * 1000.0
         z = np.asarray(shift, dtype=np.float64) * per_shift + 0.0   # + 0.0: never −0
         return float(z) if z.ndim == 0 else z
+
+    def z_per_a_um(self, camera) -> float:
+        """dz/da = m̂·f_s·n/M² in µm: slice a's ray pair (a lenses apart, slopes one view step δ apart) meets at
+        a·z(1), exactly (:meth:`object_position` is linear in the shift)."""
+        return float(self.object_position(1.0, camera.mla_pitch_mm, slope_step(camera)))
+
+    def refocus_parameter(self, camera, position):
+        """a = z / z(1): the slice at ``position`` µm from the native object plane."""
+        z = np.asarray(position, dtype=np.float64)
+        if not np.all(np.isfinite(z)):
+            raise LfprocError(f"depth {position} um is not a finite number of micrometres")
+        a = z / self.z_per_a_um(camera)
+        return float(a) if a.ndim == 0 else a
+
+    def usable_range(self, camera) -> UsableRange:
+        """Every ``a``: an afocal objective images every depth, of either sign (no slice at infinity, no front
+        focal plane)."""
+        return UsableRange(-math.inf, math.inf, -math.inf, math.inf)
+
+    def refusal(self, camera, a: float) -> str:
+        return "focuses at no depth of the sample"
 
     def na_view_extent(self, sample_pitch_mm: float, mla_focal_length_mm: float, center_index: int) -> int:
         """c_NA: the largest view offset |i| ≤ c whose image-side ray sine, i·p_p/|(i·p_p, f_s)|, is within NA/M."""
@@ -138,8 +208,69 @@ class Microscope:
         """λ·n/NA² in µm, the wave term of a microscope's DOF (Inoué and Spring; Levoy et al. 2006)."""
         return self.wavelength_mm * 1000.0 * self.immersion_index / self.numerical_aperture ** 2
 
+    # ----------------------------------------------------------------- views: directions (sine condition)
+    def image_sines(self, camera, offsets) -> np.ndarray:
+        """Image-side direction sines u/|(u, f_s)| of view offsets i, sampled at u = i·p_p under their lens."""
+        u = np.asarray(offsets, dtype=np.float64) * camera.sample_pitch_mm
+        return u / np.hypot(u, camera.mla_focal_length_mm)
+
+    def place_views(self, camera, offsets) -> ViewPlacement:
+        """Orthographic views: view i at the object-space angle θ_i, sin θ_i = −M·sin θ'_i/n (Abbe sine condition;
+        m_i = −i·p_p/f_s; NaN beyond 90°), crossing the objective's pupil at f_obj·n·sin θ_i = −f_tube·sin θ'_i."""
+        image = self.image_sines(camera, offsets)
+        sines = -self.objective_magnification * image / self.immersion_index
+        with np.errstate(invalid="ignore"):
+            angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
+        return ViewPlacement(np.asarray(offsets, dtype=np.float64), -self.tube_lens_focal_length_mm * image + 0.0,
+                             angle, None)
+
+    def inside_aperture(self, camera) -> np.ndarray:
+        """``(m̂, m̂)``: views whose image-side ray sine, |(u_x, u_y)|/|(u_x, u_y, f_s)|, is within NA/M."""
+        c = camera.center_index
+        k = np.arange(-c, c + 1, dtype=np.float64) * camera.sample_pitch_mm
+        ux, uy = np.meshgrid(k, k)
+        rho = np.sqrt(ux * ux + uy * uy + camera.mla_focal_length_mm ** 2)
+        return (ux * ux + uy * uy) <= (self.image_numerical_aperture * rho) ** 2 * (1.0 + 1e-12)
+
+    def view_pupil(self, camera) -> ViewPupil:
+        """Directions have no position in a pupil: the views are image-side slopes i·δ under the lenslets, f/F
+        a disc 1/F wide in slope, the widest the image-side working f-number M/(2·NA)."""
+        step = slope_step(camera)
+        coords = (np.arange(camera.m_hat) - camera.center_index) * step
+        return ViewPupil(coords, step, 1.0, 1.0 / (2.0 * self.image_aperture_sine))
+
+    def lateral_sampling_um(self, camera) -> float:
+        """p_m/M in µm: every lens covers the same patch of the sample, at every depth (Levoy et al. 2006)."""
+        return camera.mla_pitch_mm / self.objective_magnification * 1000.0
+
+    # ----------------------------------------------------------------- words and file
+    def summary(self, camera) -> dict:
+        """The derived numbers of a microscope camera (``lfproc geometry --json``'s ``camera``)."""
+        return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
+                    pitch_px=camera.pitch_px, telecentric=True, objective_magnification=self.objective_magnification,
+                    numerical_aperture=self.numerical_aperture, immersion_index=self.immersion_index,
+                    objective_focal_length_mm=self.objective_focal_length_mm,
+                    axial_magnification=self.axial_magnification, z_per_a_um=self.z_per_a_um(camera),
+                    lateral_sampling_um=self.lateral_sampling_um(camera),
+                    na_views=self.na_view_extent(camera.sample_pitch_mm, camera.mla_focal_length_mm,
+                                                 camera.center_index),
+                    wavelength_nm=self.wavelength_mm * 1e6)
+
     def describe(self) -> str:
         return f"{self.objective_magnification:g}x/{self.numerical_aperture:g} objective"
+
+    def toml_lines(self) -> list:
+        """``[microscope]`` (a prescribed objective's surfaces inline, as ``[[microscope.surfaces]]``)."""
+        lines = ["[microscope]"]
+        for key in MICROSCOPE_KEYS:
+            value = getattr(self, key)
+            if isinstance(value, bool):
+                lines.append(f"{key} = {'true' if value else 'false'}")
+            elif value is not None:
+                lines.append(f"{key} = {float(value)!r}")
+        if self.objective is not None:      # indices at wavelength_nm (550 nm where not given)
+            lines += surfaces_to_toml(self.objective, "microscope")
+        return lines
 
 
 def _positive(value, key: str, where: str) -> None:

@@ -9,7 +9,9 @@
                  image_distance_mm | focus_distance_mm, f_number, exit_pupil_distance_mm,
                  prescription (a .zmx file) | [[main_lens.surfaces]], wavelength_nm   (a real lens, _lens.py)
     [microscope] objective_magnification, numerical_aperture, immersion_index, tube_lens_focal_length_mm,
-                 relay_magnification, wavelength_nm, aplanatic        (instead of [main_lens])
+                 relay_magnification, wavelength_nm, aplanatic        (instead of [main_lens]),
+                 prescription (a .zmx file) | [[microscope.surfaces]]   (an objective by its surfaces,
+                 sample side first, in immersion_index; then M and NA are its own and may be left out)
     [decode]     micro_image_px
     [provenance] "table.key" = "where the value came from"   (optional, issue 11)
 """
@@ -21,7 +23,8 @@ import os
 
 from ..errors import LfprocError
 from ..tomlfile import parse_toml, read_toml
-from ._lens import DEFAULT_LENS_WAVELENGTH_NM, PRESCRIPTION_TOLERANCE, surfaces_from_table, surfaces_to_toml
+from ._lens import DEFAULT_LENS_WAVELENGTH_NM, PRESCRIPTION_TOLERANCE, surfaces_from_table
+from ._main_lens import MainLens
 from ._microscope import MICROSCOPE_KEYS, Microscope
 from ._optics import image_distance_for_focus
 from ._validation import require_positive
@@ -33,7 +36,7 @@ KNOWN_KEYS = {
     "mla": {"pitch_mm", "focal_length_mm", "principal_plane_gap_mm", "grid"},
     "main_lens": {"focal_length_mm", "principal_plane_gap_mm", "image_distance_mm", "focus_distance_mm", "f_number",
                   "exit_pupil_distance_mm", "prescription", "wavelength_nm", "surfaces"},
-    "microscope": set(MICROSCOPE_KEYS),
+    "microscope": set(MICROSCOPE_KEYS) | {"prescription", "surfaces"},
     "decode": {"micro_image_px"},
 }
 
@@ -90,8 +93,7 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
                               f"{', '.join(sorted(known))}")
     f_s = reader.number(mla, "mla", "focal_length_mm")
     mla_gap = reader.number(mla, "mla", "principal_plane_gap_mm", default=0.0)
-    optics = (_main_lens(reader, main, f_s + mla_gap) if scope is None
-              else dict(microscope=_microscope(reader, scope)))
+    optics = _main_lens(reader, main, f_s + mla_gap) if scope is None else _microscope(reader, scope)
     micro = decode.get("micro_image_px") if decode else None
     if micro is not None and (isinstance(micro, bool) or not isinstance(micro, int)):
         if isinstance(micro, float) and micro.is_integer():
@@ -106,7 +108,7 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
         mla_pitch_mm=reader.number(mla, "mla", "pitch_mm"),
         mla_focal_length_mm=f_s,
         mla_principal_plane_gap_mm=mla_gap,
-        **optics,
+        main_optics=optics,
         grid=reader.string(mla, "mla", "grid", "rectangular"),
         cfa=reader.string(sensor, "sensor", "cfa", "none"),
         black_level=reader.number(sensor, "sensor", "black_level", default=0.0),
@@ -118,48 +120,52 @@ def camera_fields(data: dict, source: str = "camera") -> dict:
     )
 
 
-def _prescription(reader: "_TableReader", main: dict):
-    """The main lens's :class:`LensPrescription` (a ``.zmx`` file or the inline surfaces), or ``None``."""
+def _prescription(reader: "_TableReader", table: dict, name: str = "main_lens",
+                  wavelength: float = DEFAULT_LENS_WAVELENGTH_NM, object_index: float = 1.0):
+    """The :class:`LensPrescription` of ``[main_lens]`` (or ``[microscope]``, ``name``): a ``.zmx`` file or the
+    inline surfaces, indices at ``wavelength``, ``object_index`` in front of the first surface; or ``None``."""
     source = reader.source
-    has_file, has_table = "prescription" in main, "surfaces" in main
+    has_file, has_table = "prescription" in table, "surfaces" in table
     if has_file and has_table:
-        raise LfprocError(f"{source}: [main_lens] gives both prescription and [[main_lens.surfaces]]; keep one")
-    wavelength = reader.number(main, "main_lens", "wavelength_nm", default=DEFAULT_LENS_WAVELENGTH_NM)
-    if not wavelength > 0:
-        raise LfprocError(f"{source}: main_lens.wavelength_nm must be positive, got {wavelength}")
+        raise LfprocError(f"{source}: [{name}] gives both prescription and [[{name}.surfaces]]; keep one")
     if not (has_file or has_table):
-        if "wavelength_nm" in main:
-            raise LfprocError(f"{source}: main_lens.wavelength_nm needs a prescription (the indices of its glasses); "
-                              f"add prescription or [[main_lens.surfaces]], or remove it")
         return None
     if has_table:
-        return surfaces_from_table(main["surfaces"], source, wavelength)
-    name = main["prescription"]
-    if not isinstance(name, str) or not name:
-        raise LfprocError(f"{source}: main_lens.prescription must be a file name (a .zmx lens file), got {name!r}")
+        return surfaces_from_table(table["surfaces"], source, wavelength, name, object_index)
+    file = table["prescription"]
+    if not isinstance(file, str) or not file:
+        raise LfprocError(f"{source}: {name}.prescription must be a file name (a .zmx lens file), got {file!r}")
     folder = os.path.dirname(os.path.abspath(source)) if os.path.exists(source) else os.getcwd()
     from ._zmx import read_zmx
-    return read_zmx(os.path.normpath(os.path.join(folder, os.path.expanduser(name))), wavelength)
+    return read_zmx(os.path.normpath(os.path.join(folder, os.path.expanduser(file))), wavelength, object_index)
 
 
-def _agree(reader: "_TableReader", main: dict, key: str, lens_value: float, what: str) -> None:
-    """Refuse a hand-written ``main_lens.key`` that differs from the prescription's value by more than 0.1 %."""
+def _agree(reader: "_TableReader", main: dict, key: str, lens_value: float, what: str, table: str = "main_lens") -> None:
+    """Refuse a hand-written ``main_lens.key`` (``table``) that differs from the prescription's value by more than
+    0.1 %."""
     if key not in main:
         return
-    hand = reader.number(main, "main_lens", key, allow_inf=True)
+    hand = reader.number(main, table, key, allow_inf=True)
     if math.isinf(hand) or math.isinf(lens_value):
         same = hand == lens_value
     else:
         same = abs(hand - lens_value) <= PRESCRIPTION_TOLERANCE * max(abs(lens_value), 1e-3)
     if not same:
-        raise LfprocError(f"{reader.source}: main_lens.{key} = {hand} disagrees with the prescription's {what} "
-                          f"{lens_value:.6g} mm (more than 0.1 %); remove it or fix the lens")
+        unit = " mm" if table == "main_lens" else ""
+        raise LfprocError(f"{reader.source}: {table}.{key} = {hand} disagrees with the prescription's {what} "
+                          f"{lens_value:.6g}{unit} (more than 0.1 %); remove it or fix the lens")
 
 
 def _main_lens(reader: "_TableReader", main: dict, mla_path_mm: float) -> dict:
     """The ``Camera`` fields of a ``[main_lens]`` table; ``mla_path_mm`` = f_s + H1sH2s."""
     source = reader.source
-    lens = _prescription(reader, main)
+    wavelength = reader.number(main, "main_lens", "wavelength_nm", default=DEFAULT_LENS_WAVELENGTH_NM)
+    if not wavelength > 0:
+        raise LfprocError(f"{source}: main_lens.wavelength_nm must be positive, got {wavelength}")
+    lens = _prescription(reader, main, wavelength=wavelength)
+    if lens is None and "wavelength_nm" in main:
+        raise LfprocError(f"{source}: main_lens.wavelength_nm needs a prescription (the indices of its glasses); "
+                          f"add prescription or [[main_lens.surfaces]], or remove it")
     if lens is None:
         f_u = reader.number(main, "main_lens", "focal_length_mm")
         main_gap = reader.number(main, "main_lens", "principal_plane_gap_mm", default=0.0)
@@ -189,8 +195,7 @@ def _main_lens(reader: "_TableReader", main: dict, mla_path_mm: float) -> dict:
             raise LfprocError(f"{source}: the prescription's exit pupil lies {-d_a:.3f} mm behind the micro lens "
                               f"array; no plenoptic camera can use that lens there (check b_U and the stop)")
         _agree(reader, main, "exit_pupil_distance_mm", d_a, "exit pupil distance from the MLA")
-    return dict(main_focal_length_mm=f_u, image_distance_mm=b_u, main_principal_plane_gap_mm=main_gap,
-                f_number=f_number, exit_pupil_distance_mm=d_a, main_lens_prescription=lens)
+    return MainLens(f_u, b_u, main_gap, f_number, d_a, lens)
 
 
 def _microscope(reader: "_TableReader", table: dict) -> Microscope:
@@ -203,14 +208,18 @@ def _microscope(reader: "_TableReader", table: dict) -> Microscope:
     aplanatic = table.get("aplanatic")
     if aplanatic is not None and not isinstance(aplanatic, bool):
         raise LfprocError(f"{reader.source}: microscope.aplanatic must be true or false, got {aplanatic!r}")
-    return Microscope(
-        objective_magnification=number("objective_magnification"),
-        numerical_aperture=number("numerical_aperture"),
-        immersion_index=number("immersion_index"),
-        tube_lens_focal_length_mm=number("tube_lens_focal_length_mm"),
-        relay_magnification=number("relay_magnification", 1.0),
-        wavelength_nm=number("wavelength_nm") if "wavelength_nm" in table else None,
-        aplanatic=aplanatic)
+    settings = dict(relay_magnification=number("relay_magnification", 1.0),
+                    wavelength_nm=number("wavelength_nm") if "wavelength_nm" in table else None, aplanatic=aplanatic)
+    index, f_tube = number("immersion_index"), number("tube_lens_focal_length_mm")
+    wavelength = 550.0 if settings["wavelength_nm"] is None else settings["wavelength_nm"]
+    objective = _prescription(reader, table, "microscope", wavelength, index)
+    if objective is None:
+        return Microscope(number("objective_magnification"), number("numerical_aperture"), index, f_tube, **settings)
+    scope = Microscope.prescribed(objective, f_tube, **settings)   # M and NA from the surfaces
+    for key in ("objective_magnification", "numerical_aperture"):
+        if key in table:
+            _agree(reader, table, key, getattr(scope, key), f"{key.replace('_', ' ')} from its surfaces", "microscope")
+    return scope
 
 
 def parse_provenance(table, source: str) -> tuple[tuple[str, str], ...]:
@@ -251,20 +260,7 @@ def camera_to_toml(camera, include_provenance: bool = True) -> str:
         lines.append(f"white_level = {float(camera.white_level)!r}")
     lines += ["[mla]", f"pitch_mm = {camera.mla_pitch_mm!r}", f"focal_length_mm = {camera.mla_focal_length_mm!r}",
               f"principal_plane_gap_mm = {camera.mla_principal_plane_gap_mm!r}", f"grid = {_toml_str(camera.grid)}"]
-    if camera.microscope is not None:
-        lines += _microscope_lines(camera.microscope)
-    else:
-        lines += ["[main_lens]", f"focal_length_mm = {camera.main_focal_length_mm!r}",
-                  f"principal_plane_gap_mm = {camera.main_principal_plane_gap_mm!r}",
-                  f"image_distance_mm = {camera.image_distance_mm!r}"]
-        if camera.f_number is not None:
-            lines.append(f"f_number = {camera.f_number!r}")
-        if not camera.telecentric:
-            lines.append(f"exit_pupil_distance_mm = {camera.exit_pupil_distance_mm!r}")
-        lens = getattr(camera, "main_lens_prescription", None)
-        if lens is not None:      # inline, so the file stands alone (indices at the lens's wavelength)
-            lines.append(f"wavelength_nm = {float(lens.wavelength_nm)!r}")
-            lines += surfaces_to_toml(lens)
+    lines += camera.main_optics.toml_lines()
     lines.append("[decode]")
     if camera.micro_image_px_given:
         lines.append(f"micro_image_px = {camera.m_hat}")
@@ -276,17 +272,6 @@ def camera_to_toml(camera, include_provenance: bool = True) -> str:
         lines.append("[provenance]")
         lines += [f"{_toml_str(key)} = {_toml_str(text)}" for key, text in camera.provenance]
     return "\n".join(lines) + "\n"
-
-
-def _microscope_lines(scope: Microscope) -> list[str]:
-    lines = ["[microscope]"]
-    for key in MICROSCOPE_KEYS:
-        value = getattr(scope, key)
-        if isinstance(value, bool):
-            lines.append(f"{key} = {'true' if value else 'false'}")
-        elif value is not None:
-            lines.append(f"{key} = {float(value)!r}")
-    return lines
 
 
 class _TableReader:

@@ -67,11 +67,13 @@ def glass_index(name: str, wavelength_nm: float, where: str, catalogs=()) -> flo
                       f"name or a model glass (GLAS ___BLANK)")
 
 
-def read_zmx(path: str | os.PathLike, wavelength_nm: float) -> LensPrescription:
+def read_zmx(path: str | os.PathLike, wavelength_nm: float, object_index: float = 1.0) -> LensPrescription:
     """The lens surfaces of a sequential ``.zmx`` file, indices at ``wavelength_nm``.
 
     Surface 0 (object) and the last surface (image) are dropped; their thicknesses are not the
-    camera's (b_U places the micro lens array).
+    camera's (b_U places the micro lens array, the front focal plane an objective's sample).
+    ``object_index``: the medium in front of the first surface (an objective's immersion, from the camera
+    file: the object surface's glass is not read).
 
     Raises
     ------
@@ -136,7 +138,7 @@ def read_zmx(path: str | os.PathLike, wavelength_nm: float) -> LensPrescription:
                                 None if row["diam"] is None else row["diam"] * unit, row["stop"]))
     if rows[0]["stop"] or rows[-1]["stop"]:
         raise LfprocError(f"{path}: the stop is on the object or image surface; put it on a lens surface")
-    return LensPrescription(tuple(surfaces), wavelength_nm, path)
+    return LensPrescription(tuple(surfaces), wavelength_nm, path, object_index)
 
 
 def _number(token: str, path: str, lineno: int) -> float:

@@ -53,8 +53,8 @@ def run(args) -> int:
     cam = built.camera
     defaults = [key for key, text in built.provenance if text.startswith("default")]
     print(f"{args.output}: Lytro camera, {cam.pitch_px:.3f} px {cam.grid} lenses ({_m_hat_words(cam)}), f_s "
-          f"{cam.mla_focal_length_mm:.4f} mm, f_U {cam.main_focal_length_mm:.3f} mm, b_U "
-          f"{cam.image_distance_mm:.3f} mm; defaults (see [provenance]): {', '.join(defaults)}", file=sys.stdout)
+          f"{cam.mla_focal_length_mm:.4f} mm, {cam.main_optics.describe()}; defaults (see [provenance]): "
+          f"{', '.join(defaults)}", file=sys.stdout)
     return 0
 
 
@@ -89,9 +89,8 @@ def _napari(path: str, args) -> int:
         write_text_atomic(args.output, "".join(f"# {note}\n" for note in notes) + camera.to_toml())
     except OSError as exc:
         raise LfprocError(f"{args.output}: cannot write ({exc.strerror or exc}); check the folder") from None
-    scope = camera.main_optics      # the objective and tube lens (lfproc.camera.Microscope)
-    print(f"{args.output}: light-field microscope, {scope.objective_magnification:g}x/{scope.numerical_aperture:g} "
-          f"(n {scope.immersion_index:g}), {camera.pitch_px:.3f} px rectangular lenses ({_m_hat_words(camera)}), f_s "
+    print(f"{args.output}: light-field microscope, {camera.main_optics.describe()}, {camera.pitch_px:.3f} px "
+          f"rectangular lenses ({_m_hat_words(camera)}), f_s "
           f"{camera.mla_focal_length_mm:g} mm; every number's source in [provenance]", file=sys.stdout)
     return 0
 

@@ -111,20 +111,21 @@ def check_slice_options(args) -> None:
 def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_mm=0.0,
                      integer=False, what: str = "--a", max_slices: int = DEFAULT_MAX_SLICES,
                      view_extent=None, z_range: str | None = None) -> list[float]:
-    """The refocus parameters one of --a, --depth-range, --at or --z-range (microscopes, µm) asks for.
+    """The refocus parameters one of --a, --depth-range, --at (mm from the sensor) or --z-range (µm from a
+    microscope's native object plane) asks for.
 
     Every list is checked here, before any capture is read: no more than ``max_slices`` slices, no
-    duplicate a (two slices would write the same file), no slice nearer than the main lens's front
-    focal plane (:func:`check_slice_meaning`). ``view_extent``: the extent of the views the slices
-    will sum (:func:`lfproc.geometry.summed_view_extent`), for --depth-range planning.
+    duplicate a (two slices would write the same file), positions the camera's optics can focus on. Whether
+    each slice images a real object and covers the capture is checked with the capture
+    (:func:`lfproc.api.check_slices`: one usable range, the capture's). ``view_extent``: the extent of the
+    views the slices will sum (:func:`lfproc.geometry.summed_view_extent`), for the planning.
     """
     from .. import geometry
+    from ..camera import SENSOR_MM
     from ..outputs import slice_names
 
-    from_sensor = camera.object_space.from_sensor   # mm from the sensor; else a microscope's signed z in µm
-    if not from_sensor and (depth_range is not None or at_mm is not None):
-        raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native "
-                          f"object plane; use --z-range Z0:Z1[:STEP] instead of --depth-range/--at")
+    if depth_range is not None or at_mm is not None:
+        geometry.require_space(camera, SENSOR_MM, "--depth-range/--at (use --z-range for a microscope)")
     if a_list is not None:
         values = parse_number_list(a_list, what)
     elif z_range is not None:
@@ -134,7 +135,7 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     elif depth_range is not None:
         near, far = parse_depth_range(depth_range)
         geometry.check_usable_distances(camera, near, f"--depth-range {depth_range}")
-        plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
+        plan = geometry.plan_depth_range(camera, near, far, max_gap=max_gap_mm, integer=integer,
                                          max_slices=max_slices, view_extent=view_extent)
         values = [float(a) for a in plan.a]
         if not values:
@@ -146,22 +147,12 @@ def slice_parameters(camera, a_list=None, depth_range=None, at_mm=None, max_gap_
     else:
         geometry.check_usable_distances(camera, at_mm, "--at")
         values = [float(geometry.refocus_parameter(camera, at_mm))]
-    if from_sensor:   # signed depths (a microscope's z in µm) have no front focal plane to pass
-        check_slice_meaning(camera, values, what if a_list is not None else "--depth-range" if depth_range
-                            else "--at")
     if len(values) > max_slices:
         asked = what if a_list is not None or z_range is not None else "--depth-range"
         raise LfprocError(f"{asked} asks for {len(values)} slices, more than --max-slices {max_slices}; use a "
                           f"coarser list, or raise --max-slices")
     slice_names("check", values)   # duplicates raise here, not after the first capture was decoded
     return values
-
-
-def check_slice_meaning(camera, a_values, what: str = "--a") -> None:
-    """:func:`lfproc.api.check_slice_meaning` worded for a command (``what``: its flag)."""
-    from ..api import check_slice_meaning as check
-
-    check(camera, a_values, what)
 
 
 def add_aperture_option(p) -> None:
@@ -196,18 +187,14 @@ def describe_slices(camera, a_values, depth_range=None, out=None, *, max_gap_mm:
         print(f"{int(np.count_nonzero(view_mask))} views summed ({geometry.aperture_text(camera, extent)}); the DOF "
               f"follows them", file=out)
     print(f"{len(a_values)} slice(s):", file=out)
-    if not geo.space.from_sensor:   # signed depths (µm from the native object plane): in focus low to high
-        unit = geo.space.symbol
-        for a, z, near, far in zip(*(np.atleast_1d(x).tolist() for x in (geo.a, geo.depth, geo.near, geo.far))):
-            low, high = sorted((far, near))
-            print(f"  a={a:+.4f}  z = {z:+.2f} {unit}  in focus [{low:+.2f}, {high:+.2f}] {unit}", file=out)
-        return
-    for a, d, lo, hi in zip(geo.a, geo.depth, geo.near, geo.far):
-        print(f"  a={a:+.4f}  {_mm(d)}  in focus [{_mm(lo)}, {_mm(hi)}]", file=out)
+    space = geo.space
+    for a, position, near, far in zip(*(np.atleast_1d(x).tolist() for x in (geo.a, geo.depth, geo.near, geo.far))):
+        low, high = space.low_high(near, far)      # in focus, low to high
+        print(f"  a={a:+.4f}  {space.text(position)}  in focus {space.interval(low, high)}", file=out)
     if depth_range is None:
         return
     near, far = parse_depth_range(depth_range)
-    plan = geometry.plan_depth_range(camera, near, far, max_gap_mm=max_gap_mm, integer=integer,
+    plan = geometry.plan_depth_range(camera, near, far, max_gap=max_gap_mm, integer=integer,
                                      max_slices=max_slices, view_extent=extent)
     for lo, hi, why in plan.uncovered:
         print(f"  no slice is in focus at {_mm(lo)}..{_mm(hi)}: {why}", file=out)

@@ -62,12 +62,11 @@ def check_depth_options(args, camera):
 def z_sweep(args, camera) -> dict:
     """``--z-range Z0:Z1[:STEP]`` as the depth sweep's ``a_range`` (and ``step``), checked against ``camera``."""
     from .. import geometry
+    from ..camera import NATIVE_PLANE_UM
     from ..errors import LfprocError
     if args.z_range is None:
         return {}
-    if camera.object_space.unit != "um":
-        raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
-                          f"([microscope]); use --depth-range NEAR_MM:FAR_MM")
+    geometry.require_space(camera, NATIVE_PLANE_UM, "--z-range (use --depth-range NEAR_MM:FAR_MM for a camera)")
     try:
         values = [float(v) for v in args.z_range.split(":")]
     except ValueError:
@@ -76,10 +75,11 @@ def z_sweep(args, camera) -> dict:
             len(values) == 3 and values[2] <= 0):
         raise LfprocError(f"--z-range: {args.z_range!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres with Z0 != Z1 "
                           f"and STEP > 0, e.g. -50:50 or -50:50:2")
-    zeta = geometry.z_per_a_um(camera)
-    out = {"a_range": (min(values[:2]) / zeta, max(values[:2]) / zeta)}
-    if len(values) == 3:
-        out["step"] = values[2] / zeta
+    ends = [float(a) for a in geometry.position_parameter(camera, values[:2])]
+    out = {"a_range": (min(ends), max(ends))}
+    if len(values) == 3:   # a step in z as one in a: z is linear in a through the native object plane
+        out["step"] = float(geometry.position_parameter(camera, values[2])) - \
+            float(geometry.position_parameter(camera, 0.0))
     return out
 
 

@@ -47,7 +47,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from .. import geometry
-    from ..camera import Camera
+    from ..camera import SENSOR_MM, Camera
     from ..errors import LfprocError
 
     camera = Camera.from_toml(args.camera)
@@ -66,25 +66,27 @@ def run(args) -> int:
         aperture = synthetic_aperture(camera, args.aperture)
     if args.z_range is not None:      # planned with the m̂ the slices are refocused with
         a_values = [float(a) for a in z_range_parameters(camera, args.z_range)]
-    if not camera.object_space.from_sensor:   # an objective: slices in um from the native plane, views by angle
-        if getattr(args, "real_rays", False):
-            raise LfprocError(f"{args.camera}: --real-rays traces a main lens prescription; a microscope camera has "
-                              f"none")
-        return _run_microscope(args, camera, a_values, disparities, aperture)
-    if getattr(args, "real_rays", False) and camera.main_lens_prescription is None:
+    real = getattr(args, "real_rays", False)
+    if real and not geometry.traces_real_rays(camera):
         raise LfprocError(f"{args.camera}: --real-rays needs the main lens's surfaces; add main_lens.prescription "
                           f"(a .zmx file) or [[main_lens.surfaces]] to the camera file")
+    if args.plot:
+        geometry.require_space(camera, SENSOR_MM, "--plot (each slice's distance and DOF)")
     slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
     views = geometry.view_geometry(camera)
-    check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False)
-    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()], aperture["extent"])
+    if disparities is not None and views.baseline_mm is None:
+        raise LfprocError(f"{args.camera}: --disparity triangulates between virtual cameras; this camera's views are "
+                          f"orthographic (directions, no baselines): a depth is a shift of lenses per unit of a")
     tri = None if disparities is None else geometry.triangulate(camera, disparities, args.gap)
+    perspective = views.baseline_mm is not None     # virtual cameras: integer gaps and the Airy check (Eq. 22)
+    check = geometry.diffraction_check(camera, args.wavelength_nm * 1e-6, warn=False) if perspective else None
+    gaps = geometry.integer_slice_gaps(camera, [a for a in a_values if float(a).is_integer()], aperture["extent"]) \
+        if perspective else []
     if args.plot:
         from ..plots import plot_slices
         plot_slices(camera, slices, args.plot)
     plotted = f"plot of each slice's distance and DOF -> {args.plot}\n" if args.plot else ""
     nominal_m_hat_note(args, camera)
-    real = getattr(args, "real_rays", False)
     if args.json:
         report = with_aperture_tags(json_report(camera, slices, views, gaps, check, tri), aperture)
         if real:
@@ -97,8 +99,8 @@ def run(args) -> int:
     if real:
         from .real_rays import format_real_rays
         real_table = format_real_rays(camera, slices, views, aperture["extent"])
-    sys.stdout.write(aperture_line(aperture) + format_table(camera, slices, views, gaps, check, args.camera, tri)
-                     + real_table + plotted)
+    sys.stdout.write(aperture_line(aperture, camera) + format_table(camera, slices, views, gaps, check, args.camera,
+                                                                    tri) + real_table + plotted)
     return 0
 
 
@@ -166,7 +168,7 @@ def aperture_line(aperture: dict, camera=None) -> str:
     if aperture["f_number"] is None and not tags:
         return ""
     equivalent = f" (f/{tags['aperture_f_number']:.3g} equivalent)" if "aperture_f_number" in tags else ""
-    if camera is not None and camera.f_number is None and camera.main_optics.image_aperture_sine is not None and tags:
+    if camera is not None and "aperture_f_number" not in tags and tags:
         # an aperture known only as a sine (an objective's NA/M): microscopists read NA (issue 32)
         from .. import geometry
         equivalent = f" ({geometry.aperture_text(camera, aperture['extent'])})"
@@ -176,77 +178,14 @@ def aperture_line(aperture: dict, camera=None) -> str:
     return f"{head}: {summed}; the DOF follows them\n"
 
 
-def _run_microscope(args, camera, a_values, disparities, aperture) -> int:
-    """A light-field microscope: slices in µm from the native object plane, views by object-space angle."""
-    from .. import geometry
-    from ..errors import LfprocError
-    if disparities is not None:
-        raise LfprocError(f"{args.camera}: --disparity triangulates through a main lens; a microscope's depth per "
-                          f"disparity is z_per_a_um per lens of shift (see --json)")
-    if args.plot:
-        raise LfprocError(f"{args.camera}: --plot draws distances from a main lens; not available for a microscope")
-    slices = geometry.slice_geometry(camera, a_values, aperture["extent"])
-    views = geometry.microscope_views(camera)
-    nominal_m_hat_note(args, camera)
-    if args.json:
-        print(dumps_strict(with_aperture_tags(microscope_report(camera, slices, views), aperture)))
-        return 0
-    sys.stdout.write(aperture_line(aperture, camera) + format_microscope_table(camera, slices, views, args.camera))
-    return 0
-
-
-def microscope_summary(camera) -> dict:
-    """The derived numbers of a microscope camera (JSON-ready), read off its main optics (objective + tube lens)."""
-    from .. import geometry
-    scope = camera.main_optics
-    return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
-                pitch_px=camera.pitch_px, telecentric=True, objective_magnification=scope.objective_magnification,
-                numerical_aperture=scope.numerical_aperture, immersion_index=scope.immersion_index,
-                objective_focal_length_mm=scope.objective_focal_length_mm,
-                axial_magnification=scope.axial_magnification, z_per_a_um=geometry.z_per_a_um(camera),
-                lateral_sampling_um=geometry.lateral_sampling_um(camera), na_views=geometry.na_views(camera),
-                paraxial_depth_error=geometry.paraxial_depth_error(camera),
-                aplanatic=geometry.uses_aplanatic(camera), wavelength_nm=scope.wavelength_mm * 1e6)
-
-
-def microscope_report(camera, slices, views) -> dict:
-    """``slices`` (a, z_um, z_near_um, z_far_um, dof_um), ``views`` (i, angle_deg, inside_na) and the camera."""
-    return {"slices": slices.records(), "views": views.records(),
-            "lateral_sampling_um": views.lateral_sampling_um, "camera": microscope_summary(camera),
-            "provenance": dict(camera.provenance)}
-
-
-def format_microscope_table(camera, slices, views, path) -> str:
-    s = microscope_summary(camera)
-    out = [f"microscope {camera.name or path}: {s['objective_magnification']:g}x/{s['numerical_aperture']:g} "
-           f"(n = {s['immersion_index']:g}), m = {camera.m_hat} samples per lens "
-           f"({camera.pitch_px:.3f} sensor px), {s['lateral_sampling_um']:.4g} µm per lens in the object, "
-           f"{s['z_per_a_um']:.4g} µm per unit of a",
-           f"refocusing: {'aplanatic (sine condition)' if s['aplanatic'] else 'paraxial'} per-view shifts (a "
-           f"paraxial z would be off by up to {100 * s['paraxial_depth_error']:.1f} % at this NA); the DOF adds the "
-           f"wave term at {s['wavelength_nm']:.0f} nm",
-           "depths from the native object plane [µm], positive towards the objective",
-           f"{'a':>8} {'z_far':>11} {'z':>11} {'z_near':>11} {'DOF':>11}"]
-    for r in slices.records():
-        out.append(f"{r['a']:>+8.4f} {r['z_far_um']:>11.3f} {r['z_um']:>11.3f} {r['z_near_um']:>11.3f} "
-                   f"{r['dof_um']:>11.3f}")
-    out += ["", f"views: orthographic, object-space angle (sine condition); {s['na_views']} views either side of "
-                f"the centre lie inside the NA", f"{'i':>5} {'angle [deg]':>12} {'inside NA':>10}"]
-    for r in views.records():
-        angle = "-" if r["angle_deg"] is None else f"{r['angle_deg']:.3f}"
-        out.append(f"{r['i']:>5d} {angle:>12} {'yes' if r['inside_na'] else 'no':>10}")
-    return "\n".join(out) + "\n"
-
-
 def z_range_parameters(camera, text: str, advise: bool = True):
     """The ``a`` of ``--z-range Z0:Z1[:STEP]`` (µm): the fewest covering slices, or an evenly spaced stack;
     ``advise``: warn of a step far finer than the DOF here (commands that render leave it to focal_stack, which
     says it with the m̂ the light field is decoded with)."""
     from .. import geometry
+    from ..camera import NATIVE_PLANE_UM
     from ..errors import LfprocError
-    if camera.object_space.from_sensor:   # distances in mm from the sensor: no native object plane
-        raise LfprocError(f"{camera.source or 'camera'}: --z-range (micrometres) needs a microscope camera "
-                          f"([microscope]); use --depth-range NEAR_MM:FAR_MM for a camera")
+    geometry.require_space(camera, NATIVE_PLANE_UM, "--z-range (use --depth-range NEAR_MM:FAR_MM for a camera)")
     parts = text.split(":")
     try:
         values = [float(p) for p in parts]
@@ -254,7 +193,10 @@ def z_range_parameters(camera, text: str, advise: bool = True):
         values = []
     if len(values) not in (2, 3):
         raise LfprocError(f"--z-range: {text!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres, e.g. -50:50 or -50:50:2")
-    planned = geometry.plan_z_range(camera, values[0], values[1], values[2] if len(values) == 3 else None)
+    space = camera.main_optics.object_space
+    near, far = (float(v) for v in (space.nearer(values[0], values[1]), space.farther(values[0], values[1])))
+    step = values[2] if len(values) == 3 else None
+    planned = geometry.plan_slices(camera, near, far, step=step, what="--z-range ")
     if advise:
         from ..api import check_z_step
 
@@ -262,62 +204,79 @@ def z_range_parameters(camera, text: str, advise: bool = True):
     return planned
 
 
-def camera_summary(camera) -> dict:
-    """The derived numbers the geometry rests on (JSON-ready; ``inf`` becomes null)."""
+def camera_summary(camera, views) -> dict:
+    """The derived numbers the geometry rests on (JSON-ready; ``inf`` becomes null): the optics' own
+    (:meth:`lfproc.camera.MainOptics.summary`) and, for orthographic views, how they are refocused."""
     from .. import geometry
-    return dict(m_hat=camera.m_hat, effective_pixel_pitch_mm=camera.effective_pixel_pitch_mm,
-                sample_pitch_mm=camera.sample_pitch_mm,
-                image_distance_mm=camera.image_distance_mm, exit_pupil_distance_mm=camera.exit_pupil_distance_mm,
-                telecentric=camera.telecentric, micro_image_scale=geometry.micro_image_scale(camera),
-                virtual_camera_plane_mm=geometry.virtual_camera_plane_mm(camera),
-                infinity_a=geometry.infinity_parameter(camera))
+    summary = camera.main_optics.summary(camera)
+    if views.baseline_mm is None:
+        summary.update(geometry.refocus_summary(camera))
+    return summary
 
 
 def json_report(camera, slices, views, gaps, check, tri) -> dict:
-    """The contract's keys (``slices``, ``views``, ``baseline_mm``, ``triangulation``) plus additive ones."""
-    out = {"slices": slices.records(), "views": views.records(), "baseline_mm": views.baseline_mm,
-           "integer_gaps": [dict(a=a, next_a=a + 1.0, near_mm=lo, far_mm=hi) for a, lo, hi in gaps],
-           "diffraction": check.record(), "camera": camera_summary(camera),
-           "provenance": dict(camera.provenance)}
+    """The contract's keys (``slices``, ``views``, ``baseline_mm``, ``triangulation``) plus additive ones; for
+    orthographic views (a microscope's) ``lateral_sampling_um`` in place of the baseline."""
+    out = {"slices": slices.records(), "views": views.records()}
+    if views.baseline_mm is not None:
+        near, far = slices.space.keys[1:3]
+        out.update(baseline_mm=views.baseline_mm,
+                   integer_gaps=[{"a": a, "next_a": a + 1.0, near: lo, far: hi} for a, lo, hi in gaps],
+                   diffraction=check.record())
+    else:
+        out["lateral_sampling_um"] = views.lateral_sampling_um
+    out.update(camera=camera_summary(camera, views), provenance=dict(camera.provenance))
     if tri is not None:
         out["triangulation"] = tri.records()
     return out
 
 
-def _mm(value: float, width: int = 11) -> str:
+def _cell(value: float, width: int = 11) -> str:
     return f"{'inf':>{width}}" if math.isinf(value) else f"{value:>{width}.3f}"
 
 
 def format_table(camera, slices, views, gaps, check, path, tri=None) -> str:
-    """A readable table in the layout of the paper's Tables 2 and 4."""
-    from .. import geometry
+    """A readable table in the layout of the paper's Tables 2 and 4 (slices in the optics' object space)."""
+    optics = camera.main_optics
+    space = slices.space
     pupil = ("exit pupil at infinity (telecentric)" if camera.telecentric else
-             f"exit pupil {camera.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
-             f"{geometry.micro_image_scale(camera):.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} µm apart)")
-    out = [f"camera {camera.name or path}: m = {camera.m_hat} px per micro image, effective pixel pitch "
-           f"{camera.effective_pixel_pitch_mm * 1e3:.3f} µm, b_U - f_U = "
-           f"{camera.image_distance_mm - camera.main_focal_length_mm:.4f} mm, {pupil}"]
+             f"exit pupil {optics.exit_pupil_distance_mm:.3f} mm from the MLA (micro images scaled by "
+             f"{camera.micro_image_scale:.6f}, samples {camera.sample_pitch_mm * 1e3:.3f} µm apart)")
+    out = [f"camera {camera.name or path}: {optics.describe()}, m = {camera.m_hat} px per micro image, effective "
+           f"pixel pitch {camera.effective_pixel_pitch_mm * 1e3:.3f} µm, {pupil}"]
     if camera.provenance:
         out.append("where the camera's numbers came from:")
         out += [f"  {key}: {text}" for key, text in camera.provenance]
-    out += ["distances from the sensor [mm]",
-            f"{'a':>8} {'near d_a-':>11} {'d_a':>11} {'far d_a+':>11} {'DOF D_a':>11}"]
+    out += [f"positions [{space.symbol}] {space.origin}",
+            f"{'a':>8} {'near':>11} {space.letter:>11} {'far':>11} {'DOF':>11}"]
     for r in slices.records():
-        out.append(f"{r['a']:>8g} {_mm(r['near_mm'])} {_mm(r['distance_mm'])} {_mm(r['far_mm'])} {_mm(r['dof_mm'])}")
+        position, near, far, dof = (r[k] for k in space.keys)
+        out.append(f"{r['a']:>8g} {_cell(near)} {_cell(position)} {_cell(far)} {_cell(dof)}")
     for a, lo, hi in gaps:
-        out.append(f"  gap between a = {a:g} and {a + 1:g}: {lo:.3f} .. {hi:.3f} mm is in no integer slice's DOF")
+        out.append(f"  gap between a = {a:g} and {a + 1:g}: {lo:.3f} .. {hi:.3f} {space.symbol} is in no integer "
+                   f"slice's DOF")
     out.append("")
-    out.append(f"views (Eqs. 17, 33): baseline of adjacent views {views.baseline_mm:.4f} mm")
-    out.append(f"{'i':>5} {'position F_i [mm]':>18} {'tilt [deg]':>11}")
-    for r in views.records():
-        out.append(f"{r['i']:>5d} {r['position_mm']:>18.4f} {r['tilt_deg']:>11.4f}")
+    if views.baseline_mm is not None:
+        out.append(f"views (Eqs. 17, 33): baseline of adjacent views {views.baseline_mm:.4f} mm")
+        out.append(f"{'i':>5} {'position F_i [mm]':>18} {'tilt [deg]':>11}")
+        out += [f"{r['i']:>5d} {r['position_mm']:>18.4f} {r['tilt_deg']:>11.4f}" for r in views.records()]
+    else:
+        from .. import geometry
+        shifts = "paraxial" if geometry.refocus_slopes(camera) is None else "aplanatic (sine condition)"
+        out.append(f"views: orthographic, object-space angle (sine condition); {views.lateral_sampling_um:.4g} um per "
+                   f"lens in the object; {shifts} per-view refocus shifts")
+        out.append(f"{'i':>5} {'angle [deg]':>12} {'inside':>10}")
+        for r in views.records():
+            angle = "-" if r["angle_deg"] is None else f"{r['angle_deg']:.3f}"
+            out.append(f"{r['i']:>5d} {angle:>12} {'yes' if r['inside_na'] else 'no':>10}")
     if tri is not None:
         out.append("")
         out.append("triangulation (PlenoptiSign's G and dx; distance from the sensor)")
         out.append(f"{'G':>5} {'dx [px]':>9} {'B_G [mm]':>10} {'tilt [deg]':>11} {'distance':>11}")
         for r in tri.records():
             out.append(f"{r['gap']:>5} {r['disparity_px']:>9g} {r['baseline_mm']:>10.4f} {r['tilt_deg']:>11.4f} "
-                       f"{_mm(r['distance_mm'])}")
-    out.append("")
-    out.append(check.message())
+                       f"{_cell(r['distance_mm'])}")
+    if check is not None:
+        out.append("")
+        out.append(check.message())
     return "\n".join(out) + "\n"

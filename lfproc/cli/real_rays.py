@@ -9,14 +9,6 @@ from __future__ import annotations
 import math
 
 
-def prescription_summary(camera) -> dict:
-    """The lens behind the real rays: where it came from and its paraxial cardinal points."""
-    lens = camera.main_lens_prescription
-    return dict(source=lens.source, wavelength_nm=lens.wavelength_nm, surfaces=len(lens.surfaces),
-                focal_length_mm=lens.focal_length_mm, principal_plane_gap_mm=lens.principal_plane_gap_mm,
-                exit_pupil_distance_mm=camera.exit_pupil_distance_mm)
-
-
 def real_ray_records(camera, a_values, view_extent, view_offsets):
     """(slice records, view records) of the real rays, ``None`` for null."""
     from .. import geometry
@@ -31,7 +23,8 @@ def add_real_rays(report: dict, camera, view_extent) -> dict:
                                      [r["i"] for r in report["views"]])
     report["slices"] = [dict(record, real_rays=real) for record, real in zip(report["slices"], slices)]
     report["views"] = [dict(record, real_rays=real) for record, real in zip(report["views"], views)]
-    report["prescription"] = prescription_summary(camera)
+    from .. import geometry
+    report["prescription"] = geometry.real_ray_lens(camera)
     return report
 
 
@@ -52,7 +45,8 @@ def format_real_rays(camera, slices, views, view_extent) -> str:
     """Paraxial and real side by side with the deviation (Eq. 37), as the paper's Tables 2 and 4."""
     real_slices, real_views = real_ray_records(camera, [r["a"] for r in slices.records()],
                                                view_extent, [r["i"] for r in views.records()])
-    lens = prescription_summary(camera)
+    from .. import geometry
+    lens = geometry.real_ray_lens(camera)
     pupil = ("at infinity" if math.isinf(lens["exit_pupil_distance_mm"])
              else f"{lens['exit_pupil_distance_mm']:.3f} mm from the MLA")
     out = ["", f"real rays through {lens['surfaces']} surfaces of {lens['source']} at {lens['wavelength_nm']:g} nm: "

@@ -69,7 +69,7 @@ def summary(folder: str, capture, seconds: float) -> str:
     grid, camera = capture.grid, capture.camera
     height, width = capture.raw.shape
     sensor = "mono" if camera.cfa == "none" else f"{camera.cfa} mosaic"
-    pupil = "telecentric" if camera.telecentric else f"exit pupil {camera.exit_pupil_distance_mm:g} mm"
+    pupil = "telecentric" if camera.telecentric else f"exit pupil {camera.main_optics.exit_pupil_distance_mm:g} mm"
     arrays = "plane_label, depth_mm"
     if capture.ideal_views is not None:
         arrays += ", ideal_views " + "x".join(str(n) for n in capture.ideal_views.shape) + ", ideal_weight"
@@ -126,7 +126,7 @@ def write_outputs(folder: str, capture, scene_file, options) -> None:
                        "plane_label (rows, cols; -1 = background)",
     }
     if not camera.telecentric:  # absent when telecentric: "grid" is then also the lens grid
-        truth["exit_pupil_distance_mm"] = camera.exit_pupil_distance_mm
+        truth["exit_pupil_distance_mm"] = camera.main_optics.exit_pupil_distance_mm
         truth["micro_image_scale"] = micro_image_scale(camera)
         truth["lens_grid"] = capture.lens_grid.to_json_dict()
     write_json_atomic(os.path.join(folder, "ground_truth.json"), truth)

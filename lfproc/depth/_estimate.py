@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import SENSOR_MM, ObjectSpace, PositionNames
+from ..camera import SENSOR_MM, ObjectSpace
 from ..errors import LfprocError
 from ._confidence import MIN_CONFIDENCE
 
@@ -39,11 +39,11 @@ COARSE_PASS_CONFIDENCE = 0.2
 
 
 @dataclass(frozen=True, eq=False)
-class DepthMap(PositionNames):
+class DepthMap:
     """Depth of every lens of a light field, on the refocused slices' lens grid.
 
-    One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
-    :attr:`~lfproc.camera.Camera.object_space`): millimetres from the sensor for a main lens (Eq. 21),
+    One set of fields for any main optics, in the unit and from the origin of ``space`` (the optics'
+    :attr:`~lfproc.camera.MainOptics.object_space`): millimetres from the sensor for a main lens (Eq. 21),
     micrometres from the native object plane, positive towards the objective, for a microscope.
 
     Attributes
@@ -91,6 +91,36 @@ class DepthMap(PositionNames):
     space: ObjectSpace = SENSOR_MM
     lit: np.ndarray | None = None
 
+    @property
+    def distance_mm(self):
+        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
+        return self.space.named("distance_mm", self.depth)
+
+    @property
+    def near_mm(self):
+        """``near`` in mm from the sensor; ``None`` in another space."""
+        return self.space.named("near_mm", self.near)
+
+    @property
+    def far_mm(self):
+        """``far`` in mm from the sensor; ``None`` in another space."""
+        return self.space.named("far_mm", self.far)
+
+    @property
+    def z_um(self):
+        """``depth`` in µm from the native object plane; ``None`` in another space."""
+        return self.space.named("z_um", self.depth)
+
+    @property
+    def z_near_um(self):
+        """``near`` (the larger z) in µm; ``None`` in another space."""
+        return self.space.named("z_near_um", self.near)
+
+    @property
+    def z_far_um(self):
+        """``far`` (the smaller z) in µm; ``None`` in another space."""
+        return self.space.named("z_far_um", self.far)
+
     def metadata(self) -> dict:
         """Fields shared by every output of this depth map."""
         return {"method": self.method, "a_searched": [float(self.a_searched[0]), float(self.a_searched[-1])],
@@ -106,8 +136,7 @@ def occupied_range(sweep, a_lo, a_hi, step, center_index) -> tuple[float, float]
     2 × 2 (a quarter of the samples, parallax a/2), with linear interpolation (its pull towards integer
     ``a`` is far below the coarse step): from the least to the largest ``a`` estimated with some
     confidence, widened by one coarse step. The fine sweep grows beyond it where surfaces lie at its ends
-    (:func:`extended_sweep`).
-    Where nothing is confidently known the whole range is kept."""
+    (:func:`extended_sweep`). Where nothing is confidently known the whole range is kept."""
     from ._confidence import confidence, cost_floor
     from ._cost import cost_volume
     from ._refine import aggregate, refine_minimum
@@ -362,8 +391,8 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     timings["all-in-focus"] = time.perf_counter() - t0
 
     f32 = lambda x: np.asarray(x, dtype=np.float32)
-    # views at positions on a lens have an equivalent f-number; orthographic views (an objective's) an NA instead
-    positional = not camera.main_optics.views_are_orthographic
+    # virtual cameras on a lens have an equivalent f-number; orthographic views (an objective's) an NA instead
+    positional = not geometry.place_views(camera, [0]).orthographic
     return DepthMap(depth=f32(metric.depth), confidence=f32(conf), near=f32(metric.near), far=f32(metric.far),
                     a=f32(a_known), allfocus=sharp, a_searched=a_values, view_step=view_step, view_reach=reach,
                     timings_s=timings, space=metric.space, lit=lit,

@@ -21,10 +21,11 @@ import numpy as np
 DEPTH, CONFIDENCE, ALLFOCUS, PREVIEW, POINTS = ("_depth.tif", "_depth_confidence.tif", "_allfocus.tif",
                                                 "_depth_preview.png", "_depth_points.ply")
 
-#: what ``STEM_depth.tif`` holds, by the unit of the depth map's object space (:class:`lfproc.camera.ObjectSpace`)
-DEPTH_CONTENT = {"mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
-                 "um": "depth from the native object plane, positive towards the objective (z_um of the sharpest "
-                       "slice); NaN = unknown"}
+#: what ``STEM_depth.tif`` holds, by the position key of the two built-in object spaces (other spaces:
+#: :func:`_depth_content`)
+DEPTH_CONTENT = {"distance_mm": "distance from the sensor (Eq. 21); NaN = unknown, inf = infinity",
+                 "z_um": "depth from the native object plane, positive towards the objective (z_um of the sharpest "
+                         "slice); NaN = unknown"}
 
 #: the preview's legend unit and its sidecar's ``content``, by the unit of the depth map's object space
 PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark purple far, grey unknown, black no "
@@ -84,10 +85,11 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     space = depth_map.space
     known = ~np.isnan(depth_map.depth)
     paths = {}
-    meta = dict(common, unit=space.unit, content=DEPTH_CONTENT[space.unit],
+    meta = dict(common, unit=space.unit, content=_depth_content(space),
                 known_fraction=float(known.mean()) if known.size else 0.0)
-    if space.unit == "um":   # the lenses' spacing in the object: one lateral sampling for every z
-        meta["lateral_sampling_um"] = _lateral_sampling_um(camera)
+    sampling = None if camera is None else camera.main_optics.lateral_sampling_um(camera)
+    if sampling is not None:   # the lenses' spacing in the object: one lateral sampling for every depth
+        meta["lateral_sampling_um"] = sampling
     paths["depth"] = _write_float(os.path.join(outdir, stem + DEPTH), depth_map.depth, meta)
     meta = dict(common, unit="1", content="confidence of the depth, 0 (nothing known) to 1")
     paths["confidence"] = _write_float(os.path.join(outdir, stem + CONFIDENCE), depth_map.confidence, meta)
@@ -96,14 +98,21 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     write_image(path, depth_map.allfocus, meta, "tiff")
     write_sidecar(path, meta)
     paths["allfocus"] = path
-    unit, content = PREVIEW_LEGEND[space.unit]
+    distances = space.toward_optics < 0     # distances reach infinity: an inverse colour scale, legend in metres
+    unit, content = PREVIEW_LEGEND["mm" if distances else "um"]
     meta = dict(common, unit=unit, content=content)
     path = os.path.join(outdir, stem + PREVIEW)
-    write_preview(path, depth_map.distance_mm, depth_map.z_um, None if depth_map.lit is None else ~depth_map.lit)
+    unlit = None if depth_map.lit is None else ~depth_map.lit
+    if distances:
+        write_preview(path, depth_map.depth * (1.0 / space.per_mm), None, unlit)
+    else:
+        write_preview(path, None, depth_map.depth * (1000.0 / space.per_mm), unlit)
     write_sidecar(path, meta)
     paths["preview"] = path
-    if point_cloud and camera is not None and space.from_sensor:   # x, y from each lens's chief ray; z from the sensor
+    points = None
+    if point_cloud and camera is not None:   # x, y from each lens's chief ray, where the optics place them
         points, rgb = make_points(camera, getattr(lf, "grid", None), depth_map.depth, depth_map.allfocus)
+    if points is not None:
         path = os.path.join(outdir, stem + POINTS)
         meta = dict(common, unit="mm", content="x, y: object-space position from the optical axis; z: distance from "
                     "the sensor (central view's chief ray through each lens, Eqs. 13-21)", points=len(points))
@@ -114,28 +123,33 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
     return paths
 
 
-def _lateral_sampling_um(camera) -> float | None:
-    from .. import geometry
-    return None if camera is None else geometry.lateral_sampling_um(camera)
+def _depth_content(space) -> str:
+    """What ``STEM_depth.tif`` holds: the built-in spaces' words, else the space's own."""
+    reach = ", inf = infinity" if space.toward_optics < 0 else ""
+    return DEPTH_CONTENT.get(space.position_key,
+                             f"{space.position_key} of the sharpest slice, {space.symbol} {space.origin}; NaN = "
+                             f"unknown{reach}")
 
 
 def summary_line(depth_map) -> str:
     """One line for a terminal: how much is known (and of the lenses light reached), and the range of the known
     distances (metres; µm for a microscope)."""
+    space = depth_map.space
     depth = depth_map.depth
     known = ~np.isnan(depth)
     text = f"depth known at {known.mean():.0%} of {depth.size} lenses"
     lit = depth_map.lit
     if lit is not None and not lit.all():
         text += f" ({known[lit].mean() if lit.any() else 0.0:.0%} of the {lit.mean():.0%} that light reached)"
-    if not depth_map.space.from_sensor:   # signed z, linear: no infinity
+    if space.toward_optics > 0:   # signed depths, linear: no infinity
         if known.any():
             lo, hi = (float(v) for v in np.percentile(depth[known], [1, 99]))
-            text += f", z {lo:.4g} to {hi:.4g} µm from the native object plane (1st to 99th percentile)"
+            text += f", {space.letter} {lo:.4g} to {hi:.4g} {space.symbol} {space.origin.split(',')[0]} (1st to 99th " \
+                    f"percentile)"
         return text
     finite = depth[np.isfinite(depth)]
     if finite.size:
-        near, far = (float(v) / 1000.0 for v in np.percentile(finite, [1, 99]))
+        near, far = (float(v) / (1000.0 / space.per_mm) for v in np.percentile(finite, [1, 99]))
         text += f", {near:.3g} to {far:.3g} m (1st to 99th percentile)"
     if np.isinf(depth).any():
         text += ", some at infinity"

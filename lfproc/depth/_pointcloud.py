@@ -40,25 +40,20 @@ def lens_heights_mm(camera, grid, shape) -> tuple[np.ndarray, np.ndarray]:
 
 def point_cloud(camera, grid, distance_mm: np.ndarray, colours: np.ndarray | None = None):
     """``(N, 3)`` float32 points (x, y, z in mm, module docstring) of the finite distances, and their
-    ``(N, 3)`` uint8 colours (from ``colours``, linear, sRGB-encoded) or None."""
+    ``(N, 3)`` uint8 colours (from ``colours``, linear, sRGB-encoded); ``(None, None)`` where the optics place no
+    chief rays (:func:`lfproc.geometry.chief_ray_heights`: a main lens's own geometry)."""
+    from .. import geometry
     from ..io import srgb_encode
 
     sy, sx = lens_heights_mm(camera, grid, distance_mm.shape)
-    d_a = float(getattr(camera, "exit_pupil_distance_mm", np.inf))
-    if grid is not None and np.isfinite(d_a):       # the grid is the micro image centres: back to the lenses
-        scale = (d_a + camera.mla_focal_length_mm) / d_a
-        sy, sx = sy / scale, sx / scale
+    if grid is not None:       # the grid is the micro image centres: back to the lenses
+        sy, sx = sy / camera.micro_image_scale, sx / camera.micro_image_scale
     keep = np.isfinite(distance_mm)
     d = distance_mm[keep].astype(np.float64)
-    z = d - camera.sensor_to_main_lens_mm
-    f_u, b_u = camera.main_focal_length_mm, camera.image_distance_mm
-
-    def height(s):
-        m = 0.0 if not np.isfinite(d_a) else -s / d_a
-        u = s + m * b_u
-        return u + (m * f_u - u) / f_u * z
-
-    points = np.stack([height(sx[keep]), height(sy[keep]), d], axis=1).astype(np.float32)
+    heights = geometry.chief_ray_heights(camera, np.stack([sx[keep], sy[keep]]), d)
+    if heights is None:
+        return None, None
+    points = np.stack([heights[0], heights[1], d], axis=1).astype(np.float32)
     rgb = None
     if colours is not None:
         c = colours[keep]

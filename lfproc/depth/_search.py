@@ -54,22 +54,18 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise LfprocError(f"range of a {a_range!r} must be two finite numbers LOW < HIGH")
         return lo, hi
-    # depths from the native object plane (an afocal objective: no slice at infinity to start from)
-    native_plane = camera is not None and not camera.object_space.from_sensor
-    if depth_range_mm is not None and native_plane:
-        raise LfprocError(f"{camera.source or 'camera'}: a microscope's depths are micrometres from the native object "
-                          f"plane; give a z range (z_range_um=...) instead of a depth range in mm")
-    if native_plane:   # Levoy et al. 2006: the N_u resolvable depths span |a| <= 1
-        return MICROSCOPE_A_RANGE
     if depth_range_mm is not None:
         from .. import geometry
 
         if camera is None:
             raise LfprocError("a depth range in mm needs the light field's camera; decode with camera=")
+        from ..camera import SENSOR_MM
+
+        geometry.require_space(camera, SENSOR_MM, "depth_range_mm= (for micrometres give z_range_um=)")
         near, far = (float(v) for v in depth_range_mm)
         if not (near > 0 and far >= near) or math.isnan(far):
             raise LfprocError(f"depth range {near}:{far} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")
-        closest = camera.sensor_to_main_lens_mm + camera.main_focal_length_mm
+        closest = geometry.front_focal_plane_mm(camera)
         if near <= closest:
             raise LfprocError(f"depth range starts at {near} mm, but this camera focuses only beyond {closest:.3f} mm "
                               f"from the sensor; give a larger NEAR")
@@ -77,10 +73,10 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
         lo = float(geometry.refocus_parameter(camera, far))
         return lo, max(hi, lo + 1e-9)
     if camera is not None:
-        from .. import geometry
-
-        a_inf = geometry.infinity_parameter(camera)
-        return a_inf, a_inf + DEFAULT_A_SPAN
+        low = camera.main_optics.usable_range(camera).low
+        if not math.isfinite(low):   # no slice at infinity (an afocal objective): the N_u resolvable depths
+            return MICROSCOPE_A_RANGE
+        return low, low + DEFAULT_A_SPAN   # from the slice at infinity, nearer
     return DEFAULT_A_RANGE
 
 

@@ -31,8 +31,6 @@ import numpy as np
 
 from ..camera import Camera
 from ..errors import LfprocError
-from ._microscope import object_numerical_aperture
-from ._views import baseline_mm, view_positions_mm
 
 
 def summed_view_extent(view_mask) -> float:
@@ -55,20 +53,16 @@ def summed_view_extent(view_mask) -> float:
 
 
 def _pupil(camera: Camera):
-    """(coordinates of the views' pupil cells (m̂,), the cell width, the length F multiplies the diameter by,
-    the widest f-number or None).
+    """The views as cells of a pupil (:meth:`lfproc.camera.MainOptics.view_pupil`): (coordinates (m̂,), the cell
+    width, the length F divides into the diameter, the widest f-number or None).
 
     A camera's views sit at F_i = i·ΔB in the entrance pupil (Eq. 17), F = f_U / diameter. Orthographic
     views (a microscope's) are directions, with no position in a pupil: they are image-side ray slopes under
     the lenslets, i·p/f_s (p the sample pitch), and F = 1 / diameter in slope: the image-side working
     f-number, 1/(2·sine) for the optics' whole aperture (M/(2·NA) of an objective).
     """
-    optics = camera.main_optics
-    if optics.views_are_orthographic:   # no virtual cameras to place: the pupil is one of slopes at the MLA
-        step = camera.sample_pitch_mm / camera.mla_focal_length_mm
-        coords = (np.arange(camera.m_hat) - camera.center_index) * step
-        return coords, step, 1.0, 1.0 / (2.0 * optics.image_aperture_sine)
-    return view_positions_mm(camera), float(baseline_mm(camera, 1)), camera.main_focal_length_mm, camera.f_number
+    pupil = camera.main_optics.view_pupil(camera)
+    return pupil.coordinates, pupil.cell, pupil.length, pupil.widest
 
 
 def equivalent_f_number(camera: Camera, view_extent=None) -> float:
@@ -125,20 +119,29 @@ def aperture_views(camera: Camera, f_number: float) -> np.ndarray:
 
 
 def equivalent_numerical_aperture(camera: Camera, view_extent=None) -> float:
-    """A microscope's summed views as an object-side NA: M / (2·N_eq), N_eq the image-side equivalent
-    f-number (:func:`equivalent_f_number`; paraxial, NA_image = 1/(2·N)), at most the objective's NA
-    (views outside it carry no light). Microscopists think in NA, as photographers in f-numbers."""
-    # one NA for every object point needs object-side telecentric optics (orthographic views); a lens's
-    # object-side cone changes with the object's distance
-    if not camera.main_optics.views_are_orthographic:
-        raise LfprocError("an equivalent numerical aperture needs a microscope camera ([microscope]); a camera's "
-                          "summed views have an equivalent f-number (equivalent_f_number)")
-    return object_numerical_aperture(camera, equivalent_f_number(camera, view_extent))
+    """The summed views as an object-side NA: n·sin θ of their cone, M / (2·N_eq) by the Abbe sine condition
+    (N_eq the image-side equivalent f-number, :func:`equivalent_f_number`; paraxial), at most the optics' own
+    NA (views outside it carry no light). Microscopists think in NA, as photographers in f-numbers.
+
+    Needs one lateral scale for every object point, i.e. optics with a lateral sampling (object-side
+    telecentric, :meth:`lfproc.camera.MainOptics.lateral_sampling_um`): a lens's object-side cone changes with
+    the object's distance.
+    """
+    optics = camera.main_optics
+    sampling = optics.lateral_sampling_um(camera)
+    if sampling is None:
+        raise LfprocError(f"{camera.source or 'camera'}: an equivalent numerical aperture needs object-side "
+                          f"telecentric optics (a microscope); this camera's summed views have an equivalent "
+                          f"f-number (equivalent_f_number)")
+    # the lateral magnification is the lens pitch over its footprint in the object; the widest cone is the stop's
+    magnification = camera.mla_pitch_mm * 1000.0 / sampling
+    return float(min(magnification / (2.0 * equivalent_f_number(camera, view_extent)),
+                     magnification * optics.image_aperture_sine))
 
 
 def aperture_text(camera: Camera, view_extent=None) -> str:
     """How people name the summed views' aperture: ``"f/5.6 equivalent"`` for a camera, ``"NA 0.42
-    equivalent"`` for a microscope (:func:`equivalent_numerical_aperture`)."""
-    if camera.main_optics.views_are_orthographic:   # object-side telecentric: one NA for every point
+    equivalent"`` for optics with one lateral scale (a microscope, :func:`equivalent_numerical_aperture`)."""
+    if camera.main_optics.lateral_sampling_um(camera) is not None:   # object-side telecentric: one NA for every point
         return f"NA {equivalent_numerical_aperture(camera, view_extent):.2f} equivalent"
     return f"f/{equivalent_f_number(camera, view_extent):.2g} equivalent"

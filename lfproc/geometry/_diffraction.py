@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import Camera, MainLens
 from ..errors import LfprocError
 
 #: default wavelength for the Airy limit (Eq. 22), in millimetres (550 nm)
@@ -58,12 +58,13 @@ def working_f_number(camera: Camera) -> float | None:
 
     The Airy disk on the micro lenses (Eq. 22) follows the cone that converges there, whose f-number is
     N · b_U / f_U, not the object-side N (they agree only when focused at infinity, b_U = f_U).
-    ``None`` without an f-number, and so for a microscope (``camera.f_number`` is None: its aperture is the
+    ``None`` without an f-number, and for other optics than a main lens (a microscope's aperture is the
     objective's NA, whose cone at the MLA this check does not report).
     """
-    if camera.f_number is None:
+    lens = camera.main_optics
+    if not isinstance(lens, MainLens) or lens.f_number is None:    # the main lens's own Airy check (Eq. 22)
         return None
-    return float(camera.f_number) * camera.image_distance_mm / camera.main_focal_length_mm
+    return float(lens.f_number) * lens.image_distance_mm / lens.focal_length_mm
 
 
 def diffraction_check(camera: Camera, wavelength_mm: float = DEFAULT_WAVELENGTH_MM,
@@ -72,7 +73,8 @@ def diffraction_check(camera: Camera, wavelength_mm: float = DEFAULT_WAVELENGTH_
     if not (wavelength_mm > 0 and math.isfinite(wavelength_mm)):
         raise LfprocError(f"wavelength must be a positive number of millimetres, got {wavelength_mm}")
     pitch = camera.effective_pixel_pitch_mm
-    main = None if camera.f_number is None else float(airy_radius_mm(working_f_number(camera), wavelength_mm))
+    working = working_f_number(camera)
+    main = None if working is None else float(airy_radius_mm(working, wavelength_mm))
     micro = float(airy_radius_mm(camera.mla_focal_length_mm / camera.mla_pitch_mm, wavelength_mm))
     limited = micro <= pitch and (main is None or main <= pitch)
     check = DiffractionCheck(wavelength_mm, pitch, main, micro, limited)

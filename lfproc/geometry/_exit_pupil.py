@@ -11,8 +11,6 @@ so that an infinite d_A gives exactly the telecentric numbers.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..camera import Camera
@@ -21,7 +19,7 @@ from ..errors import LfprocError
 
 def pupil_curvature(camera: Camera) -> float:
     """κ = 1/d_A in 1/mm: the slope change per mm of lens height; exactly 0.0 for a telecentric camera."""
-    return 0.0 if camera.telecentric else 1.0 / camera.exit_pupil_distance_mm
+    return 0.0 if camera.telecentric else 1.0 / camera.main_optics.exit_pupil_distance_mm
 
 
 def micro_image_scale(camera: Camera) -> float:
@@ -63,19 +61,3 @@ def exit_pupil_from_scale(scale, camera: Camera):
     with np.errstate(divide="ignore"):
         d_a = np.where(s > 1.0, camera.mla_focal_length_mm / np.maximum(s - 1.0, np.finfo(float).tiny), np.inf)
     return float(d_a) if d_a.ndim == 0 else d_a
-
-
-def virtual_camera_plane_mm(camera: Camera) -> float:
-    """Distance from the sensor of the plane holding every view's virtual optical centre (Eq. 17 generalised).
-
-    Two rays of one view (the same pixel offset under two lenses) meet in object space at
-    z_V = f_U·(1 − b_U/d_A)/(1 − ε/d_A) from H1U, ε = b_U − f_U: the main lens front focal plane
-    (z_V = f_U) when telecentric, the entrance pupil otherwise. ``inf`` (object-side telecentric
-    views) when d_A = ε.
-    """
-    kappa = pupil_curvature(camera)
-    f_u, b_u = camera.main_focal_length_mm, camera.image_distance_mm
-    denom = 1.0 - kappa * (b_u - f_u)
-    if denom == 0.0:
-        return math.inf
-    return camera.sensor_to_main_lens_mm + f_u * (1.0 - kappa * b_u) / denom

@@ -1,4 +1,8 @@
-"""Slices and views of a light-field microscope in object space: micrometres from the native object plane.
+"""A light-field microscope's own geometry: z per a, the aperture's views, aplanatic per-view shifts.
+
+Its slices are the generic ray model's (:mod:`._slices`) and its views the objective's own placement
+(:meth:`lfproc.camera.Microscope.place_views`, the sine condition); this module holds what only an objective
+has. Positions are micrometres from the native object plane.
 
 The ray model of :mod:`._slices` with the microscope's transfer (:mod:`._transfer`): a ray pair (A, C)
 meeting w = A·p_m/δ = A·m̂·f_s behind the MLA (δ = p_p/f_s, p_p = p_m/m̂) is the object point
@@ -33,15 +37,10 @@ so the paraxial tag z(a) overstates its depth by the fraction e = Σw·g/Σw −
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..errors import LfprocError
 from ..camera import Microscope
-
-UM_PER_MM = 1000.0
 
 
 def _microscope_of(camera) -> Microscope | None:
@@ -59,41 +58,9 @@ def _scope(camera) -> Microscope:
 
 
 def z_per_a_um(camera) -> float:
-    """dz/da = m̂·f_s·n/M² in µm, through the microscope's ray transfer (exact for the paraxial map)."""
-    # slice a's ray pair: a lenses apart, slopes one view step δ = p_p/f_s apart (w = a·m̂·f_s); the optics'
-    # own object_position, so that slice_geometry's z is exactly a · z_per_a_um
-    return float(_scope(camera).object_position(1.0, camera.mla_pitch_mm,
-                                                camera.sample_pitch_mm / camera.mla_focal_length_mm))
-
-
-def lateral_sampling_um(camera) -> float:
-    """Object-space spacing of the lenses, p_m/M in µm (Levoy et al. 2006: one output pixel per lenslet)."""
-    return camera.mla_pitch_mm / _scope(camera).objective_magnification * UM_PER_MM
-
-
-def image_sines(camera, centre: float = 0.0):
-    """Image-side direction sines of the views along one axis, i = −c…c, sampled at (i + ``centre``)·p_p
-    under their lens (``centre``: where the decoder read the central view, in samples off the lens centre:
-    the lit disc's centre, :attr:`lfproc.LightField.view_centre`)."""
-    c = camera.center_index
-    u = (np.arange(-c, c + 1) + float(centre)) * camera.sample_pitch_mm
-    return u / np.hypot(u, camera.mla_focal_length_mm)
-
-
-def pupil_positions_mm(camera, centre: float = 0.0) -> np.ndarray:
-    """Where each view offset i = −c…c crosses the objective's back focal plane (its pupil), in mm: a
-    microscope view's ``position_mm``, as F_i (Eq. 17) is a camera's. By the sine condition a ray leaving the
-    sample at n·sin θ crosses it at f_obj·n·sin θ (f_obj = f_tube / M), which is −f_tube times the view's
-    image-side sine; the sign follows the view's object-space angle. ``centre``: see :func:`image_sines`."""
-    return -_scope(camera).tube_lens_focal_length_mm * image_sines(camera, centre) + 0.0
-
-
-def object_numerical_aperture(camera, image_f_number: float) -> float:
-    """The object-side NA of an image-side cone f/``image_f_number`` at the MLA: M/(2·N) by the Abbe sine
-    condition (paraxial, NA_image = 1/(2·N)), at most the objective's NA (views outside it carry no light)."""
-    scope = _scope(camera)
-    na = scope.objective_magnification / (2.0 * image_f_number)
-    return float(min(na, scope.numerical_aperture))
+    """dz/da = m̂·f_s·n/M² in µm, through the microscope's ray transfer (exact for the paraxial map,
+    :meth:`lfproc.camera.Microscope.z_per_a_um`)."""
+    return _scope(camera).z_per_a_um(camera)
 
 
 def na_views(camera) -> int:
@@ -111,13 +78,6 @@ def _view_grid(camera, centre=(0.0, 0.0)):
     return ux, uy, np.sqrt(ux * ux + uy * uy + camera.mla_focal_length_mm ** 2)
 
 
-def views_inside_na(camera) -> np.ndarray:
-    """Boolean (m̂, m̂): views whose image-side ray sine is within NA/M (the objective's aperture)."""
-    ux, uy, rho = _view_grid(camera)
-    limit = _scope(camera).image_numerical_aperture
-    return (ux * ux + uy * uy) <= (limit * rho) ** 2 * (1.0 + 1e-12)
-
-
 def _view_directions(camera, centre=(0.0, 0.0)):
     """(α, β, γ, ρ) on the (m̂, m̂) view grid: object-space direction sines, cosine, and |(u, f_s)|.
 
@@ -129,7 +89,7 @@ def _view_directions(camera, centre=(0.0, 0.0)):
     scale = scope.objective_magnification / (scope.immersion_index * rho)
     alpha, beta = ux * scale, uy * scale
     radial = np.hypot(alpha, beta)
-    limit = min(max(scope.numerical_aperture / scope.immersion_index, float(radial[views_inside_na(camera)].max())),
+    limit = min(max(scope.numerical_aperture / scope.immersion_index, float(radial[scope.inside_aperture(camera)].max())),
                 1.0 - 1e-9)
     clip = np.where(radial > limit, limit / np.where(radial > 0, radial, 1.0), 1.0)
     alpha, beta = alpha * clip, beta * clip
@@ -148,7 +108,7 @@ def paraxial_depth_error(camera) -> float:
     """e = Σw·g/Σw − 1: the fraction by which a paraxial slice's z overstates the depth sharp in it (docstring)."""
     g = aplanatic_gain(camera)
     ux, uy, _ = _view_grid(camera)
-    w = (ux * ux + uy * uy) * views_inside_na(camera)
+    w = (ux * ux + uy * uy) * _scope(camera).inside_aperture(camera)
     if not w.any():
         return 0.0
     return float((w * g).sum() / w.sum() - 1.0)
@@ -201,110 +161,10 @@ def microscope_slices(camera, a, view_extent=None):
     return slice_geometry(camera, a, view_extent)
 
 
-def refocus_parameter_z(camera, z_um) -> np.ndarray | float:
-    """The ``a`` of the slice at ``z_um`` (µm from the native object plane, positive towards the objective)."""
-    z = np.asarray(z_um, dtype=np.float64)
-    if not np.all(np.isfinite(z)):
-        raise LfprocError(f"depth {z_um} um is not a finite number of micrometres")
-    a = z / z_per_a_um(camera)
-    return float(a) if a.ndim == 0 else a
-
-
-@dataclass(frozen=True, eq=False)
-class MicroscopeViews:
-    """Views of a microscope along one axis: offsets i = −c…c, object-space angle θ_i (°), inside the NA.
-
-    The views are orthographic (the microscope is object-side telecentric): view i looks along θ_i,
-    sin θ_i = M·sin θ'_i / n (Abbe sine condition), θ'_i the image-side angle atan(i·p_p/f_s).
-    """
-
-    i: np.ndarray
-    angle_deg: np.ndarray
-    inside_na: np.ndarray
-    lateral_sampling_um: float
-
-    def records(self) -> list[dict]:
-        return [dict(i=int(i), angle_deg=(float(t) if math.isfinite(t) else None), inside_na=bool(k))
-                for i, t, k in zip(self.i, self.angle_deg, self.inside_na)]
-
-
-def microscope_views(camera, centre: float = 0.0) -> MicroscopeViews:
-    """Object-space angles of the views (sine condition) and which lie inside the objective's NA.
-
-    ``centre``: where the decoder read the central view along this axis, in samples off the lens centre
-    (the lit disc's centre, :attr:`lfproc.LightField.view_centre`): the angles are those of the rays the
-    views were read at. The NA is the disc's, so which views lie inside it does not change."""
-    scope = _scope(camera)
-    c = camera.center_index
-    sines = -scope.objective_magnification * image_sines(camera, centre) / scope.immersion_index   # m_i = −i·p_p/f_s
-    with np.errstate(invalid="ignore"):
-        angle = np.degrees(np.arcsin(np.where(np.abs(sines) <= 1.0, sines, np.nan))) + 0.0
-    inside = np.abs(np.arange(-c, c + 1)) <= na_views(camera)
-    return MicroscopeViews(np.arange(-c, c + 1), angle, inside, lateral_sampling_um(camera))
-
-
-def _a_for_lower_limit(camera, lower_um: float) -> float:
-    """The ``a`` whose lower DOF limit (``z_far_um``) is ``lower_um``: inverts :func:`microscope_slices`.
-
-    The far border-ray pair is A = (2ac − 1)/(2c + 1) where A ≥ 0 and (2ac − 1)/(2c − 1) below
-    (c = c_NA, :func:`._slices._dof_pairs`), and z_far = z(A) − λn/(2NA²).
-    """
-    c = max(na_views(camera), 1)
-    wave = _scope(camera).wave_depth_of_field()
-    big_a = (lower_um + 0.5 * wave) / z_per_a_um(camera)
-    return (big_a * (2 * c + 1) + 1.0) / (2 * c) if big_a >= 0 else (big_a * (2 * c - 1) + 1.0) / (2 * c)
-
-
-def plan_z_range(camera, z0_um: float, z1_um: float, step_um: float | None = None,
-                 max_slices: int = 10000) -> np.ndarray:
-    """Slices for a depth range of a microscope, in µm from the native object plane (``--z-range``).
-
-    Without ``step_um``: the fewest slices whose DOF intervals [z_far, z_near] together cover
-    [z0, z1] (greedy from the far end, as :func:`plan_slices` for ``--depth-range``; neighbours overlap
-    by 1e-9 relative against rounding). With ``step_um``: slices at z0, z0 + step, … up to z1 (an
-    evenly spaced z-stack). Returns increasing ``a``.
-    """
-    lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise LfprocError(f"z_range_um={z0_um}:{z1_um} must be finite micrometres, e.g. -50:50")
-    zeta = z_per_a_um(camera)
-    if step_um is not None:
-        if not (math.isfinite(step_um) and step_um > 0):
-            raise LfprocError(f"z_range_um= step must be a positive number of micrometres, got {step_um}")
-        count = int(math.floor((hi - lo) / step_um + 1e-9)) + 1
-        if count > max_slices:
-            raise LfprocError(f"z_range_um={z0_um}:{z1_um}:{step_um} asks for {count} slices, more than {max_slices}; "
-                              f"use a larger STEP")
-        return (lo + step_um * np.arange(count)) / zeta
-    slices, edge = [], lo
-    while True:
-        a = _a_for_lower_limit(camera, edge - 1e-9 * max(1.0, abs(edge)))
-        slices.append(a)
-        edge = float(microscope_slices(camera, a).z_near_um)
-        if edge >= hi:
-            return np.array(slices)
-        if len(slices) >= max_slices:
-            raise LfprocError(f"z_range_um={z0_um}:{z1_um} needs more than {max_slices} slices; narrow it")
-
-
-#: a z step finer than the depth of field by more than this factor earns a warning (``z_step_advice``)
-FINE_STEP_FACTOR = 10.0
-
-
-def z_step_advice(camera, step_um: float, z0_um: float, z1_um: float) -> str | None:
-    """A warning's text when an evenly spaced z-stack's step is far finer than the slices' depth of field.
-
-    Slices a small fraction of their DOF apart show the same thing again (25 µm of DOF sampled every
-    0.2 µm repeats each slice a hundred times, issue 32). Returns ``None`` unless ``step_um`` is more than
-    :data:`FINE_STEP_FACTOR` times finer than the thinnest DOF over [z0, z1] (all views summed, the
-    thinnest they can be); the text names a sensible step, half that DOF (neighbours overlap by half,
-    so every depth is in focus in two slices).
-    """
-    lo, hi = float(min(z0_um, z1_um)), float(max(z0_um, z1_um))
-    ends = microscope_slices(camera, np.array([lo, hi]) / z_per_a_um(camera))
-    dof = float(np.min(ends.dof_um))
-    if not (math.isfinite(dof) and dof > 0 and step_um * FINE_STEP_FACTOR < dof):
-        return None
-    return (f"a z step of {step_um:.4g} µm is {dof / step_um:.0f}x finer than the slices' depth of field "
-            f"({dof:.3g} µm): neighbouring slices show the same; a step of about {dof / 2:.2g} µm (half the DOF) "
-            f"samples the depth fully")
+def refocus_summary(camera) -> dict:
+    """How this camera refocuses, for a report: with per-view gains (a microscope objective's sine condition)
+    ``paraxial_depth_error`` and ``aplanatic`` (:func:`uses_aplanatic`); ``{}`` for optics that refocus with
+    Eq. 9's shifts alone."""
+    if _microscope_of(camera) is None:
+        return {}
+    return {"paraxial_depth_error": paraxial_depth_error(camera), "aplanatic": uses_aplanatic(camera)}

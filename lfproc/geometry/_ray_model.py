@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..camera import SENSOR_MM, MainLens
+from ..camera import MainLens
 from ..errors import LfprocError
 
 
@@ -73,21 +73,14 @@ class RayModel:
         return 1.0 if self.telecentric else (d_a + self.mla_focal_length_mm) / d_a
 
     @property
-    def sensor_to_main_lens_mm(self) -> float:
-        return (self.mla_focal_length_mm + self.mla_principal_plane_gap_mm + self.image_distance_mm
-                + self.main_principal_plane_gap_mm)
-
-    @property
     def main_optics(self) -> MainLens:
         """The main lens as the one main-optics interface (:class:`~lfproc.camera.MainLens`)."""
         return MainLens(self.main_focal_length_mm, self.image_distance_mm, self.main_principal_plane_gap_mm,
                         self.f_number, self.exit_pupil_distance_mm)
 
-    object_space = SENSOR_MM
+    #: error messages name the model
+    source = "ray model"
 
     @property
     def mla_path_mm(self) -> float:
         return self.mla_focal_length_mm + self.mla_principal_plane_gap_mm
-
-    def require_main_lens(self, what: str) -> None:
-        """A ray model always has its main lens."""

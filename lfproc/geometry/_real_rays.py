@@ -43,14 +43,29 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import Camera, MainLens
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
+from ._main_lens import main_lens_of
 from ._slices import _slope_step, _view_extent, slice_geometry
 
 
+def traces_real_rays(camera) -> bool:
+    """Whether the camera's optics can be traced exactly: a main lens given by its surfaces."""
+    optics = camera.main_optics
+    return isinstance(optics, MainLens) and optics.prescription is not None
+
+
+def real_ray_lens(camera) -> dict:
+    """The lens behind the real rays: where its surfaces came from and its paraxial cardinal points."""
+    lens = _require_prescription(camera)
+    return dict(source=lens.source, wavelength_nm=lens.wavelength_nm, surfaces=len(lens.surfaces),
+                focal_length_mm=lens.focal_length_mm, principal_plane_gap_mm=lens.principal_plane_gap_mm,
+                exit_pupil_distance_mm=camera.main_optics.exit_pupil_distance_mm)
+
+
 def _require_prescription(camera: Camera):
-    lens = getattr(camera.main_optics, "prescription", None)     # main optics given by their surfaces
+    lens = main_lens_of(camera, "real rays through the main lens's surfaces").prescription
     if lens is None:
         raise LfprocError(f"{camera.source or 'camera'}: real rays need the main lens's surfaces; give "
                           f"main_lens.prescription (a .zmx file) or [[main_lens.surfaces]] in the camera file")
@@ -72,7 +87,7 @@ class _Frame:
 def _frame(camera: Camera) -> _Frame:
     lens = _require_prescription(camera)
     vertex = np.array([lens.vertex_mm(k) for k in range(len(lens.surfaces))])
-    z_mla = lens.rear_principal_plane_mm + camera.image_distance_mm
+    z_mla = lens.rear_principal_plane_mm + main_lens_of(camera, "real rays").image_distance_mm
     return _Frame(vertex, np.array([s.curvature for s in lens.surfaces]), np.array(lens.indices_before()),
                   np.array([s.index for s in lens.surfaces]), z_mla,
                   z_mla + camera.mla_focal_length_mm + camera.mla_principal_plane_gap_mm)

@@ -4,7 +4,7 @@ Pure, vectorised functions of a :class:`~lfproc.camera.Camera` and the refocus p
 images. The ray pairs below are followed to the micro lens array; where they meet in object space is
 the camera's main optics' business (:attr:`Camera.main_optics`, one interface for a main lens and a
 microscope objective, :mod:`lfproc.camera._main_optics`), reported in its unit and from its origin
-(:attr:`Camera.object_space`): millimetres from the sensor for a main lens, the closed forms below;
+(``camera.main_optics.object_space``): millimetres from the sensor for a main lens, the closed forms below;
 micrometres from the native object plane for a microscope (:mod:`._microscope`).
 
 Closed forms
@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import SENSOR_MM, Camera, ObjectSpace, SliceNames
+from ..camera import SENSOR_MM, Camera, ObjectSpace
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
@@ -87,7 +87,7 @@ def _slope_gap(camera: Camera, spread):
 def _pair_position(camera: Camera, shift, spread):
     """(position, D) of the object point where a ray pair (A, C) meets, through the camera's main optics.
 
-    The position is in the optics' object-space unit (:attr:`Camera.object_space`): for a main lens the
+    The position is in the optics' object-space unit (``camera.main_optics.object_space``): for a main lens the
     distance from the sensor, ``inf`` where the rays do not meet in front of it (z ≤ 0 or parallel).
     D = −(N·A_S + A·p_m·C_S) with S the optics' transfer: linear in (A, C) and of the sign of the object
     vergence (for a main lens D = (A·p_m + N·ε)/f_U, the sign of 1/x); it changes sign where the meeting
@@ -149,12 +149,22 @@ def _dof_parameters(camera: Camera, a, view_extent=None):
     return _equivalent_parameter(camera, *near), _equivalent_parameter(camera, *far)
 
 
+def require_space(camera: Camera, space: ObjectSpace, what: str) -> None:
+    """Refuse ``what``, whose numbers are in ``space`` (e.g. mm from the sensor), for a camera whose main optics
+    report positions in another space; one line naming both."""
+    actual = camera.main_optics.object_space
+    if actual != space:
+        raise LfprocError(f"{camera.source or 'camera'}: {what} is in {space.symbol} {space.origin}; this camera's "
+                          f"optics ({camera.main_optics.describe()}) place slices in {actual.symbol} {actual.origin}")
+
+
 def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
     """Central distance d_a of refocused slice ``a`` from the sensor (Eqs. 13–21; finite d_A: Hahne 2018).
 
     Parameters
     ----------
     camera : Camera
+        Whose optics place slices in mm from the sensor (a main lens).
     a : float or array_like
         Refocus parameter (any real value; positive focuses nearer than a = 0).
 
@@ -163,17 +173,17 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
     float or ndarray
         Distance in mm; ``inf`` where the chief rays are parallel or diverge.
     """
-    camera.require_main_lens("a slice distance from the sensor")
+    require_space(camera, SENSOR_MM, "a slice distance from the sensor")
     d = _distance_at(camera, a)
     return float(d) if d.ndim == 0 else d
 
 
 @dataclass(frozen=True, eq=False)
-class SliceGeometry(SliceNames):
+class SliceGeometry:
     """Geometry of refocused slices (arrays with the shape of ``a``, or floats for a scalar ``a``).
 
     One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
-    :attr:`~lfproc.camera.Camera.object_space`): millimetres from the sensor for a main lens (Eqs. 21, 31),
+    :attr:`~lfproc.camera.MainOptics.object_space`): millimetres from the sensor for a main lens (Eqs. 21, 31),
     micrometres from the native object plane, positive towards the objective, for a microscope.
 
     Attributes
@@ -196,6 +206,46 @@ class SliceGeometry(SliceNames):
     far: np.ndarray
     dof: np.ndarray
     space: ObjectSpace = SENSOR_MM
+
+    @property
+    def distance_mm(self):
+        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
+        return self.space.named("distance_mm", self.depth)
+
+    @property
+    def near_mm(self):
+        """``near`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("near_mm", self.near)
+
+    @property
+    def far_mm(self):
+        """``far`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("far_mm", self.far)
+
+    @property
+    def dof_mm(self):
+        """``dof`` in mm (Eq. 23); ``None`` in another space."""
+        return self.space.named("dof_mm", self.dof)
+
+    @property
+    def z_um(self):
+        """``depth`` in µm from the native object plane; ``None`` in another space."""
+        return self.space.named("z_um", self.depth)
+
+    @property
+    def z_near_um(self):
+        """``near`` (the larger z, nearer the objective) in µm; ``None`` in another space."""
+        return self.space.named("z_near_um", self.near)
+
+    @property
+    def z_far_um(self):
+        """``far`` (the smaller z) in µm; ``None`` in another space."""
+        return self.space.named("z_far_um", self.far)
+
+    @property
+    def dof_um(self):
+        """``dof`` in µm; ``None`` in another space."""
+        return self.space.named("dof_um", self.dof)
 
     def records(self) -> list[dict]:
         """One dict per slice with the contract's JSON keys (``space.keys``); infinity as ``math.inf``.
@@ -231,7 +281,7 @@ def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
         For a microscope camera the ``_um`` fields instead (:func:`~._microscope.microscope_slices`).
     """
     optics = camera.main_optics
-    space = camera.object_space
+    space = optics.object_space
     a_arr = np.asarray(a, dtype=np.float64)
     if view_extent is None:
         view_extent = _lit_view_extent(camera)
@@ -239,10 +289,8 @@ def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
     near_pair, far_pair = _dof_pairs(camera, a_arr, view_extent)
     limit1, sign1 = _pair_position(camera, *near_pair)
     limit2, sign2 = _pair_position(camera, *far_pair)
-    nearer = np.minimum if space.from_sensor else np.maximum     # nearer the optics: less distance, more z
-    farther = np.maximum if space.from_sensor else np.minimum
-    near = nearer(nearer(limit1, limit2), d)
-    far = farther(farther(limit1, limit2), d)
+    near = space.nearer(space.nearer(limit1, limit2), d)     # nearer the optics: less distance, more z
+    far = space.farther(space.farther(limit1, limit2), d)
     # D is linear along the border rays' path from the central pair to each limit (up to a positive
     # factor): a sign change on either path means the DOF passes through infinity
     centre_in_front = d_sign > 0
@@ -254,8 +302,7 @@ def slice_geometry(camera: Camera, a, view_extent=None) -> SliceGeometry:
     near = np.where(crosses, np.minimum(in_front, d), near)
     half_wave = 0.5 * optics.wave_depth_of_field()        # a microscope's wave term, split evenly (0 for a lens)
     if half_wave:
-        toward = -1.0 if space.from_sensor else 1.0
-        near, far = near + toward * half_wave, far - toward * half_wave
+        near, far = near + space.toward_optics * half_wave, far - space.toward_optics * half_wave
     with np.errstate(invalid="ignore"):
         dof = np.where(np.isinf(far) | np.isinf(near), np.inf, np.abs(far - near))
     if a_arr.ndim == 0:
@@ -271,37 +318,44 @@ def _lit_view_extent(camera: Camera) -> float:
 
 
 def infinity_parameter(camera: Camera) -> float:
-    """a_∞ = −δ·ε/(p_m·(1 − κε)): the refocus parameter of the slice focused at infinity (0 when b_U = f_U)."""
-    camera.require_main_lens("the slice at infinity")
-    eps = camera.image_distance_mm - camera.main_focal_length_mm
-    return -_slope_step(camera) * eps / (camera.mla_pitch_mm * (1.0 - pupil_curvature(camera) * eps))
+    """a_∞: the refocus parameter of the slice focused at infinity (−δ·ε/(p_m·(1 − κε)) of a main lens, 0 when
+    b_U = f_U), the far end of the optics' usable range.
+
+    Raises
+    ------
+    LfprocError
+        For optics with no slice at infinity (an afocal objective: every a is a finite depth).
+    """
+    usable = camera.main_optics.usable_range(camera)
+    if not (np.isfinite(usable.low) and np.isinf(usable.low_position)):
+        raise LfprocError(f"{camera.source or 'camera'}: this camera's optics ({camera.main_optics.describe()}) have "
+                          f"no slice at infinity: every a focuses at a finite depth")
+    return usable.low
 
 
 def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     """The ``a`` whose slice is centred at ``distance_mm`` from the sensor (inverse of Eq. 21).
 
     a = δ·(f_U²/x − ε) / (p_m·(1 − κε + κ·f_U²/x)) with x = d − L − f_U, the distance from the front
-    focal plane (κ = 0 when telecentric).
+    focal plane (κ = 0 when telecentric; :meth:`lfproc.camera.MainLens.refocus_parameter`).
 
     Raises
     ------
     LfprocError
-        For a distance at or behind the main lens (d ≤ L), or NaN.
+        For a distance at or behind the main lens (d ≤ L), or NaN; for optics whose positions are not mm
+        from the sensor (:func:`position_parameter` takes any optics' own).
     """
-    camera.require_main_lens("a distance in mm (give depths of a microscope in um, z_um=)")
-    d = np.asarray(distance_mm, dtype=np.float64)
-    inside = camera.sensor_to_main_lens_mm
-    if np.any(np.isnan(d)) or np.any(d <= inside):
-        bad = d[np.isnan(d) | (d <= inside)].ravel()[0]
-        raise LfprocError(f"distance {bad} mm is not in front of the main lens (it must exceed {inside:.3f} mm "
-                          f"from the sensor); give a larger distance")
-    f_u = camera.main_focal_length_mm
-    eps = camera.image_distance_mm - f_u
-    kappa = pupil_curvature(camera)
-    x = d - inside - f_u
-    with np.errstate(divide="ignore"):
-        inv_x = np.where(np.isinf(d), 0.0, 1.0 / x)
-    with np.errstate(invalid="ignore"):
-        pupil = 1.0 - kappa * eps + kappa * (f_u * f_u * inv_x) if kappa else 1.0
-    a = _slope_step(camera) * (f_u * f_u * inv_x - eps) / (camera.mla_pitch_mm * pupil)
-    return float(a) if np.ndim(a) == 0 else a
+    require_space(camera, SENSOR_MM, "a distance in mm (distance_mm=)")
+    return camera.main_optics.refocus_parameter(camera, distance_mm)
+
+
+def position_parameter(camera: Camera, position) -> np.ndarray | float:
+    """The ``a`` whose slice is centred at ``position``, in the optics' own object space (mm from the sensor,
+    µm from a native object plane, …): the inverse of the central ray pair's position (Eqs. 13–21).
+
+    Raises
+    ------
+    LfprocError
+        For a position no slice of these optics can focus on, in the optics' own words.
+    """
+    return camera.main_optics.refocus_parameter(camera, position)

@@ -22,8 +22,8 @@ import numpy as np
 from ..camera import Camera
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
+from ._main_lens import main_lens_of
 from ._slices import _distance_at, _slope_step
-from ._views import _virtual_cameras
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,9 +81,10 @@ def triangulate(camera: Camera, disparity_px, gap=1, a=0.0) -> Triangulation:
     Raises
     ------
     LfprocError
-        For orthographic views (a microscope's), which have no virtual cameras, baselines or tilts.
+        For optics other than a main lens (a microscope's views are orthographic: no virtual cameras,
+        baselines or tilts).
     """
-    _virtual_cameras(camera)
+    lens = main_lens_of(camera, "triangulation between virtual cameras")
     dx = np.asarray(disparity_px, dtype=np.float64)
     g = np.asarray(gap, dtype=np.float64)
     a = np.asarray(a, dtype=np.float64)
@@ -93,8 +94,8 @@ def triangulate(camera: Camera, disparity_px, gap=1, a=0.0) -> Triangulation:
         raise LfprocError("the slice a that disparities are measured against must be finite")
     if np.any(np.isinf(dx)):
         raise LfprocError("disparities must be finite numbers of pixels (NaN marks an unknown one)")
-    f_u = camera.main_focal_length_mm
-    eps = camera.image_distance_mm - f_u
+    f_u = lens.focal_length_mm
+    eps = lens.image_distance_mm - f_u
     delta = _slope_step(camera)
     pupil = 1.0 - pupil_curvature(camera) * eps
     raw = dx - a * g

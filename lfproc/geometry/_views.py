@@ -1,4 +1,7 @@
-"""Virtual cameras of the viewpoint images (Section 4: Eqs. 17, 33, 34; finite exit pupil: Hahne et al. 2018)."""
+"""Where the views look from (Section 4: Eqs. 17, 33, 34; finite exit pupil: Hahne et al. 2018), asked of the
+main optics (:meth:`lfproc.camera.MainOptics.place_views`): a main lens's views are virtual cameras at
+positions F_i with tilts Φ_i and baselines ΔB; an objective's are directions (orthographic), at an
+object-space angle each, crossing its pupil at a height, with no baseline."""
 
 from __future__ import annotations
 
@@ -6,28 +9,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import Camera
-from ._exit_pupil import pupil_curvature
+from ..camera import Camera, ViewPlacement
+from ..errors import LfprocError
 from ._slices import _slope_step
-
-
-def _virtual_cameras(camera: Camera) -> None:
-    """Refuse orthographic views (a microscope's): they have object-space angles instead of virtual cameras."""
-    if camera.main_optics.views_are_orthographic:   # object-side telecentric: every view is a direction, no pinhole
-        camera.require_main_lens("virtual camera positions, tilts and baselines (a microscope's views are "
-                                 "orthographic: see their object-space angles, lfproc.geometry.microscope_views)")
-
-
-def _pupil_factor(camera: Camera) -> float:
-    """1 − ε/d_A: the virtual cameras spread by 1/(1 − ε/d_A) with a finite exit pupil (exactly 1.0 telecentric)."""
-    _virtual_cameras(camera)
-    return 1.0 - pupil_curvature(camera) * (camera.image_distance_mm - camera.main_focal_length_mm)
 
 
 def view_offsets(camera: Camera) -> np.ndarray:
     """i = k − c for every view index k = 0 … m̂ − 1."""
     c = camera.center_index
     return np.arange(-c, c + 1)
+
+
+def place_views(camera: Camera, i=None) -> ViewPlacement:
+    """The views at offsets ``i`` (default −c … c) along one axis, as the main optics place them."""
+    return camera.main_optics.place_views(camera, view_offsets(camera) if i is None else i)
+
+
+def _virtual_cameras(camera: Camera, i=None) -> ViewPlacement:
+    """:func:`place_views`, refused for orthographic views (directions have no virtual camera, no baseline)."""
+    views = place_views(camera, i)
+    if views.orthographic:
+        raise LfprocError(f"{camera.source or 'camera'}: the views of this camera's optics "
+                          f"({camera.main_optics.describe()}) are orthographic, directions without virtual camera "
+                          f"positions or baselines; see their object-space angles (lfproc.geometry.view_geometry)")
+    return views
 
 
 def view_slopes(camera: Camera, i=None) -> np.ndarray:
@@ -42,8 +47,7 @@ def view_positions_mm(camera: Camera, i=None) -> np.ndarray:
     With a finite exit pupil the centres lie in the entrance pupil plane
     (:func:`~lfproc.geometry.virtual_camera_plane_mm`) at m_i·f_U/(1 − ε/d_A) (Hahne et al. 2018).
     """
-    _virtual_cameras(camera)
-    return view_slopes(camera, i) * camera.main_focal_length_mm / _pupil_factor(camera)
+    return _virtual_cameras(camera, i).position_mm
 
 
 def view_tilts_deg(camera: Camera, i=None) -> np.ndarray:
@@ -53,59 +57,64 @@ def view_tilts_deg(camera: Camera, i=None) -> np.ndarray:
     paper's Table 4 prints the opposite sign for the same magnitudes). The axis is the view's ray
     through the lens on the optical axis, so a finite exit pupil leaves the tilt unchanged.
     """
-    _virtual_cameras(camera)
-    eps = camera.image_distance_mm - camera.main_focal_length_mm
-    tilt = np.degrees(np.arctan(view_slopes(camera, i) * eps / camera.main_focal_length_mm))
-    return tilt + 0.0  # no negative zeros (b_U = f_U gives -0.0 for i > 0)
+    return _virtual_cameras(camera, i).tilt_deg
 
 
 def baseline_mm(camera: Camera, gap=1) -> np.ndarray | float:
-    """Baseline ΔB_g = |F_i − F_(i+g)| = g·p_p·f_U/f_s between views g apart (Eq. 34; ÷ |1 − ε/d_A| with d_A)."""
-    _virtual_cameras(camera)
-    b = np.abs(np.asarray(gap, dtype=np.float64)) * _slope_step(camera) * camera.main_focal_length_mm
-    b = b / abs(_pupil_factor(camera))
+    """Baseline ΔB_g = |F_i − F_(i+g)| = g·p_p·f_U/f_s between views g apart (Eq. 34; ÷ |1 − ε/d_A| with d_A):
+    the distance of view offset g's virtual camera from the central one."""
+    g = np.asarray(gap, dtype=np.float64)
+    b = np.abs(_virtual_cameras(camera, np.abs(g).ravel()).position_mm).reshape(g.shape)
     return float(b) if b.ndim == 0 else b
 
 
 @dataclass(frozen=True, eq=False)
 class ViewGeometry:
-    """Virtual cameras of the views along one axis: offsets i = −c…c, positions F_i (mm), tilts Φ_i (°)."""
+    """The views along one axis: offsets i = −c…c and where each looks from, as the optics place them.
+
+    Virtual cameras (a main lens): positions F_i (mm), tilts Φ_i (°) and the adjacent baseline. Orthographic
+    views (an objective's): ``baseline_mm`` is ``None``, ``tilt_deg`` is each view's object-space angle (also
+    ``angle_deg``), ``position_mm`` where it crosses the objective's pupil; ``inside`` marks the views inside
+    the optics' stop (the central row of :func:`views_inside_aperture`).
+    """
 
     i: np.ndarray
     position_mm: np.ndarray
     tilt_deg: np.ndarray
-    baseline_mm: float
+    baseline_mm: float | None
+    inside: np.ndarray
+    lateral_sampling_um: float | None = None
+
+    @property
+    def angle_deg(self) -> np.ndarray:
+        """The views' object-space angles (orthographic views), or their tilts."""
+        return self.tilt_deg
 
     def records(self) -> list[dict]:
+        """One dict per view: ``i``, ``position_mm``, ``tilt_deg`` for virtual cameras; ``i``, ``angle_deg``
+        (``None`` where no ray has it) and ``inside_na`` for orthographic views."""
+        if self.baseline_mm is None:
+            return [dict(i=int(i), angle_deg=(float(t) if np.isfinite(t) else None), inside_na=bool(k))
+                    for i, t, k in zip(self.i, self.tilt_deg, self.inside)]
         return [dict(i=int(i), position_mm=float(p), tilt_deg=float(t))
                 for i, p, t in zip(self.i, self.position_mm, self.tilt_deg)]
 
 
 def view_geometry(camera: Camera) -> ViewGeometry:
-    """Positions, tilts and the adjacent baseline of all views (Eqs. 17, 33, 34)."""
+    """Positions, tilts and the adjacent baseline of all views (Eqs. 17, 33, 34), or an objective's angles."""
     i = view_offsets(camera)
-    return ViewGeometry(i, view_positions_mm(camera, i), view_tilts_deg(camera, i), baseline_mm(camera, 1))
+    views = place_views(camera, i)
+    inside = views_inside_aperture(camera)[camera.center_index]
+    return ViewGeometry(i, views.position_mm, views.tilt_deg, views.baseline_mm, inside,
+                        camera.main_optics.lateral_sampling_um(camera))
 
 
 def views_inside_aperture(camera: Camera) -> np.ndarray:
-    """Boolean mask ``(m̂, m̂)`` of views whose virtual centre lies inside the main lens aperture.
+    """Boolean mask ``(m̂, m̂)`` of views inside the main optics' stop.
 
-    The virtual centre of view (ky, kx) sits at (F_iy, F_ix) in the entrance pupil (the front focal
-    plane for an image-side telecentric main lens), whose diameter is f_U / N. Views outside it see
-    no light (the dark corners of every micro image). Without ``f_number`` every view is kept.
-
-    Orthographic views (a microscope's) are directions, not positions in a pupil: those whose image-side
-    ray sine is within the optics' :attr:`~lfproc.camera.MainOptics.image_aperture_sine`, NA/M
-    (:func:`~._microscope.views_inside_na`).
+    A main lens: views whose virtual centre (F_iy, F_ix) lies in the entrance pupil, diameter f_U / N (the
+    front focal plane for an image-side telecentric lens); views outside it see no light (the dark corners of
+    every micro image); without ``f_number`` every view is kept. An objective: views whose image-side ray sine
+    is within NA/M (:meth:`lfproc.camera.MainOptics.inside_aperture`).
     """
-    m = camera.m_hat
-    optics = camera.main_optics
-    if optics.views_are_orthographic:    # views are directions: the stop bounds their sine (Abbe), not a position
-        from ._microscope import views_inside_na
-        return views_inside_na(camera)
-    if optics.image_aperture_sine is None:
-        return np.ones((m, m), dtype=bool)
-    pos = view_positions_mm(camera)
-    radius = camera.main_focal_length_mm / (2.0 * camera.f_number)
-    r2 = pos[:, None] ** 2 + pos[None, :] ** 2
-    return r2 <= radius * radius * (1.0 + 1e-12)
+    return camera.main_optics.inside_aperture(camera)

@@ -13,7 +13,8 @@ Reading
     frame): `open_picture` (a `LytroPicture`), `depth_lambda`, `confidence_map`, `picture_metadata`,
     `camera_metadata` (any Lytro file), `is_picture_file` and `refuse_pictures` (cheap, headers only);
     `lambda_map` turns Lytro's lambda into the paper's a and distances (`LambdaMap`;
-    `camera_lambda_map` from a camera file, `refocused_map` for a picture's refocused focus);
+    `camera_lambda_map` from a camera file, `refocused_map` for a picture's refocused focus; `focused_at`: a
+    camera with its main lens focused at a distance);
     `stack_images` decodes a picture's focus stack and `encode_jpeg` re-encodes a frame.
     `is_napari_metadata` and `napari_camera` read napari-LF's ``metadata.txt`` as a microscope camera;
     `read_camera` reads any of the three files that describe a camera (a camera TOML, napari-LF's
@@ -46,7 +47,7 @@ from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
 from ._lytro_camera import LytroCamera, lytro_camera
 from ._lytro_container import has_container_extension, is_container
 from ._lytro_h264 import decode_views as decode_picture_views
-from ._lytro_lambda import LambdaMap, camera_lambda_map, lambda_map, refocused_map
+from ._lytro_lambda import LambdaMap, camera_lambda_map, focused_at, lambda_map, refocused_map
 from ._lytro_metadata import LytroMetadata
 from ._lytro_picture import LytroPicture
 from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_lambda_map, picture_metadata,
@@ -65,7 +66,7 @@ from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_imag
 
 __all__ = [
     "LambdaMap", "LytroPicture", "camera_metadata", "confidence_map", "depth_lambda", "is_picture_file",
-    "lambda_map", "open_picture", "picture_lambda_map", "picture_metadata", "refuse_pictures",
+    "lambda_map", "focused_at", "open_picture", "picture_lambda_map", "picture_metadata", "refuse_pictures",
     "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
     "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
     "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",

@@ -41,7 +41,7 @@ def read_camera(path: str | os.PathLike) -> Camera:
     Warns
     -----
     LfprocWarning
-        A Lytro file's camera: its focus distance is assumed (infinity); ``camera.with_focus_distance(MM)``
+        A Lytro file's camera: its focus distance is assumed (infinity); ``lfproc.io.focused_at(camera, MM)``
         sets the real one.
     """
     from ._lytro_camera import lytro_camera
@@ -53,7 +53,7 @@ def read_camera(path: str | os.PathLike) -> Camera:
     if is_lytro_file(path):
         camera = lytro_camera(camera_metadata(path)).camera
         warnings.warn(f"{path}: camera from its metadata, main lens focused at infinity (the metadata has no focus "
-                      f"distance); camera.with_focus_distance(MM) sets where it focused", LfprocWarning, stacklevel=2)
+                      f"distance); lfproc.io.focused_at(camera, MM) sets where it focused", LfprocWarning, stacklevel=2)
         return camera
     if is_napari_metadata(path):
         return napari_camera(path)[0]

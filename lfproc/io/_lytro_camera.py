@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..camera import Camera
+from ..camera import Camera, MainLens
 from ..errors import LfprocError
 from ._lytro_metadata import LytroMetadata
 
@@ -99,19 +99,19 @@ def lytro_camera(meta: LytroMetadata, focus_distance_mm: float | None = None) ->
     f_u = metres_to_mm(meta.focal_length_m)
     fields = dict(
         pixel_pitch_mm=metres_to_mm(meta.pixel_pitch_m), mla_pitch_mm=metres_to_mm(meta.lens_pitch_m),
-        mla_focal_length_mm=metres_to_mm(meta.sensor_offset_m[2]), main_focal_length_mm=f_u, image_distance_mm=f_u,
-        f_number=meta.f_number, grid="hexagonal" if "hex" in (meta.tiling or "").lower() else "rectangular",
-        cfa=meta.cfa, exit_pupil_distance_mm=exit_pupil,
-        name=" ".join(p for p in ("Lytro", meta.model, meta.serial or "") if p), source=where, **levels)
+        mla_focal_length_mm=metres_to_mm(meta.sensor_offset_m[2]),
+        main_optics=MainLens(f_u, f_u, f_number=meta.f_number, exit_pupil_distance_mm=exit_pupil),
+        grid="hexagonal" if "hex" in (meta.tiling or "").lower() else "rectangular",
+        cfa=meta.cfa, name=" ".join(p for p in ("Lytro", meta.model, meta.serial or "") if p), source=where, **levels)
     if focus_distance_mm is None:
         provenance.append(("main_lens.image_distance_mm", DEFAULT_FOCUS))
     else:
-        fields["image_distance_mm"] = Camera(**fields).with_focus_distance(float(focus_distance_mm)).image_distance_mm
+        fields["main_optics"] = fields["main_optics"].focused_at(float(focus_distance_mm),
+                                                                 fields["mla_focal_length_mm"], where)
         provenance.append(("main_lens.image_distance_mm",
                            f"flag: --focus-distance {focus_distance_mm:g} mm (thin-lens equation)"))
     provenance.append(("decode.micro_image_px", "not stated: the largest odd integer not above the measured micro "
                                                 "image pitch (the white image's calibration), else pitch / pixel pitch"))
-    # built once with its provenance: a camera copied with dataclasses.replace would state m̂ (Camera)
     return LytroCamera(camera=Camera(**fields, provenance=tuple(provenance)), provenance=tuple(provenance),
                        notes=tuple(_notes(meta)))
 

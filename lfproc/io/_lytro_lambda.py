@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..camera import MainLens
 from ..errors import LfprocError
 
 DISTANCE_FROM = "lambda"
@@ -46,6 +47,16 @@ class LambdaMap:
     f_number: float
     lens_pitch_mm: float
     infinity_lambda: float
+
+    @property
+    def focal_length_mm(self) -> float:
+        """f_U of the camera's main lens."""
+        return self.camera.main_optics.focal_length_mm
+
+    @property
+    def image_distance_mm(self) -> float:
+        """b_U of the camera's main lens (where the lambda reading puts it)."""
+        return self.camera.main_optics.image_distance_mm
 
     @property
     def unit_mm(self) -> float:
@@ -105,10 +116,11 @@ def lambda_map(meta) -> LambdaMap:
                           f"the lambda reading (both must be positive); distances are not derived")
     built = lytro_camera(meta).camera
     pitch = built.mla_pitch_mm
-    image_distance = built.main_focal_length_mm + meta.infinity_lambda * meta.f_number * pitch
+    lens = built.main_optics                    # a Lytro camera's main lens (lytro_camera builds it)
+    image_distance = lens.focal_length_mm + meta.infinity_lambda * meta.f_number * pitch
     provenance = tuple(p for p in built.provenance if p[0] != "main_lens.image_distance_mm") + \
         (("main_lens.image_distance_mm", PROVENANCE),)
-    camera = replace(built, image_distance_mm=image_distance, provenance=provenance)
+    camera = replace(built, main_optics=replace(lens, image_distance_mm=image_distance), provenance=provenance)
     return LambdaMap(camera=camera, f_number=meta.f_number, lens_pitch_mm=pitch, infinity_lambda=meta.infinity_lambda)
 
 
@@ -126,22 +138,36 @@ def camera_lambda_map(camera, source: str) -> LambdaMap:
     LfprocError
         A microscope camera, or one without ``f_number``.
     """
-    if not camera.object_space.from_sensor or camera.main_focal_length_mm is None:   # an objective, no main lens
-        raise LfprocError(f"{source}: describes a microscope, not a Lytro camera; pass a camera file with a "
+    lens = camera.main_optics
+    if not isinstance(lens, MainLens):     # lambda is a main lens's focus unit (a Lytro camera's)
+        raise LfprocError(f"{source}: describes a {lens.describe()}, not a Lytro camera; pass a camera file with a "
                           f"[main_lens] (e.g. from 'lfproc camera' on a Lytro file of the same camera)")
-    if camera.f_number is None or camera.f_number <= 0:
+    if lens.f_number is None or lens.f_number <= 0:
         raise LfprocError(f"{source}: [main_lens] has no f_number, which turns lambda into distances; add "
                           f"f_number (the Lytro F01 is f/1.91; 'lfproc camera' writes it from a Lytro file's metadata)")
     pitch = camera.mla_pitch_mm
-    infinity = (camera.image_distance_mm - camera.main_focal_length_mm) / (camera.f_number * pitch)
-    return LambdaMap(camera=camera, f_number=camera.f_number, lens_pitch_mm=pitch, infinity_lambda=infinity)
+    infinity = (lens.image_distance_mm - lens.focal_length_mm) / (lens.f_number * pitch)
+    return LambdaMap(camera=camera, f_number=lens.f_number, lens_pitch_mm=pitch, infinity_lambda=infinity)
 
 
 def refocused_map(mapping: LambdaMap, focus_distance_mm: float) -> LambdaMap:
     """The lambda map with the main lens focused at ``focus_distance_mm`` from the sensor (b_U from the
     thin-lens equation, λ_∞ = (b_U − f_U) / (N·p_m)); a(λ) is unchanged."""
-    camera = mapping.camera.with_focus_distance(float(focus_distance_mm))
+    camera = focused_at(mapping.camera, float(focus_distance_mm))
     camera = replace(camera, provenance=camera.provenance + (
         ("main_lens.image_distance_mm", f"flag: --focus-distance {focus_distance_mm:g} mm (thin-lens equation)"),))
-    infinity = (camera.image_distance_mm - camera.main_focal_length_mm) / mapping.unit_mm
+    lens = camera.main_optics
+    infinity = (lens.image_distance_mm - lens.focal_length_mm) / mapping.unit_mm
     return replace(mapping, camera=camera, infinity_lambda=infinity)
+
+
+def focused_at(camera, focus_distance_mm: float):
+    """``camera`` with its main lens focused at ``focus_distance_mm`` from the sensor (b_U from the thin-lens
+    equation, ``MainLens.focused_at``); the provenance of b_U (or of a focus distance) no longer holds and is
+    dropped."""
+    stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
+    if not isinstance(camera.main_optics, MainLens):
+        raise LfprocError(f"{camera.source or 'camera'}: a focus distance needs a main lens ([main_lens]); this "
+                          f"camera's optics are a {camera.main_optics.describe()}")
+    lens = camera.main_optics.focused_at(focus_distance_mm, camera.mla_path_mm, camera.source or "camera")
+    return replace(camera, main_optics=lens, provenance=tuple(p for p in camera.provenance if p[0] not in stale))

@@ -21,7 +21,7 @@ from ..io import write_gif_frames, write_png_preview
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
 from ._lytro_pictures import export_picture
 from ._names import FORMATS, output_stem, slice_name, slice_names, unique_stems, view_name
-from ._optics_tags import aperture_tags, signed_depths, stack_f_number, views_have_angles
+from ._optics_tags import aperture_tags, stack_f_number
 from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
                         write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
 from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
@@ -36,5 +36,5 @@ __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "output_stem", "
            "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
            "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
            "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
-           "mosaic_of_shown", "aperture_tags", "signed_depths", "stack_f_number", "views_have_angles",
+           "mosaic_of_shown", "aperture_tags", "stack_f_number",
            "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture"]

@@ -148,8 +148,8 @@ def _camera_record(mapping, camera_from: str, focus_distance_mm) -> dict:
         focus_from = "lambda (infinityLambda x fNumber x lensPitch, docs/lytro.md)"
     else:
         focus_from = f"the {camera_from} (its b_U)"
-    return {"from": camera_from, "focal_length_mm": cam.main_focal_length_mm, "f_number": cam.f_number,
-            "image_distance_mm": cam.image_distance_mm, "focus_distance_mm": slice_distance_mm(cam, 0.0),
+    return {"from": camera_from, "focal_length_mm": mapping.focal_length_mm, "f_number": mapping.f_number,
+            "image_distance_mm": mapping.image_distance_mm, "focus_distance_mm": slice_distance_mm(cam, 0.0),
             "infinity_lambda": mapping.infinity_lambda, "lambda_unit_mm": mapping.unit_mm,
             "image_distance_from": focus_from}
 

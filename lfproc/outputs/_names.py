@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
-from ._optics_tags import signed_depths
+from ._optics_tags import named_by_position
 
 #: output format -> file extension
 FORMATS = {"tiff": ".tif", "png16": ".png", "jpeg": ".jpg", "exr": ".exr"}
@@ -49,16 +49,17 @@ def _labels(values: list[float], camera) -> list[str]:
     if len({round(a, 12) for a in values}) != len(values):
         raise LfprocError("two refocus parameters are equal (to 12 decimals): each slice needs its own a; "
                           "remove the duplicate from the list")
-    z, unit = None, None
-    if signed_depths(camera):   # a microscope's z in µm: named by z, which sorts like a
+    z, space = None, None
+    if named_by_position(camera):   # a microscope's z in µm: named by z, which sorts like a
         from ..geometry import slice_geometry
 
-        z, unit = [float(v) for v in (slice_geometry(camera, values).depth if values else [])], camera.object_space.unit
+        z, space = [float(v) for v in (slice_geometry(camera, values).depth if values else [])], \
+            camera.main_optics.object_space
     for decimals in range(3, 13):
         if z is None:
             labels = [f"a{a + 0.0:+.{decimals}f}" for a in values]
         else:
-            labels = [f"z{v + 0.0:+.{decimals}f}{unit}" for v in z]
+            labels = [f"{space.letter}{v + 0.0:+.{decimals}f}{space.unit}" for v in z]
         if len(set(labels)) == len(labels):
             return labels
     return labels

@@ -18,7 +18,7 @@ from ..io import write_gif_frames, write_png_preview
 from ..viewpoints import circular_walk
 from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, add_label, as_rgb, slice_label, upscale, upscale_factor
 from ._names import slice_names, view_name
-from ._optics_tags import lens_spacing_tag, views_have_angles
+from ._optics_tags import lens_spacing_tag
 from ._products import mosaic_of_shown, shown_block
 from ._tone import ToneMap
 
@@ -55,10 +55,11 @@ def slice_labels(camera, a_values, view_mask=None) -> list[str]:
     extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
     geo = geometry.slice_geometry(camera, np.asarray(a_values, dtype=np.float64), extent)
     depth, near, far = (np.atleast_1d(x) for x in (geo.depth, geo.near, geo.far))
-    if geo.space.from_sensor:   # metres from the sensor
-        return [slice_label(d, lo, hi) for d, lo, hi in zip(depth, near, far)]
-    unit = geo.space.symbol     # signed depths (µm from the native object plane): the DOF low to high
-    return [f"z {z:+.1f} {unit} | DOF {min(lo, hi):+.1f} to {max(lo, hi):+.1f} {unit}"
+    if geo.space.toward_optics < 0:   # distances, to infinity: in metres
+        return [slice_label(d / geo.space.per_mm, lo / geo.space.per_mm, hi / geo.space.per_mm)
+                for d, lo, hi in zip(depth, near, far)]
+    space = geo.space                 # signed depths (µm from the native object plane): the DOF low to high
+    return [f"{space.letter} {z:+.1f} {space.symbol} | DOF {min(lo, hi):+.1f} to {max(lo, hi):+.1f} {space.symbol}"
             for z, lo, hi in zip(depth.tolist(), near.tolist(), far.tolist())]
 
 
@@ -92,14 +93,11 @@ def view_label(camera, ky: int, kx: int, centre=None) -> str:
     orthographic view (a microscope's): its angle in the object (sine condition). ``centre``: where the
     central view was read (``LightField.view_centre``), as in the views' tags."""
     cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))
-    if views_have_angles(camera):
-        ay = geometry.microscope_views(camera, cy).angle_deg[ky]
-        ax = geometry.microscope_views(camera, cx).angle_deg[kx]
-        return f"view [{ky}, {kx}] | {np.hypot(ay, ax):.1f} deg in the object"
     offsets = geometry.view_offsets(camera)
-    py = geometry.view_positions_mm(camera, offsets + cy)[ky]
-    px = geometry.view_positions_mm(camera, offsets + cx)[kx]
-    return f"view [{ky}, {kx}] | {np.hypot(py, px):.2f} mm from the centre"
+    along_y, along_x = geometry.place_views(camera, offsets + cy), geometry.place_views(camera, offsets + cx)
+    if along_y.orthographic:   # directions: the angle in the object
+        return f"view [{ky}, {kx}] | {np.hypot(along_y.tilt_deg[ky], along_x.tilt_deg[kx]):.1f} deg in the object"
+    return f"view [{ky}, {kx}] | {np.hypot(along_y.position_mm[ky], along_x.position_mm[kx]):.2f} mm from the centre"
 
 
 def write_view_previews(outdir: str, stem: str, views: np.ndarray, keep: np.ndarray | None, camera,

@@ -44,7 +44,7 @@ def slice_metadata(source: str, camera, a_values, view_mask=None, upsample: int 
         extra["upsample"] = int(upsample)
     extra.update(slice_shift_tags(camera))
     records = geometry.slice_geometry(camera, np.asarray(a_values), extent).records()
-    if getattr(camera, "main_lens_prescription", None) is not None:   # a real lens: its rays beside the model's
+    if geometry.traces_real_rays(camera):   # a real lens: its rays beside the model's
         real = geometry.real_ray_slices(camera, np.asarray(a_values, dtype=np.float64).ravel(), extent).records()
         records = [dict(rec, real_rays=r) for rec, r in zip(records, real)]
     tail = {} if provenance is None else {"provenance": provenance}
@@ -130,7 +130,7 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
 def _real_view_tags(camera, centre):
     """``(ky, kx) -> {"real_rays": {"position_mm": [y, x], "tilt_deg": [y, x]}}`` for a camera with a lens
     prescription (each axis traced in its meridional plane, :func:`lfproc.geometry.real_ray_views`); else ``{}``."""
-    if getattr(camera, "main_lens_prescription", None) is None:
+    if not geometry.traces_real_rays(camera):
         return lambda ky, kx: {}
     offsets = geometry.view_offsets(camera)
     cy, cx = (0.0, 0.0) if centre is None else (float(centre[0]), float(centre[1]))

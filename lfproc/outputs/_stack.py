@@ -35,13 +35,10 @@ EVEN_TOLERANCE = 1e-6
 
 
 def lateral_um_per_lens(camera) -> float | None:
-    """Object-space size of one lens in µm where the views are orthographic and so share one lateral scale (a
-    microscope: :func:`lfproc.geometry.lateral_sampling_um`, pitch / M), ``None`` for a photographic camera
-    (its scale changes with depth)."""
-    from .. import geometry
-    from ._optics_tags import views_have_angles
-
-    return geometry.lateral_sampling_um(camera) if views_have_angles(camera) else None
+    """Object-space size of one lens in µm where every depth shares one lateral scale (object-side telecentric
+    optics, a microscope: pitch / M, :meth:`lfproc.camera.MainOptics.lateral_sampling_um`), ``None`` for a
+    photographic camera (its scale changes with depth)."""
+    return camera.main_optics.lateral_sampling_um(camera)
 
 
 def stack_path(outdir: str, stem: str, kind: str) -> str:
@@ -52,16 +49,12 @@ def stack_path(outdir: str, stem: str, kind: str) -> str:
     return os.path.join(outdir, stem + STACK_KINDS[kind])
 
 
-def stack_axis(records: list[dict]) -> tuple[np.ndarray, np.ndarray, str]:
-    """The stack's order (indices into ``records``), each slice's axial position and its unit:
-    ``z_um`` ascending for a microscope, else ``distance_mm`` in order of increasing ``a``."""
-    if records and all("z_um" in r for r in records):
-        z = np.array([r["z_um"] for r in records], dtype=np.float64)
-        order = np.argsort(z, kind="stable")
-        return order, z[order], "µm"
+def stack_axis(records: list[dict], space) -> tuple[np.ndarray, np.ndarray]:
+    """The stack's order (indices into ``records``: increasing ``a``) and each slice's position in ``space``
+    (the record's ``space.position_key``: ``z_um`` of a microscope, ``distance_mm`` of a camera; NaN without)."""
     a = np.array([r["a"] for r in records], dtype=np.float64)
     order = np.argsort(a, kind="stable")
-    return order, np.array([r.get("distance_mm", math.nan) for r in records], dtype=np.float64)[order], "mm"
+    return order, np.array([r.get(space.position_key, math.nan) for r in records], dtype=np.float64)[order]
 
 
 def z_spacing_um(z_um: np.ndarray) -> float:
@@ -72,7 +65,7 @@ def z_spacing_um(z_um: np.ndarray) -> float:
     return float(steps.mean()) if steps.mean() > 0 else 1.0
 
 
-def write_focal_stack(path: str, images: np.ndarray, records: list[dict], *, kind: str = "imagej",
+def write_focal_stack(path: str, images: np.ndarray, records: list[dict], space, *, kind: str = "imagej",
                       lens_um: float | None = None, upsample: int = 1) -> str:
     """Write the slices ``images`` (``(K, H, W, C)`` float32) as one z-stack file; returns ``path``.
 
@@ -84,9 +77,12 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], *, kin
         The refocused slices in the order of ``records``.
     records : list of dict
         Each slice's sidecar fields (``a`` and ``distance_mm``, or ``z_um`` for a microscope).
+    space : lfproc.camera.ObjectSpace
+        The space of the records' positions (``camera.main_optics.object_space``).
     kind : {"imagej", "ome"}
     lens_um : float or None
-        Object-space size of one lens in µm (:func:`lateral_um_per_lens`); ``None``: pixel units.
+        Object-space size of one lens in µm (:func:`lateral_um_per_lens`): the stack is then to scale, x, y and z
+        in µm; ``None``: pixel units.
     upsample : int
         The slices' upsampling: the pixel is ``lens_um / upsample``.
     """
@@ -96,17 +92,17 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], *, kin
     if images.ndim != 4 or images.shape[0] != len(records):
         raise LfprocError(f"{path}: a stack needs (K, H, W, C) slices, one per record; got {images.shape} "
                           f"for {len(records)} record(s)")
-    order, position, unit = stack_axis(records)
+    order, position = stack_axis(records, space)
     data = np.ascontiguousarray(np.moveaxis(images[order], 3, 1))        # (Z, C, Y, X)
     channels = data.shape[1]
     axes = "ZCYX" if channels > 1 else "ZYX"
     if channels == 1:
         data = data[:, 0]
-    metric = lens_um is not None and unit == "µm"
+    metric = lens_um is not None     # one lateral scale: x, y and the positions (in µm) to scale
     pixel = lens_um / upsample if metric else 1.0
-    dz = z_spacing_um(position) if metric else 1.0
+    dz = z_spacing_um(position * (1000.0 / space.per_mm)) if metric else 1.0
     ordered = [records[i] for i in order]
-    labels = [_label(r) for r in ordered for _ in range(channels)]
+    labels = [_label(r, space) for r in ordered for _ in range(channels)]
     info = json.dumps(json_safe({"slices": ordered, "pixel_um": pixel if metric else None,
                                  "z_spacing_um": dz if metric else None,
                                  "evenly_spaced": _even(position) if metric else None}), allow_nan=False)
@@ -119,7 +115,7 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], *, kin
             meta = {"axes": axes, "Description": info,
                     "Plane": {"PositionZ": [float(p) if math.isfinite(p) else 0.0 for p in position
                                             for _ in range(channels)],
-                              "PositionZUnit": [unit] * (len(position) * channels)}}
+                              "PositionZUnit": [space.symbol] * (len(position) * channels)}}
             if metric:
                 meta.update(PhysicalSizeX=pixel, PhysicalSizeXUnit="µm", PhysicalSizeY=pixel,
                             PhysicalSizeYUnit="µm", PhysicalSizeZ=dz, PhysicalSizeZUnit="µm")
@@ -136,8 +132,6 @@ def _even(z: np.ndarray) -> bool:
     return bool(np.ptp(steps) <= EVEN_TOLERANCE * max(abs(float(steps.mean())), 1e-12))
 
 
-def _label(record: dict) -> str:
-    if "z_um" in record:
-        return f"a={record['a']:.6g} z={record['z_um']:.6g} µm"
-    distance = record.get("distance_mm", math.nan)
-    return f"a={record['a']:.6g} d={'inf' if not math.isfinite(distance) else f'{distance:.6g}'} mm"
+def _label(record: dict, space) -> str:
+    position = record.get(space.position_key, math.nan)
+    return f"a={record['a']:.6g} {space.letter}={'inf' if not math.isfinite(position) else f'{position:.6g}'} {space.symbol}"

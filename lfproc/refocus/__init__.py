@@ -70,14 +70,14 @@ import sys
 import types
 
 from ._block import refocus_view_block, view_weight_inside
-from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, check_refocused_area, full_view_fraction,
+from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, full_view_fraction,
                         max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
 from ._sharpness import SHARPNESS_BAND, slice_sharpness
 
 __all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
            "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
-           "usable_a_bound", "check_refocused_area", "slice_sharpness", "SHARPNESS_BAND", "refocus_view_block",
+           "usable_a_bound", "slice_sharpness", "SHARPNESS_BAND", "refocus_view_block",
            "view_weight_inside"]
 
 

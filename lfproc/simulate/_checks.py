@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import Camera, MainLens
 from ..errors import LfprocError
 from ._sensor import MAX_SHOT_NOISE_PHOTONS
 
@@ -63,11 +63,13 @@ def _check_levels(low, high) -> None:
 
 
 def _require_f_number(camera: Camera) -> None:
-    # the tracer places a main lens's stop and principal planes at distances from the sensor: only optics whose
-    # object space is measured from the sensor have them (a microscope has its own renderer, _microscope.py)
-    if not camera.object_space.from_sensor:
-        camera.require_main_lens("this renderer (a main lens with its stop and planes at distances from the sensor)")
-    if camera.f_number is None:
+    # the tracer places a main lens's stop and principal planes at distances from the sensor: a main lens's own
+    # renderer (a microscope has its own, _microscope.py)
+    if not isinstance(camera.main_optics, MainLens):
+        raise LfprocError(f"{camera.source or 'camera'}: this renderer traces a main lens ([main_lens]), its stop and "
+                          f"planes at distances from the sensor; this camera's optics are a "
+                          f"{camera.main_optics.describe()}")
+    if camera.main_optics.f_number is None:
         raise LfprocError(f"{camera.source or 'camera'}: rendering needs the aperture stop; add "
                           f"main_lens.f_number to the camera")
 

@@ -23,8 +23,8 @@ def central_view_truth(setup, arrays) -> tuple[np.ndarray, np.ndarray]:
         return np.full(centers.shape[:2], -1, dtype=np.int64), np.full(centers.shape[:2], np.nan)
     camera = setup.camera
     s_mm = (centers - np.array(setup.axis_px)) * camera.pixel_pitch_mm
-    inv_d_a = 0.0 if camera.telecentric else 1.0 / camera.exit_pupil_distance_mm
-    labels, hit_z = _central_hits_kernel(np.ascontiguousarray(s_mm), inv_d_a, camera.image_distance_mm,
-                                         camera.main_focal_length_mm, *arrays.kernel_args()[:3])
+    inv_d_a = 0.0 if camera.telecentric else 1.0 / camera.main_optics.exit_pupil_distance_mm
+    labels, hit_z = _central_hits_kernel(np.ascontiguousarray(s_mm), inv_d_a, camera.main_optics.image_distance_mm,
+                                         camera.main_optics.focal_length_mm, *arrays.kernel_args()[:3])
     labels = np.where(labels >= 0, arrays.order[np.maximum(labels, 0)], -1).astype(np.int64)
-    return labels, hit_z + camera.sensor_to_main_lens_mm
+    return labels, hit_z + camera.main_optics.sensor_path_mm(camera.mla_path_mm)

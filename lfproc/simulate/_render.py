@@ -26,7 +26,7 @@ Ray model (one ray per sensor point x and micro lens aperture point t)
    The main lens rim, a circle of radius ``rim_radius_mm`` in the principal plane, blocks rays with
    ``|U|`` above it (vignetting).
 4. An object plane at distance D from the sensor lies at ``z = D − L`` with L the sensor-to-H1U path
-   (``Camera.sensor_to_main_lens_mm``). A ray takes the radiance of the nearest plane whose region it
+   (``MainLens.sensor_path_mm``). A ray takes the radiance of the nearest plane whose region it
    hits, else the background (:mod:`lfproc.simulate._scene`).
 
 Each pixel integrates stratified sub-samples over its area (``pixel_samples``² points) and over the
@@ -138,7 +138,7 @@ def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_de
         Also compute ``ideal_views`` and ``ideal_weight`` (about doubles the time).
     exit_pupil_distance_mm : float or None
         d_A, the exit pupil's distance in front of the micro lens array (mm); ``inf`` is telecentric,
-        ``None`` (the default) takes ``camera.exit_pupil_distance_mm``. The capture's ``camera``
+        ``None`` (the default) takes ``camera.main_optics.exit_pupil_distance_mm``. The capture's ``camera``
         carries the value used.
     progress : callable or None
         Called as ``progress(fraction_done, stage)`` after each band of rows (``stage`` is "capture",
@@ -168,7 +168,7 @@ def render(camera: Camera, scene: Scene, sensor_shape=(480, 640), *, rotation_de
                    pixel_samples=int(pixel_samples), aperture_samples=int(aperture_samples),
                    shot_noise_photons=shot_noise_photons, read_noise_dn=float(read_noise_dn),
                    exposure=float(exposure), seed=int(seed), ideal_views=bool(ideal_views),
-                   exit_pupil_distance_mm=camera.exit_pupil_distance_mm)
+                   exit_pupil_distance_mm=camera.main_optics.exit_pupil_distance_mm)
     labels, depth_mm = central_view_truth(setup, arrays)
     return SimulatedCapture(raw=raw, white=white, grid=setup.grid, camera=camera, ideal_views=views,
                             ideal_weight=weight, plane_label=labels, planes=scene.planes,

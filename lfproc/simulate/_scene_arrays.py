@@ -47,7 +47,7 @@ class SceneArrays:
 
     @classmethod
     def build(cls, scene: Scene, camera: Camera) -> SceneArrays:
-        inside = camera.sensor_to_main_lens_mm
+        inside = camera.main_optics.sensor_path_mm(camera.mla_path_mm)
         order = np.argsort([p.distance_mm for p in scene.planes], kind="stable").astype(np.int64)
         n = len(order)
         z = np.zeros(n)

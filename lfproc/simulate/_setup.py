@@ -4,7 +4,7 @@ The simulated lattices (:func:`default_grid` of the micro image centres, :func:`
 the lenses), the main lens rim (:func:`auto_rim_radius_mm`), the stratified sub-samples over a
 pixel and over a micro lens aperture, and :class:`_Setup`, which bundles them for the kernels.
 
-Exit pupil. With the exit pupil d_A in front of the micro lens array (``camera.exit_pupil_distance_mm``),
+Exit pupil. With the exit pupil d_A in front of the micro lens array (the main lens's ``exit_pupil_distance_mm``),
 the chief ray of the lens at height s comes from the pupil's centre and meets the sensor at
 s·(d_A + f_s)/d_A: the micro image centres form the lens lattice scaled by that factor about the
 optical axis (Hahne et al. 2018; :func:`micro_image_scale`). Telecentric (d_A = inf): factor 1.
@@ -75,9 +75,9 @@ def with_exit_pupil(camera: Camera, exit_pupil_distance_mm) -> Camera:
     if isinstance(d_a, bool) or not isinstance(d_a, (int, float)) or math.isnan(d_a) or d_a <= 0:
         raise LfprocError(f"exit_pupil_distance_mm must be a positive distance in mm, inf (telecentric) or None "
                           f"(the camera's), got {d_a!r}")
-    if float(d_a) == camera.exit_pupil_distance_mm:
+    if float(d_a) == camera.main_optics.exit_pupil_distance_mm:
         return camera
-    return replace(camera, exit_pupil_distance_mm=float(d_a))
+    return camera.with_optics(replace(camera.main_optics, exit_pupil_distance_mm=float(d_a)))
 
 
 def lens_grid_of(grid: LensGrid, camera: Camera, sensor_shape) -> LensGrid:
@@ -112,12 +112,13 @@ def auto_rim_radius_mm(camera: Camera, sensor_shape) -> float:
     _require_f_number(camera)
     rho = 0.5 * min(height, width) * camera.pixel_pitch_mm
     r_cell = camera.mla_pitch_mm * (1.0 / math.sqrt(2.0) if camera.grid == "rectangular" else 1.0 / math.sqrt(3.0))
-    f_s, b_u, d_a = camera.mla_focal_length_mm, camera.image_distance_mm, camera.exit_pupil_distance_mm
+    lens = camera.main_optics
+    f_s, b_u, d_a = camera.mla_focal_length_mm, lens.image_distance_mm, lens.exit_pupil_distance_mm
     if math.isinf(d_a):
-        max_slope = min(1.0 / (2.0 * camera.f_number), r_cell / f_s)
+        max_slope = min(1.0 / (2.0 * camera.main_optics.f_number), r_cell / f_s)
         return rho + r_cell + (f_s + b_u) * max_slope
     scale = micro_image_scale(camera)
-    max_delta = min(1.0 / (2.0 * camera.f_number) + r_cell / d_a, scale * r_cell / f_s)
+    max_delta = min(1.0 / (2.0 * camera.main_optics.f_number) + r_cell / d_a, scale * r_cell / f_s)
     return rho * abs(d_a - b_u) / (d_a + f_s) + r_cell + (f_s + b_u) * max_delta / scale
 
 
@@ -164,7 +165,7 @@ class _Setup:
         lattice = np.array([*grid.origin_xy_px, u[0], u[1], v[0], v[1], grid.pitch_px, grid.row_spacing_px,
                             1.0 if grid.kind == "hexagonal" else 0.0])
         axis = ((shape[1] - 1) / 2.0, (shape[0] - 1) / 2.0)
-        stop = 1.0 / (2.0 * camera.f_number)
+        stop = 1.0 / (2.0 * camera.main_optics.f_number)
         return cls(camera, shape, grid, lens_grid_of(grid, camera, shape), axis, rim, lattice,
                    pixel_offsets(n_pix),
                    aperture_offsets_mm(camera.grid, camera.mla_pitch_mm, float(rotation_deg), n_ap),
@@ -173,8 +174,9 @@ class _Setup:
     def optics_args(self):
         c = self.camera
         rim2 = self.rim_radius_mm ** 2 if math.isfinite(self.rim_radius_mm) else math.inf
-        inv_d_a = 0.0 if c.telecentric else 1.0 / c.exit_pupil_distance_mm
-        return (c.mla_focal_length_mm, c.image_distance_mm, c.main_focal_length_mm, self.max_slope2, rim2, inv_d_a)
+        inv_d_a = 0.0 if c.telecentric else 1.0 / c.main_optics.exit_pupil_distance_mm
+        lens = c.main_optics
+        return (c.mla_focal_length_mm, lens.image_distance_mm, lens.focal_length_mm, self.max_slope2, rim2, inv_d_a)
 
 
 def pixel_offsets(n: int) -> np.ndarray:

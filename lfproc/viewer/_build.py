@@ -70,7 +70,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     from ..provenance import provenance
 
     camera = lf.camera
-    space = camera.object_space
+    space = camera.main_optics.object_space
     focus = estimate_depth(lf, a_values, depth_map)
     extent = None if lf.view_mask is None else geometry.summed_view_extent(lf.view_mask)   # DOF of the views summed
     a_values = scene_slices(camera, focus, view_extent=extent) if a_values is None else \
@@ -148,8 +148,8 @@ def _view_stack(lf):
 def page_apertures(camera) -> list:
     """The synthetic apertures a page offers: ``None`` (every view with light), then 2, 4 and 8 times the
     main lens's f-number (two, four and six stops) while they hold more than the central view (one view
-    does not refocus; needs ``f_number``)."""
-    if camera.f_number is None:
+    does not refocus; needs ``f_number``: an objective's orthographic views have an NA, not f-numbers)."""
+    if geometry.place_views(camera, [0]).orthographic or camera.main_optics.view_pupil(camera).widest is None:
         return [None]
     widest, narrowest = geometry.aperture_limits(camera)
     return [None] + [widest * k for k in (2.0, 4.0, 8.0)
@@ -163,7 +163,7 @@ def _aperture_record(camera, stack, f_number, stem: str, folder: str, extension:
     view_mask = stack.view_mask
     extent, _ = summed_views_metadata(camera, view_mask)
     names = slice_names(stem, stack.a)
-    columns = [("a", stack.a)] + [(key, getattr(stack, key)) for key in camera.object_space.keys]
+    columns = [("a", stack.a)] + list(zip(stack.space.keys, (stack.depth, stack.near, stack.far, stack.dof)))
     slices = [dict({key: float(values[k]) for key, values in columns}, image=f"{folder}/{names[k]}{extension}")
               for k in range(len(stack))]
     n_views = stack.views_summed
@@ -186,19 +186,23 @@ def _view_records(camera, view_set, stem: str, extension: str) -> dict:
     object-space angle, ``tilt_deg``, turned likewise (objective + tube lens invert too).
     """
     optics = camera.main_optics
-    places = view_set.tilt_deg if optics.views_are_orthographic else view_set.position_mm
+    c = camera.center_index
+    views = geometry.place_views(camera)
+    places = view_set.tilt_deg if views.orthographic else view_set.position_mm
     items = [dict({key: value for key, value in record.items() if key not in ("source", "provenance")},
                   image=f"views/{view_name(stem, *view_set.view[k])}{extension}",
                   marker_mm=[-float(places[k][0]) + 0.0, -float(places[k][1]) + 0.0])
              for k, record in enumerate(view_set.records())]
-    c = camera.center_index
-    if optics.views_are_orthographic:   # an objective's views: placed by their angles inside its NA
-        angles = geometry.microscope_views(camera).angle_deg
-        return {"m_hat": camera.m_hat, "center": c, "lateral_sampling_um": geometry.lateral_sampling_um(camera),
-                "aperture_radius_deg": math.degrees(math.asin(optics.numerical_aperture / optics.immersion_index)),
-                "angle_step_deg": abs(float(angles[c + 1] - angles[c])) if c else 1.0, "items": items}
-    return {"m_hat": camera.m_hat, "center": c, "baseline_mm": geometry.baseline_mm(camera, 1),
-            "aperture_radius_mm": (camera.main_focal_length_mm / (2 * camera.f_number)) if camera.f_number else None,
+    if views.orthographic:   # an objective's views: placed by their angles inside its aperture
+        sine = optics.image_aperture_sine     # the stop's rim: the view whose image-side sine is the aperture's
+        rim = sine * camera.mla_focal_length_mm / math.sqrt(1.0 - sine * sine) / camera.sample_pitch_mm
+        return {"m_hat": camera.m_hat, "center": c, "lateral_sampling_um": optics.lateral_sampling_um(camera),
+                "aperture_radius_deg": abs(float(geometry.place_views(camera, [rim]).tilt_deg[0])),
+                "angle_step_deg": abs(float(views.tilt_deg[c + 1] - views.tilt_deg[c])) if c else 1.0,
+                "items": items}
+    pupil = optics.view_pupil(camera)
+    return {"m_hat": camera.m_hat, "center": c, "baseline_mm": views.baseline_mm,
+            "aperture_radius_mm": pupil.length / (2 * pupil.widest) if pupil.widest else None,
             "items": items}
 
 
@@ -207,16 +211,11 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
     on the scale)."""
     from ..colours import DEPTH_COLOURS
 
-    space = camera.object_space
+    space = camera.main_optics.object_space
     ticks = []
     for t in np.linspace(0.0, 1.0, 5):
-        a = a_far + t * (a_near - a_far)
-        if not space.from_sensor:   # signed depths, linear in a
-            z = float(a * geometry.z_per_a_um(camera))
-            ticks.append({"t": float(t), space.position_key: z, "label": f"{z:.3g} {space.symbol}"})
-            continue
-        distance = math.inf if a <= geometry.infinity_parameter(camera) else geometry.slice_distance_mm(camera, a)
-        ticks.append({"t": float(t), space.position_key: distance, "label": metres(distance)})
+        position = float(geometry.slice_positions(camera, a_far + t * (a_near - a_far)))
+        ticks.append({"t": float(t), space.position_key: position, "label": _position_label(space, position)})
     searched = f" over {len(focus.sweep_a)} slices (a {focus.sweep_a[0]:.3f} to {focus.sweep_a[-1]:.3f})" \
         if len(focus.sweep_a) else ""
     return {"image": "depth.png", "method": focus.method + searched,
@@ -224,41 +223,37 @@ def _depth_record(camera, focus, a_far: float, a_near: float) -> dict:
             "colour_scale": "linear in a (disparity), far = first colour, near = last; grey = low confidence"}
 
 
+def _position_label(space, position: float) -> str:
+    """A position on the page: distances (which reach infinity) in metres, signed depths in their unit."""
+    if space.toward_optics < 0:
+        return metres(position / space.per_mm)
+    return f"{position:.3g} {space.symbol}"
+
+
 def camera_summary(camera) -> list[list[str]]:
-    """(label, value) rows describing the camera for people: its main lens, or its objective's own numbers
-    (magnification, NA, immersion, tube lens: an objective is what makes the views orthographic)."""
-    if camera.main_optics.views_are_orthographic:
-        return _objective_summary(camera)
-    focus_mm = geometry.slice_distance_mm(camera, 0.0)
+    """(label, value) rows describing the camera for people: its main optics, where they focus at a = 0, the
+    micro lenses and pixels, how the views are spaced (the baseline of virtual cameras, or the lateral sampling
+    of orthographic views and how they are refocused) and the exit pupil."""
+    optics = camera.main_optics
+    space = optics.object_space
+    views = geometry.place_views(camera, [0])
     rows = [
         ("camera", camera.name or "(unnamed)"),
-        ("main lens", f"f = {camera.main_focal_length_mm:g} mm"
-                      + (f", f/{camera.f_number:g}" if camera.f_number else "")),
-        ("focused at (a = 0)", metres(focus_mm)),
+        ("main optics", optics.describe()),
+        ("focused at (a = 0)", f"{_position_label(space, float(geometry.slice_positions(camera, 0.0)))} "
+                               f"{space.origin.split(',')[0]}"),
         ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, "
                          f"f = {camera.mla_focal_length_mm:g} mm"),
         ("pixels", f"{camera.pixel_pitch_mm * 1000:g} µm ({camera.effective_pixel_pitch_mm * 1000:.3f} µm after "
                    f"resampling to {camera.m_hat} x {camera.m_hat} views)"),
-        ("baseline of adjacent views", f"{geometry.baseline_mm(camera, 1):.3f} mm"),
     ]
-    exit_pupil = camera.main_optics.exit_pupil_distance_mm
+    if views.orthographic:
+        rows += [("lateral sampling", f"{optics.lateral_sampling_um(camera):.4g} µm per lens in the sample"),
+                 ("refocusing", "paraxial" if geometry.refocus_slopes(camera) is None else "aplanatic (sine condition)")]
+    else:
+        rows.append(("baseline of adjacent views", f"{views.baseline_mm:.3f} mm"))
+    exit_pupil = optics.exit_pupil_distance_mm
     rows.append(("exit pupil", "telecentric (at infinity)" if not math.isfinite(exit_pupil) else f"{exit_pupil:g} mm"))
-    return [list(r) for r in rows]
-
-
-def _objective_summary(camera) -> list[list[str]]:
-    objective = camera.main_optics
-    rows = [
-        ("camera", camera.name or "(unnamed)"),
-        ("objective", f"{objective.objective_magnification:g}x / NA {objective.numerical_aperture:g}, immersion n = "
-                      f"{objective.immersion_index:g}, tube lens {objective.tube_lens_focal_length_mm:g} mm"),
-        ("focused at (a = 0)", "the native object plane (z = 0 µm)"),
-        ("micro lenses", f"{camera.grid}, pitch {camera.mla_pitch_mm * 1000:g} µm, "
-                         f"f = {camera.mla_focal_length_mm:g} mm"),
-        ("lateral sampling", f"{geometry.lateral_sampling_um(camera):.4g} µm per lens in the sample"),
-        ("depth per unit of a", f"{geometry.z_per_a_um(camera):.4g} µm"),
-        ("refocusing", "aplanatic (sine condition)" if geometry.uses_aplanatic(camera) else "paraxial"),
-    ]
     return [list(r) for r in rows]
 
 
@@ -291,11 +286,11 @@ def page_entry(outdir: str, page_dir: str) -> dict:
         data = json.load(fh)
     relative = os.path.relpath(page_dir, outdir).replace(os.sep, "/")
     middle = data["slices"][len(data["slices"]) // 2]
-    if data.get("unit") == "um":
-        depths = [s["z_um"] for s in data["slices"]]
-        span = f"{min(depths):.3g} to {max(depths):.3g} µm"
+    key = next(k for k in middle if k != "a")     # the slices' position key: distance_mm, z_um, …
+    positions = [math.inf if s[key] is None else s[key] for s in data["slices"]]
+    if key == "distance_mm":   # distances from the sensor, to infinity: in metres
+        span = f"{metres(min(positions))} to {metres(max(positions))}"
     else:
-        distances = [math.inf if s["distance_mm"] is None else s["distance_mm"] for s in data["slices"]]
-        span = f"{metres(min(distances))} to {metres(max(distances))}"
+        span = f"{min(positions):.3g} to {max(positions):.3g} {'µm' if data.get('unit') == 'um' else data.get('unit')}"
     return {"stem": data["stem"], "href": f"{relative}/index.html", "thumbnail": f"{relative}/{middle['image']}",
             "source": data["source"], "slices": len(data["slices"]), "range": span}

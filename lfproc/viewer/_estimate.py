@@ -55,9 +55,9 @@ def sweep_range(camera, lens_shape, a_values=None) -> tuple[float, float]:
         margin = 0.5 / c
         return float(np.min(a_values)) - margin, float(np.max(a_values)) + margin
     reach = min(lens_shape) / (3.0 * c)  # |a|·c lenses of shift at the outer views: a third of the image
-    if not camera.object_space.from_sensor:   # a microscope: no slice at infinity; the N_u resolvable depths, |a| <= 1
+    a_inf = camera.main_optics.usable_range(camera).low
+    if not np.isfinite(a_inf):   # no slice at infinity (a microscope): the N_u resolvable depths, |a| <= 1
         return -min(1.0, reach), min(1.0, reach)
-    a_inf = geometry.infinity_parameter(camera)
     lo = max(a_inf, -reach)
     return lo, max(lo, min(a_inf + DEFAULT_SPAN_A, reach))
 

@@ -64,7 +64,7 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
     facts = [["source", os.path.abspath(path)], ["holds", ", ".join(picture.contents)]]
     if mapping:
         facts += [["camera", f"Lytro {meta.model}" + (f", serial {meta.serial}" if meta.serial else "")],
-                  ["main lens", f"f = {mapping.camera.main_focal_length_mm:.2f} mm, f/{mapping.f_number:.2f}"],
+                  ["main lens", f"f = {mapping.focal_length_mm:.2f} mm, f/{mapping.f_number:.2f}"],
                   ["distances", "derived from lambda (docs/lytro.md)"]]
     else:
         facts.append(["distances", f"unknown: {why}"])

@@ -23,24 +23,17 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) 
     a_lo, a_hi = (float(v) for v in np.percentile(a, [2, 98]))
     c = max(camera.center_index, 1)  # widened by half a DOF, about (1 + |a|)/(2c) in a, against estimate errors
     a_lo, a_hi = a_lo - (1 + abs(a_lo)) / (2 * c), a_hi + (1 + abs(a_hi)) / (2 * c)
-    if not camera.object_space.from_sensor:   # signed depths (µm from the native plane), as --z-range
-        zeta = geometry.z_per_a_um(camera)
-        try:
-            planned = geometry.plan_z_range(camera, a_lo * zeta, a_hi * zeta, max_slices=4 * max_slices)
-        except LfprocError:   # more than 4x the page's slices: even steps in a
-            planned = np.linspace(a_lo, a_hi, max_slices)
-        if len(planned) > max_slices:
-            planned = np.linspace(planned[0], planned[-1], max_slices)
-        return np.asarray(planned, dtype=np.float64)
-    a_inf = geometry.infinity_parameter(camera)
-    far = math.inf if a_lo <= a_inf else geometry.slice_distance_mm(camera, a_lo)
-    near = geometry.slice_distance_mm(camera, max(a_hi, a_inf + 1e-6))
-    near = min(near, far) if math.isfinite(near) else geometry.slice_distance_mm(camera, a_inf + 1.0)
+    usable = camera.main_optics.usable_range(camera)
+    far = float(geometry.slice_positions(camera, a_lo))
+    near = float(geometry.slice_positions(camera, max(a_hi, usable.low + 1e-6)))
+    if not np.isfinite(near):   # a near end beyond the optics' range: one unit of a in from its far end
+        near = float(geometry.slice_positions(camera, usable.low + 1.0))
+    near = float(camera.main_optics.object_space.nearer(near, far))
     try:  # covers what can be covered (DOFs that shrink to nothing are left out, far part first)
         planned = geometry.plan_depth_range(camera, near, far, max_slices=4 * max_slices, view_extent=view_extent).a
     except LfprocError:  # nothing coverable: even steps in a
         planned = np.array([])
-    if len(planned) == 0:   # within the real slices (infinity to the front focal plane), as focal_stack takes them
+    if len(planned) == 0:   # within the real slices (e.g. infinity to the front focal plane), as focal_stack takes them
         low, high = geometry.usable_a_range(camera)
         a_lo, a_hi = min(max(a_lo, low), high), min(max(a_hi, low), high)
         planned = np.unique(np.linspace(a_lo, a_hi, int(np.clip(np.ceil((a_hi - a_lo) * c) + 1, 2, max_slices))))
@@ -52,12 +45,8 @@ def scene_slices(camera, focus, max_slices: int = MAX_SLICES, view_extent=None) 
 def slice_intervals_a(camera, a_values, view_extent=None) -> np.ndarray:
     """``(K, 2)``: each slice's DOF as an interval of ``a`` (far limit's a, near limit's a; Eq. 31 inverted)."""
     geo = geometry.slice_geometry(camera, np.atleast_1d(np.asarray(a_values, dtype=np.float64)), view_extent)
-    if not geo.space.from_sensor:   # signed depths (a microscope's z), linear in a
-        zeta = geometry.z_per_a_um(camera)
-        return np.stack([geo.z_far_um / zeta, geo.z_near_um / zeta], axis=1)
-    a_inf = geometry.infinity_parameter(camera)
-    far_a = [a_inf if not math.isfinite(f) else geometry.refocus_parameter(camera, f) for f in geo.far_mm]
-    near_a = [geometry.refocus_parameter(camera, n) for n in geo.near_mm]
+    far_a = np.atleast_1d(geometry.position_parameter(camera, geo.far))
+    near_a = np.atleast_1d(geometry.position_parameter(camera, geo.near))
     return np.stack([np.minimum(far_a, near_a), np.maximum(far_a, near_a)], axis=1)
 
 

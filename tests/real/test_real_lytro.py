@@ -58,7 +58,7 @@ def test_real_illum_picture_camera(illum, tmp_path, capsys):
     status, _, err = cli(capsys, "camera", path, "-o", tmp_path / "illum.toml")
     assert status == 0, err
     cam = Camera.from_toml(tmp_path / "illum.toml")
-    assert round(cam.main_focal_length_mm, 3) == 13.886 and round(cam.f_number, 3) == 2.082
+    assert round(cam.main_optics.focal_length_mm, 3) == 13.886 and round(cam.main_optics.f_number, 3) == 2.082
     assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.0014, 0.02, 0.037)
     assert cam.grid == "hexagonal" and cam.telecentric            # exitPupilOffset.z 10000 m
     text = (tmp_path / "illum.toml").read_text()
@@ -113,8 +113,8 @@ def test_real_first_generation_stack(real_dir, tmp_path, capsys):
     cam = Camera.from_toml(tmp_path / "f01.toml")
     for k, lam in enumerate(lambdas):
         sidecar = json.loads((tmp_path / "mm" / f"f01-IMG_0001-stk_stack_{k:02d}.json").read_text())
-        expected = newton_distance(lam, f_u=cam.main_focal_length_mm, n=cam.f_number, p_m=cam.mla_pitch_mm,
-                                   f_s=cam.mla_focal_length_mm, b_u=cam.image_distance_mm)
+        expected = newton_distance(lam, f_u=cam.main_optics.focal_length_mm, n=cam.main_optics.f_number, p_m=cam.mla_pitch_mm,
+                                   f_s=cam.mla_focal_length_mm, b_u=cam.main_optics.image_distance_mm)
         assert (sidecar["distance_mm"] is None) == math.isinf(expected)
         if math.isfinite(expected):
             assert sidecar["distance_mm"] == pytest.approx(expected, rel=1e-9)
@@ -166,7 +166,7 @@ def test_real_napari_metadata(real_dir, tmp_path, capsys):
     status, _, err = cli(capsys, "camera", real_dir / "lfm-seaurchin" / "metadata.txt", "-o", tmp_path / "lfm.toml")
     assert status == 0, err
     cam = Camera.from_toml(tmp_path / "lfm.toml")
-    scope = cam.microscope
+    scope = cam.main_optics
     assert (cam.pixel_pitch_mm, cam.mla_pitch_mm, cam.mla_focal_length_mm) == (0.0074, 0.125, 2.433)
     assert (scope.objective_magnification, scope.numerical_aperture, scope.immersion_index) == (20, 0.5, 1.33)
     assert (scope.tube_lens_focal_length_mm, scope.wavelength_nm, scope.relay_magnification) == (200, 482, 1)
