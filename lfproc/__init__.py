@@ -29,6 +29,7 @@ _LAZY = {
     # the Python API (contract): light to import, heavy only when called
     "read_light_field": ("lfproc.api", "read_light_field"),
     "calibrate_white": ("lfproc.api", "calibrate_white"),
+    "prepare_decoding": ("lfproc.api", "prepare_decoding"),
     "focal_stack": ("lfproc.api", "focal_stack"),
     "view_stack": ("lfproc.api", "view_stack"),
     "depth_map": ("lfproc.api", "depth_map"),

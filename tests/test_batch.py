@@ -53,10 +53,10 @@ N_VIEWS = 49
 
 def files_per_capture(data) -> int:
     """Slices and the views that carry light (the only ones written), each with its sidecar."""
-    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.api import prepare_decoding
 
     camera = Camera.from_toml(data / "camera.toml")
-    lf = load_lightfield(str(data / "captures" / "cap0.png"), prepare_decoding(camera, white=str(data / "white.png")))
+    lf = prepare_decoding(camera, white=str(data / "white.png"), cache=True).decode(str(data / "captures" / "cap0.png"))
     lit = N_VIEWS if lf.view_mask is None else int(lf.view_mask.sum())
     return 2 * (len(REFOCUS.split(",")) + lit)
 BOOKKEEPING = {batch.MANIFEST_NAME, batch.LOCK_NAME}
@@ -506,3 +506,25 @@ def test_calib_only_fingerprints_the_recorded_white_image(data, tmp_path):
     os.utime(white, ns=(1, 1))  # the recorded white image changed: the capture is redone
     assert run_cli(*argv).returncode == 0
     assert json.loads((out / batch.MANIFEST_NAME).read_text())["summary"]["done"] == 1
+
+
+def test_warnings_are_recorded_per_capture_and_summed_up_once(data, tmp_path, capsys):
+    """Every LfprocWarning a capture gives is in its manifest entry, worded for the command line; the command
+    says how many captures warned and each distinct warning once (here a = 1.5: fewer than half the pixels of
+    these 21 x 28 lenses average all views, for every capture alike)."""
+    inputs = [str(data / "captures" / name) for name in ("cap0.png", "cap1.png")]
+    out = tmp_path / "out"
+    argv = ["batch", *inputs, "--camera", str(data / "camera.toml"), "--white", str(data / "white.png"),
+            "--a", "0,1.5", "--workers", "1", "-o", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    entries = manifest(out)["captures"]
+    for source in inputs:
+        said = entries[source]["warnings"]
+        assert len(said) == 1 and said[0].startswith(f"{source}: in 1 slice(s) (up to a=+1.5) fewer than half"), said
+    assert manifest(out)["summary"]["warned"] == 2
+    assert "2 of 2 captures processed warned" in err
+    assert err.count("fewer than half the pixels") == 1 and "(and 1 more capture(s) alike)" in err
+    assert main(argv) == 0                       # a rerun skips both: nothing new to say, the entries keep theirs
+    assert "warned" not in capsys.readouterr().err
+    assert [entries[s]["warnings"] for s in inputs] == [manifest(out)["captures"][s]["warnings"] for s in inputs]

@@ -16,7 +16,7 @@ import lfproc
 from lfproc import Camera, LensGrid
 from lfproc import decoder_cache as dc
 from lfproc.io import write_image
-from lfproc.pipeline import DecodeSetup, load_lightfield, prepare_decoding
+from lfproc.api import DecodeSetup, prepare_decoding
 
 GRID = LensGrid("hexagonal", 9.0, 0.4, (6.3, 5.8), 9, 12)
 SHAPE = (84, 116)
@@ -52,8 +52,8 @@ def folder(tmp_path, monkeypatch):
 
 
 def decode_with_calib(folder, camera=None, **options):
-    setup = prepare_decoding(camera or tiny_camera(), calib=str(folder / "grid.json"), **options)
-    return load_lightfield(str(folder / "capture.png"), setup)
+    setup = prepare_decoding(camera or tiny_camera(), grid=str(folder / "grid.json"), **options, cache=True)
+    return setup.decode(str(folder / "capture.png"))
 
 
 def cache_entries():
@@ -79,7 +79,7 @@ def test_second_decode_reuses_the_entry_and_gives_the_same_views(folder, monkeyp
 
 def test_cached_decoder_equals_a_fresh_one_field_by_field(folder):
     """Every field of the stored decoder (arrays, grids, settings) comes back exactly (generic by field)."""
-    setup = prepare_decoding(tiny_camera(), calib=str(folder / "grid.json"))
+    setup = prepare_decoding(tiny_camera(), grid=str(folder / "grid.json"), cache=True)
     fresh = setup._make_decoder((), "none")
     key = setup._cache_key((), "none")
     path = os.path.join(dc.cache_dir(), key + ".lfdec")
@@ -150,9 +150,9 @@ def test_every_input_of_the_state_is_in_the_key(folder, monkeypatch, change):
     elif change == "m_hat":
         after = key_of(folder, tiny_camera(micro_image_px=5))
     elif change == "interpolation":
-        after = key_of(folder, interpolation="cubic")
+        after = key_of(folder, decode_interpolation="cubic")
     elif change == "demosaic":
-        after = key_of(folder, demosaic_method="careful")
+        after = key_of(folder, demosaic="careful")
     elif change == "version":
         monkeypatch.setattr(lfproc, "__version__", lfproc.__version__ + ".post1")
         after = key_of(folder)
@@ -209,13 +209,13 @@ def test_failed_write_leaves_no_entry_and_no_temporary_file(folder, monkeypatch)
 
 
 def test_corrupt_or_foreign_entry_is_replaced(folder):
-    setup = prepare_decoding(tiny_camera(), calib=str(folder / "grid.json"))
+    setup = prepare_decoding(tiny_camera(), grid=str(folder / "grid.json"), cache=True)
     key = setup._cache_key((), "none")
     path = os.path.join(dc.cache_dir(), key + ".lfdec")
     good = open(path, "rb").read()
     open(path, "wb").write(good[: len(good) // 2])     # truncated (a disk error; never by lfproc itself)
     assert dc.load(path, key, type(setup.decoder_for((), "none"))) is None
-    first = load_lightfield(str(folder / "capture.png"), setup)
+    first = setup.decode(str(folder / "capture.png"))
     again = decode_with_calib(folder)                  # re-derived and stored whole again
     assert open(path, "rb").read() == good
     assert again.views.tobytes() == first.views.tobytes()

@@ -10,7 +10,7 @@ from conftest import assert_clean_error, run_cli
 from PIL import Image
 
 from lfproc.camera import Camera
-from lfproc.pipeline import load_lightfield, prepare_decoding
+from lfproc.api import prepare_decoding
 
 # an 8-bit monochrome camera (the sample's optics): a pedestal of 16-24 DN is 6-9 % of its range
 CAM = Camera(pixel_pitch_mm=0.009, mla_pitch_mm=0.1, mla_focal_length_mm=0.4, main_focal_length_mm=50.0,
@@ -41,8 +41,8 @@ def files(tmp_path_factory):
 
 
 def _views(capture, white, dark=None, calib=None):
-    setup = prepare_decoding(CAM, calib, white, dark=dark, captures=[capture])
-    lf = load_lightfield(capture, setup)
+    setup = prepare_decoding(CAM, white=white, grid=calib, dark=dark, captures=[capture], cache=True)
+    lf = setup.decode(capture)
     return lf.views[..., 0], lf
 
 
