@@ -254,7 +254,7 @@ def test_cache_is_bounded_least_recently_used_first(folder, monkeypatch):
     (entry,) = cache_entries()
     size = dc.disk_bytes(entry)
     monkeypatch.setenv("LFPROC_CACHE_MAX_GB", str(1.5 * size / 1e9))
-    decode_with_calib(folder, interpolation="nearest")     # a second entry: the first one goes
+    decode_with_calib(folder, decode_interpolation="nearest")     # a second entry: the first one goes
     (left,) = cache_entries()
     assert left != entry
     assert dc.clear() == 1 and cache_entries() == []

@@ -132,7 +132,8 @@ def _probe(value, camera, what: str):
 
 
 def _existing(path, what: str) -> str:
-    if not os.path.isfile(path):
+    """``path`` if something is there (the readers word a folder or an unreadable file), else one line."""
+    if not os.path.exists(path):
         raise LfprocError(f"{os.fspath(path)}: no such file (given as {what}=); check the path")
     return os.fspath(path)
 

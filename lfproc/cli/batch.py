@@ -249,7 +249,7 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
                        failed_captures=[{"source": s, "error": e} for s, e in failures])
         manifest.save(summary)
     print(format_summary(summary, manifest.path))
-    if warned:
+    if warned and not interrupted:     # interrupted: one line says so (the manifest has the warnings)
         print(warnings_summary(warned, counts["done"] + counts["failed"]), file=sys.stderr)
     if interrupted:
         left = len(jobs) - counts["done"] - counts["skipped"] - counts["failed"]

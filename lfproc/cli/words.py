@@ -53,6 +53,8 @@ FLAGS = {
 #: also gave the Python spelling before the library spoke Python)
 PHRASES = {
     "lfproc.calibrate_white(white, camera).save(path)": "lfproc calibrate WHITE --camera CAM -o GRID.json",
+    "lfproc.read_light_field(...).save(path)": "'lfproc decode'",
+    "check the grid (lfproc.calibrate_white)": "check the grid (lfproc calibrate)",
     "(a LensGrid from lfproc.calibrate_white, or its saved file)": "(from lfproc calibrate)",
     "as white=, or pass white_is_white=True": "as WHITE, or pass --white-is-white",
     "pass the white image as white= and": "pass the white image as WHITE (--white) and",
