@@ -40,6 +40,7 @@ of an earlier run that this run did not measure are kept); ``--markdown`` prints
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -105,20 +106,23 @@ def illum_grid(camera):
 
 
 def make_capture(folder: Path) -> None:
-    """White image, capture, camera and exact grid file of the Illum-like sensor (kept if already there)."""
-    from lfproc.atomic import write_json_atomic
+    """White image, capture, camera and exact grid file of the Illum-like sensor (kept if already there); the
+    grid file is laid out as ``lfproc calibrate`` writes it (one key per line), with the exact lattice."""
+    from lfproc.gridfile import Calibration
     from lfproc.io import write_image
 
     names = ("white.png", "capture.png", "camera.toml", "grid.json")
-    if all((folder / name).is_file() for name in names):
+    if all((folder / name).is_file() for name in names) and '"centers_xy_px": [[' in (folder / "grid.json").read_text():
         return
     camera = illum_camera()
     grid = illum_grid(camera)
-    white, capture = illum_frames(grid)
-    write_image(folder / "white.png", white)
-    write_image(folder / "capture.png", capture)
+    if not all((folder / name).is_file() for name in names[:2]):
+        white, capture = illum_frames(grid)
+        write_image(folder / "white.png", white)
+        write_image(folder / "capture.png", capture)
     (folder / "camera.toml").write_text(camera.to_toml())
-    write_json_atomic(folder / "grid.json", dict(grid.to_json_dict(), white_image=str(folder / "white.png")))
+    exact = dataclasses.replace(grid, calibration=Calibration(white_image=str(folder / "white.png")))
+    exact.save(folder / "grid.json")
 
 
 # ----------------------------------------------------------------------------- measuring
