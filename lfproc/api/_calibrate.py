@@ -54,8 +54,8 @@ def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -
     from ._read import _camera, _capture, _probe
 
     camera = _camera(camera)
-    white_facts = _probe(white, camera, "white")   # headers first: a bad file fails before any pixel is read
-    dark_facts = None if dark is None else _probe(dark, camera, "dark")
+    white_facts = _probe(white, camera)   # headers first: a bad file fails before any pixel is read
+    dark_facts = None if dark is None else _probe(dark, camera)
     if dark_facts is not None:
         check_same_sensor(dark_facts, white_facts, "dark frame", "white image")
     dark_capture = None if dark is None else _capture(dark, camera, "dark")

@@ -94,7 +94,7 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
         check_grid_fits_camera(camera, grid)
     white_path = os.fspath(white) if isinstance(white, _PATH) else _recorded_white(grid) if white is None else None
     white_capture = None if white is None or white_path is not None else _capture(white, camera, "white")
-    white_facts = _probe(white_path, camera, "white") if white_path else \
+    white_facts = _probe(white_path, camera) if white_path else \
         ImageFacts.of_capture(white_capture) if white_capture is not None else None
     recorded = reference_facts(grid)
     if white_facts is not None and recorded is not None:
@@ -103,7 +103,7 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     dark_path = _dark_for(dark, grid)
     dark_capture = None if dark is None or dark_path is not None else _capture(dark, camera, "dark")
     if dark_path is not None or dark_capture is not None:
-        dark_facts = _probe(dark_path, camera, "dark") if dark_path else ImageFacts.of_capture(dark_capture)
+        dark_facts = _probe(dark_path, camera) if dark_path else ImageFacts.of_capture(dark_capture)
         check_same_sensor(dark_facts, reference, "dark frame", _reference_what(reference, white_facts, grid))
     _check_capture_headers(captures, camera, reference, grid, _reference_what(reference, white_facts, grid))
     white_metadata = lytro_metadata_of(white_path)

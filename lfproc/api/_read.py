@@ -111,7 +111,7 @@ def _capture(value, camera, what: str):
     if isinstance(value, _PATH):
         from ..io import read_capture
 
-        return read_capture(_existing(value, what), camera)
+        return read_capture(os.fspath(value), camera)
     if isinstance(value, Capture):
         return value
     data = np.asarray(value)
@@ -124,18 +124,12 @@ def _capture(value, camera, what: str):
     return Capture(np.ascontiguousarray(data, dtype=np.float32), cfa, f"{what} array")
 
 
-def _probe(value, camera, what: str):
-    """The header facts (`lfproc.inputs.ImageFacts`) of a file given as ``what=``; None for an array."""
+def _probe(value, camera):
+    """The header facts (`lfproc.inputs.ImageFacts`) of a file (a missing file or a folder refused in one line);
+    None for an array."""
     from ..inputs import probe_image
 
-    return probe_image(_existing(value, what), camera) if isinstance(value, _PATH) else None
-
-
-def _existing(path, what: str) -> str:
-    """``path`` if something is there (the readers word a folder or an unreadable file), else one line."""
-    if not os.path.exists(path):
-        raise LfprocError(f"{os.fspath(path)}: no such file (given as {what}=); check the path")
-    return os.fspath(path)
+    return probe_image(os.fspath(value), camera) if isinstance(value, _PATH) else None
 
 
 def _camera(camera, capture=None) -> Camera:
