@@ -117,7 +117,8 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     if dark_path is not None:
         dark_capture = read_capture(dark_path, camera)
     if grid is None:
-        white_capture = subtract_dark(white_capture or read_capture(white_path, camera), dark_capture, "white image")
+        white_capture = subtract_dark(read_capture(white_path, camera) if white_capture is None else white_capture,
+                                      dark_capture, "white image")
         grid = fit_grid(white_capture, camera, dark_capture, white_is_white=white_is_white, stacklevel=3)
     elif white_capture is not None:
         white_capture = subtract_dark(white_capture, dark_capture, "white image")
@@ -126,10 +127,12 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
         warnings.warn(f"{_name(grid)}: no white image available (recorded: {recorded_white}); decoding without "
                       f"devignetting; pass white=... to correct vignetting", LfprocWarning, stacklevel=2)
     measured = measured_m_hat(camera, grid.pitch_px, grid.source or "the calibration")
-    setup = DecodeSetup(measured.camera, grid, white_capture, white_path, dark_capture, reference,
-                        file_inputs(camera=camera_file(camera), grid=grid.source, white=white_path, dark=dark_path),
-                        decode_interpolation, demosaic, cache, white_is_white, white_metadata, white_note,
-                        measured.note)
+    setup = DecodeSetup(measured.camera, grid, white=white_capture, white_path=white_path, dark=dark_capture,
+                        reference=reference, inputs=file_inputs(camera=camera_file(camera), grid=grid.source,
+                                                                white=white_path, dark=dark_path),
+                        decode_interpolation=decode_interpolation, demosaic=demosaic, cache=cache,
+                        white_is_white=white_is_white, white_metadata=white_metadata, white_note=white_note,
+                        m_hat_note=measured.note)
     setup.prepare()
     # the decoder holds what decoding needs of the white image: its pixels need not stay in memory (nor travel
     # to batch workers); the file is read again only if the decoder must be derived again
