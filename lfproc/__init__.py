@@ -30,6 +30,7 @@ _LAZY = {
     "read_camera": ("lfproc.io", "read_camera"),
     "read_light_field": ("lfproc.api", "read_light_field"),
     "calibrate_white": ("lfproc.api", "calibrate_white"),
+    "prepare_decoding": ("lfproc.api", "prepare_decoding"),
     "focal_stack": ("lfproc.api", "focal_stack"),
     "view_stack": ("lfproc.api", "view_stack"),
     "depth_map": ("lfproc.api", "depth_map"),

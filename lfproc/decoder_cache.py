@@ -108,8 +108,11 @@ def clear(folder: str | None = None) -> int:
 
 # ----------------------------------------------------------------------------- key
 def file_digest(path: str) -> str:
-    """SHA-256 of a file's bytes, with those of a Lytro raw's metadata file (``NAME.txt``/``.json``) beside it."""
-    sha = hashlib.sha256()
+    """SHA-256 of a file's SHA-256 (:func:`lfproc.provenance.sha256_of`: once per file and process) and of the
+    bytes of a Lytro raw's metadata file (``NAME.txt``/``.json``) beside it."""
+    from .provenance import sha256_of
+
+    sha = hashlib.sha256(sha256_of(path).encode() + b"\0")
     stem, ext = os.path.splitext(os.path.abspath(path))
     companions = []
     if ext.lower() == ".raw":
@@ -117,7 +120,7 @@ def file_digest(path: str) -> str:
         companions = sorted(os.path.join(folder, name) for name in os.listdir(folder)
                             if os.path.splitext(name)[0] == os.path.basename(stem)
                             and os.path.splitext(name)[1].lower() in (".txt", ".json"))
-    for name in (path, *companions):
+    for name in companions:
         with open(name, "rb") as fh:
             for block in iter(lambda: fh.read(1 << 22), b""):
                 sha.update(block)

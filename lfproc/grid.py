@@ -10,16 +10,23 @@ by +90°. Lens (r, q) — row r, column q — sits at
 A non-rigid lattice (a micro lens array that is not perfectly regular, or distorted optics) adds a smooth
 `SmoothDeviation` to these rigid positions: lens centre = rigid position p + D(p), where D is a
 polynomial in the sensor position p (so it does not depend on how the lenses are numbered).
+
+A grid fitted to a white image (`lfproc.calibrate_white`) carries its `lfproc.gridfile.Calibration`: what
+it was fitted from and what the fit measured. `LensGrid.save` writes the grid file (GRID.json, what ``lfproc
+calibrate`` writes) and `LensGrid.load` reads one back, with its calibration and the file it came from
+(`lfproc.gridfile`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import LfprocError
+from .gridfile import MAKE_GRID, Calibration
 
 ROW_SPACING = {"rectangular": 1.0, "hexagonal": math.sqrt(3.0) / 2.0}
 
@@ -82,6 +89,9 @@ class SmoothDeviation:
                    half_size_px=tuple(data["half_size_px"]), coeffs_x=tuple(data["coeffs_x"]),
                    coeffs_y=tuple(data["coeffs_y"]))
 
+    def __repr__(self) -> str:
+        return f"SmoothDeviation(degree {self.degree}, {len(self.coeffs_x) + len(self.coeffs_y)} coefficients)"
+
 
 @dataclass(frozen=True)
 class LensGrid:
@@ -103,6 +113,11 @@ class LensGrid:
     deviation : SmoothDeviation or None
         Smooth offsets of the lens centres from the rigid lattice (a non-rigid lattice); ``None`` = rigid.
         ``pitch_px``, ``rotation_deg`` and ``origin_xy_px`` then describe the best rigid lattice.
+    calibration : Calibration or None
+        What the grid was fitted from (`lfproc.calibrate_white`, or a grid file's record); None for a
+        lattice made otherwise. Not part of the lattice: grids compare equal without it.
+    source : str or None
+        The grid file it was read from (`load`), for messages and provenance; None otherwise.
     """
 
     kind: str
@@ -113,6 +128,8 @@ class LensGrid:
     cols: int
     residual_rms_px: float = 0.0
     deviation: SmoothDeviation | None = None
+    calibration: Calibration | None = field(default=None, compare=False)
+    source: str | None = field(default=None, compare=False)
 
     @property
     def model(self) -> str:
@@ -188,6 +205,7 @@ class LensGrid:
 
     @classmethod
     def from_json_dict(cls, data: dict, source: str = "grid") -> LensGrid:
+        """The lattice of :meth:`to_json_dict`'s ``data`` (its calibration is :meth:`load`'s)."""
         try:
             return cls(kind=str(data["grid"]), pitch_px=float(data["pitch_px"]),
                        rotation_deg=float(data["rotation_deg"]),
@@ -197,7 +215,30 @@ class LensGrid:
                        deviation=(None if data.get("deviation") is None
                                   else SmoothDeviation.from_json_dict(data["deviation"])))
         except (KeyError, TypeError, ValueError, OverflowError, AttributeError) as exc:
-            raise LfprocError(f"{source}: not a grid file written by 'lfproc calibrate' ({exc!r}); "
-                              f"run lfproc calibrate again") from None
+            raise LfprocError(f"{source}: not a lens grid ({exc!r}); fit the grid again with {MAKE_GRID}") from None
         except LfprocError as exc:
-            raise LfprocError(f"{source}: {exc}; run lfproc calibrate again") from None
+            raise LfprocError(f"{source}: {exc}; fit the grid again with {MAKE_GRID}") from None
+
+    def save(self, path) -> None:
+        """Write the grid file ``path`` (GRID.json, atomically): the lattice, its centres and the calibration,
+        exactly what ``lfproc calibrate -o`` writes for the same inputs (`lfproc.gridfile.write_grid_file`)."""
+        from .gridfile import write_grid_file
+
+        write_grid_file(path, dict(self.to_json_dict(),
+                                   **({} if self.calibration is None else self.calibration.to_json_dict())))
+
+    @classmethod
+    def load(cls, path) -> LensGrid:
+        """A grid file written by :meth:`save` or ``lfproc calibrate`` (any version), with its calibration and
+        ``source`` (the path); one-line errors naming the file (`lfproc.gridfile.read_grid_file`)."""
+        from .gridfile import read_grid_file
+
+        data = read_grid_file(path)
+        lattice = cls.from_json_dict(data, source=str(path))
+        calibration = Calibration.from_json_dict(data, lattice.pitch_px, str(path))
+        return dataclasses.replace(lattice, calibration=calibration, source=str(path))
+
+    def __repr__(self) -> str:
+        made = "" if self.calibration is None else f", fitted to {self.calibration.white_image or 'an array'}"
+        return (f"LensGrid({self.kind}, {self.rows} x {self.cols} lenses, pitch {self.pitch_px:.4f} px, rotation "
+                f"{self.rotation_deg:.4f} deg, {self.model}{made})")

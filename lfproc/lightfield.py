@@ -28,6 +28,9 @@ from .camera import Camera
 from .errors import LfprocError
 from .grid import LensGrid
 
+#: how a message tells a Python caller to write a light field file (the commands word it as `lfproc decode`)
+SAVE_AGAIN = "lfproc.read_light_field(...).save(path)"
+
 FILE_FORMAT = "lfproc-lightfield-1"
 
 
@@ -213,7 +216,7 @@ class LightField:
         grid = LensGrid.from_json_dict(_grid_document(grid_json, path), source=path) if grid_json else None
         if views.dtype.kind not in "fiub":
             raise LfprocError(f"{path}: its views are {views.dtype} data, not numbers; write it again with "
-                              f"'lfproc decode'")
+                              f"{SAVE_AGAIN}")
         centre = members.get("view_centre")
         inputs = {"light_field": path, **_stored_inputs(members.get("inputs_json"), path)}
         return cls.from_views(views, camera, grid, members.get("view_mask"), None if centre is None else
@@ -230,7 +233,7 @@ def _stored_inputs(member, path: str) -> dict:
         records = {str(role): {"path": str(r["path"]), "sha256": str(r["sha256"])} for role, r in stored.items()
                    if role != "light_field"}
     except (ValueError, TypeError, KeyError, AttributeError):
-        raise LfprocError(f"{path}: its inputs_json record is damaged; write it again with 'lfproc decode'") from None
+        raise LfprocError(f"{path}: its inputs_json record is damaged; write it again with {SAVE_AGAIN}") from None
     return records
 
 
@@ -244,9 +247,9 @@ def _grid_document(grid_json: str, path: str) -> dict:
     try:
         document = json.loads(grid_json)
     except ValueError as exc:
-        raise LfprocError(f"{path}: its grid_json is not JSON ({exc}); write it again with 'lfproc decode'") from None
+        raise LfprocError(f"{path}: its grid_json is not JSON ({exc}); write it again with {SAVE_AGAIN}") from None
     if not isinstance(document, dict):
-        raise LfprocError(f"{path}: its grid_json is not a grid; write it again with 'lfproc decode'")
+        raise LfprocError(f"{path}: its grid_json is not a grid; write it again with {SAVE_AGAIN}")
     return document
 
 
@@ -261,15 +264,15 @@ def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
         with zipfile.ZipFile(path) as archive:
             infos = {info.filename[:-4]: info for info in archive.infolist() if info.filename.endswith(".npy")}
             if "format" not in infos:
-                raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+                raise LfprocError(f"{path}: not an lfproc light field file; write one with {SAVE_AGAIN}")
             for name in ("format", *names, *(n for n in optional if n in infos)):
                 if name not in infos:
                     raise LfprocError(f"{path}: the light field file has no '{name}'; write it again with "
-                                      f"'lfproc decode'")
+                                      f"{SAVE_AGAIN}")
                 _check_member(archive, infos[name], name, path)
         with np.load(path, allow_pickle=False) as data:
             if str(data["format"]) != FILE_FORMAT:
-                raise LfprocError(f"{path}: not an lfproc light field file; write one with 'lfproc decode'")
+                raise LfprocError(f"{path}: not an lfproc light field file; write one with {SAVE_AGAIN}")
             members = {name: data[name] for name in names}
             members.update({name: data[name] for name in optional if name in data})
             return members
@@ -277,7 +280,7 @@ def _read_members(path: str, names: tuple, optional: tuple = ()) -> dict:
         raise LfprocError(f"{path}: light field file not found; check the path") from None
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, KeyError, NotImplementedError,
             RuntimeError) as exc:
-        raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with 'lfproc decode'") \
+        raise LfprocError(f"{path}: cannot read light field file ({exc}); write it again with {SAVE_AGAIN}") \
             from None
 
 
@@ -292,27 +295,27 @@ def _check_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, name: str, pa
     if info.compress_size > os.path.getsize(path) or \
             info.file_size > _MAX_INFLATION * info.compress_size + (1 << 20):
         raise LfprocError(f"{path}: member '{name}' declares sizes the file cannot hold; the file is corrupt, "
-                          f"write it again with 'lfproc decode'")
+                          f"write it again with {SAVE_AGAIN}")
     import tokenize
 
     with archive.open(info) as fh:
         version = np.lib.format.read_magic(fh)
         if version not in ((1, 0), (2, 0)):
             raise LfprocError(f"{path}: member '{name}' has numpy format version {version}; write it again with "
-                              f"'lfproc decode'")
+                              f"{SAVE_AGAIN}")
         try:
             read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
                 np.lib.format.read_array_header_2_0
             shape, _, dtype = read_header(fh)
         except (ValueError, TypeError, SyntaxError, tokenize.TokenError) as exc:
             raise LfprocError(f"{path}: member '{name}' has a corrupt header ({type(exc).__name__}); write it "
-                              f"again with 'lfproc decode'") from None
+                              f"again with {SAVE_AGAIN}") from None
         header_bytes = fh.tell()
     if dtype.hasobject:
         raise LfprocError(f"{path}: member '{name}' holds Python objects, which lfproc never unpickles; write the "
-                          f"file again with 'lfproc decode'")
+                          f"file again with {SAVE_AGAIN}")
     declared = math.prod(shape) * dtype.itemsize
     if declared > info.file_size - header_bytes:
         raise LfprocError(f"{path}: member '{name}' declares {shape} {dtype} ({declared} bytes) but holds "
                           f"{info.file_size - header_bytes}; the file is truncated or corrupt, write it again with "
-                          f"'lfproc decode'")
+                          f"{SAVE_AGAIN}")

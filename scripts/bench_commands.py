@@ -5,6 +5,7 @@ same run.
     python scripts/bench_commands.py [--quick] [--out DIR] [--keep DIR] [--before CHECKOUT] [--markdown]
     python scripts/bench_commands.py --disk-only [--out DIR]
     python scripts/bench_commands.py --batch-only [--keep DIR] [--out DIR]
+    python scripts/bench_commands.py --compare REV [--pairs N] [--keep DIR] [--out DIR]
 
 The capture is a Lytro-Illum-like sensor (7728 × 5368 px, GRBG, 1.4 µm pixels under 20 µm hexagonal
 lenses = 14.29 px, m̂ = 15 → a 15 × 15 × 434 × 625 × 3 light field) made here in a few seconds: a white
@@ -27,6 +28,9 @@ times a smooth random texture, both 10-bit in 16-bit PNGs (kept in ``--keep DIR`
   quieter moment on a shared machine.
 * ``--before CHECKOUT``: the same commands run on the code of another checkout (e.g. ``git worktree
   add /tmp/base COMMIT``), for the before/after table.
+* ``--compare REV``: refocus and views of this tree against those of revision REV, N alternating pairs
+  (default 4): the median ratio of the pairs (wall and CPU) and each side's peak memory
+  (``scripts/bench_compare.py``); the other rows of the page are kept.
 
 ``--quick`` (about 2 minutes on 2 idle cores): refocus and views, the phases, a batch of 4 captures, no
 disk, depth or viewer. Results go to ``DIR/benchmarks-commands.json`` and ``.md`` (``DIR`` is created; rows
@@ -36,6 +40,7 @@ of an earlier run that this run did not measure are kept); ``--markdown`` prints
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -99,20 +104,23 @@ def illum_grid(camera):
 
 
 def make_capture(folder: Path) -> None:
-    """White image, capture, camera and exact grid file of the Illum-like sensor (kept if already there)."""
-    from lfproc.atomic import write_json_atomic
+    """White image, capture, camera and exact grid file of the Illum-like sensor (kept if already there); the
+    grid file is laid out as ``lfproc calibrate`` writes it (one key per line), with the exact lattice."""
+    from lfproc.gridfile import Calibration
     from lfproc.io import write_image
 
     names = ("white.png", "capture.png", "camera.toml", "grid.json")
-    if all((folder / name).is_file() for name in names):
+    if all((folder / name).is_file() for name in names) and '"centers_xy_px": [[' in (folder / "grid.json").read_text():
         return
     camera = illum_camera()
     grid = illum_grid(camera)
-    white, capture = illum_frames(grid)
-    write_image(folder / "white.png", white)
-    write_image(folder / "capture.png", capture)
+    if not all((folder / name).is_file() for name in names[:2]):
+        white, capture = illum_frames(grid)
+        write_image(folder / "white.png", white)
+        write_image(folder / "capture.png", capture)
     (folder / "camera.toml").write_text(camera.to_toml())
-    write_json_atomic(folder / "grid.json", dict(grid.to_json_dict(), white_image=str(folder / "white.png")))
+    exact = dataclasses.replace(grid, calibration=Calibration(white_image=str(folder / "white.png")))
+    exact.save(folder / "grid.json")
 
 
 # ----------------------------------------------------------------------------- measuring
@@ -173,13 +181,13 @@ folder, out = sys.argv[1], sys.argv[2]
 import numpy, cv2, lfproc
 from lfproc import Camera, LightField
 from lfproc.io import read_capture
-from lfproc.pipeline import prepare_decoding
+from lfproc import prepare_decoding
 from lfproc.refocus import refocus
 from lfproc.outputs import write_slices
 from lfproc.camera import MainLens
 mark("imports (numpy, OpenCV, OpenImageIO, numba)")
 camera = Camera.from_toml(os.path.join(folder, "camera.toml"))
-setup = prepare_decoding(camera, calib=os.path.join(folder, "grid.json"))
+setup = prepare_decoding(camera, grid=os.path.join(folder, "grid.json"), cache=True)
 mark("camera, grid file, decoder (from the cache)")
 capture = read_capture(os.path.join(folder, "capture.png"), camera)
 mark("reading the capture PNG")
@@ -210,7 +218,7 @@ def phases(folder: Path, env: dict) -> dict:
 
 def floors(folder: Path, env: dict) -> dict:
     """Python + imports in a fresh process; OpenCV's PNG decoder alone on the capture."""
-    start = run_command([sys.executable, "-c", "import numpy, cv2, numba, OpenImageIO, lfproc.pipeline"], env)
+    start = run_command([sys.executable, "-c", "import numpy, cv2, numba, OpenImageIO, lfproc.api"], env)
     png = run_command([sys.executable, "-c", f"import cv2; cv2.imread({str(folder / 'capture.png')!r}, "
                                              f"cv2.IMREAD_UNCHANGED)"], env)
     return {"imports_s": start["seconds"], "imports_cpu_s": start["cpu_s"], "png_read_s": png["seconds"],
@@ -489,7 +497,7 @@ def markdown(r: dict) -> str:
     if r.get("floors"):
         f = r["floors"]
         lines += ["", "Floors measured in the same run: Python starting and importing numpy, OpenCV, numba, "
-                      f"OpenImageIO and lfproc.pipeline {f['imports_s']:.2f} s (CPU {f['imports_cpu_s']:.2f} s); "
+                      f"OpenImageIO and lfproc.api {f['imports_s']:.2f} s (CPU {f['imports_cpu_s']:.2f} s); "
                       f"decoding the capture PNG with `cv2.imread` alone {f['png_read_cpu_s']:.2f} s CPU "
                       "(including that process's start)."]
     if r.get("phases"):
@@ -526,6 +534,10 @@ def markdown(r: dict) -> str:
                   "All runs, s (floor / views, in the order run): "
                   + ", ".join(f"{a:.2f} / {b:.2f}" for a, b in zip(d["floor_runs_s"], d["views_runs_s"]))
                   + ". The virtual disk here speeds up from run to run, so single runs mislead."]
+    if r.get("compare"):
+        from bench_compare import compare_lines
+
+        lines += compare_lines(r["compare"])
     return "\n".join(lines) + "\n"
 
 
@@ -538,6 +550,8 @@ def main(argv=None) -> int:
     parser.add_argument("--batch", type=int, metavar="N", help="captures in the batch (default 20, --quick 4)")
     parser.add_argument("--disk-only", action="store_true", help="only the view-writing measurement")
     parser.add_argument("--batch-only", action="store_true", help="only the batch runs (and the load gauge)")
+    parser.add_argument("--compare", metavar="REV", help="only the A/B of refocus and views against revision REV")
+    parser.add_argument("--pairs", type=int, default=4, metavar="N", help="alternating pairs of --compare (default 4)")
     parser.add_argument("--note", default="", help="a paragraph for the page about this run (e.g. the machine's load)")
     parser.add_argument("--markdown", action="store_true", help="also print the tables (markdown) to stdout")
     args = parser.parse_args(argv)
@@ -549,7 +563,15 @@ def main(argv=None) -> int:
            "cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count(),
            "sensor": list(SENSOR), "note": args.note}
     try:
-        if args.batch_only:
+        if args.compare:
+            from bench_compare import compare
+
+            make_capture(folder)
+            load_before = reference_load()
+            result = compare(ROOT, folder, args.compare, args.pairs, run_command, child_env)
+            result.update(date=new["date"], note=args.note, load={"before": load_before, "after": reference_load()})
+            new["compare"] = {args.compare: result}
+        elif args.batch_only:
             make_capture(folder)
             load_before = reference_load()
             new["batch"] = batch(folder, args.batch or 20, child_env(None, folder / "cache-now"))
@@ -569,13 +591,16 @@ def main(argv=None) -> int:
             new["floors"] = floors(folder, env)
             new["batch"] = batch(folder, args.batch or (4 if args.quick else 20), env)
             new["load"] = {"before": load_before, "after": reference_load()}
-        if args.disk_only or not (args.quick or args.batch_only):
+        if args.disk_only or not (args.quick or args.batch_only or args.compare):
             new["disk"] = disk_floor_and_views(folder)
     finally:
         if not args.keep:
             shutil.rmtree(folder, ignore_errors=True)
     json_path = out / "benchmarks-commands.json"
     previous = json.loads(json_path.read_text()) if json_path.is_file() else None
+    if previous and new.get("compare"):     # earlier comparisons against other revisions are kept
+        new["compare"] = {**previous.get("compare", {}), **new["compare"]}
+        new = {key: value for key, value in new.items() if key in ("compare",)}
     results = merge_results(previous, new)
     if "batch" in new and "batch_load" not in new:      # a full run's batch: no note of an earlier batch-only run
         results.pop("batch_load", None)

@@ -104,7 +104,7 @@ def accuracy_rows(quick: bool):
     import lfproc
     from lfproc import LightField, geometry, simulate
     from lfproc.io import read_capture, write_image
-    from lfproc.pipeline import DecodeSetup, load_lightfield
+    from lfproc.api import DecodeSetup
 
     camera = test_camera()
     rows, textureless_rows = [], []
@@ -114,8 +114,8 @@ def accuracy_rows(quick: bool):
         with tempfile.TemporaryDirectory() as tmp:
             write_image(os.path.join(tmp, "c.png"), sim.raw)
             write_image(os.path.join(tmp, "w.png"), sim.white)
-            decoded = load_lightfield(os.path.join(tmp, "c.png"),
-                                      DecodeSetup(camera, sim.grid, read_capture(os.path.join(tmp, "w.png"), camera)))
+            setup = DecodeSetup(camera, sim.grid, read_capture(os.path.join(tmp, "w.png"), camera))
+            decoded = setup.decode(os.path.join(tmp, "c.png"))
         truth = truth_distance(sim)
         truth_a = np.where(np.isfinite(truth), geometry.refocus_parameter(camera, np.nan_to_num(truth, nan=1e9)), np.nan)
         finite_a = truth_a[np.isfinite(truth_a)]

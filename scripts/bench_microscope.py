@@ -131,26 +131,26 @@ def main(argv=None):
 
     from lfproc import Camera, refocus
     from lfproc.outputs import lateral_um_per_lens, slice_metadata, write_focal_stack
-    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.api import prepare_decoding
 
     camera = Camera.from_toml(os.path.join(ROOT, "lfproc", "samples", "cameras", "lfm-20x.toml"))
     capture, white, grid = make_inputs(args.workdir, camera)
     t0 = time.perf_counter()
-    setup = prepare_decoding(camera, calib=grid, white=white)
-    lf = load_lightfield(capture, setup)               # builds the decoder (once per session)
+    setup = prepare_decoding(camera, white=white, grid=grid, cache=True)
+    lf = setup.decode(capture)               # builds the decoder (once per session)
     setup_s = time.perf_counter() - t0
     records = slice_metadata(capture, camera, A_VALUES)
     stack_path = os.path.join(args.workdir, "capture_stack.tif")
 
     def end_to_end():
-        field = load_lightfield(capture, setup)
+        field = setup.decode(capture)
         stack = refocus(field, A_VALUES, interpolation=args.interpolation)
         write_focal_stack(stack_path, stack, records, kind="imagej", lens_um=lateral_um_per_lens(camera))
         return field
 
     refocus(lf, A_VALUES[:2], interpolation=args.interpolation)          # compile / load the kernels
     total_s, lf = best_of(end_to_end, args.repeats, "end_to_end")
-    decode_s, _ = best_of(lambda: load_lightfield(capture, setup), args.repeats, "read_and_decode")
+    decode_s, _ = best_of(lambda: setup.decode(capture), args.repeats, "read_and_decode")
     refocus_s, stack = best_of(lambda: refocus(lf, A_VALUES, interpolation=args.interpolation), args.repeats,
                                "refocus")
     linear_s, _ = best_of(lambda: refocus(lf, A_VALUES, interpolation="linear"), args.repeats, "refocus_linear")

@@ -53,10 +53,10 @@ N_VIEWS = 49
 
 def files_per_capture(data) -> int:
     """Slices and the views that carry light (the only ones written), each with its sidecar."""
-    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.api import prepare_decoding
 
     camera = Camera.from_toml(data / "camera.toml")
-    lf = load_lightfield(str(data / "captures" / "cap0.png"), prepare_decoding(camera, white=str(data / "white.png")))
+    lf = prepare_decoding(camera, white=str(data / "white.png"), cache=True).decode(str(data / "captures" / "cap0.png"))
     lit = N_VIEWS if lf.view_mask is None else int(lf.view_mask.sum())
     return 2 * (len(REFOCUS.split(",")) + lit)
 BOOKKEEPING = {batch.MANIFEST_NAME, batch.LOCK_NAME}
@@ -118,6 +118,16 @@ def run_cli_with_faults(argv, spec, popen=False):
         return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                                 start_new_session=True)
     return subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
+
+
+def without_warnings(stderr: str) -> str:
+    """A batch's stderr without its summary of the captures' warnings (every capture here warns at a = 1.5)."""
+    lines = stderr.splitlines(keepends=True)
+    start = next((i for i, line in enumerate(lines) if "captures processed warned" in line), len(lines))
+    end = start + 1
+    while end < len(lines) and lines[end].startswith("  "):
+        end += 1
+    return "".join(lines[:start] + lines[end:])
 
 
 def partial_files(outdir) -> list:
@@ -198,7 +208,7 @@ def test_a_local_worker_process_killed_mid_capture_still_completes(data, referen
     proc = run_cli_with_faults(batch_argv(data, tmp_path / "out", "--workers", "2"),
                                {"kill": {"stem": "cap1", "after": 10, "marker": str(marker)}})
     assert proc.returncode == 0, proc.stderr
-    assert proc.stderr == ""
+    assert without_warnings(proc.stderr) == ""
     assert marker.is_file()  # a worker died (the batch itself exited 0)
     assert statuses(tmp_path / "out") == {f"cap{i}.png": ("done", "done") for i in range(4)}
     assert tree_bytes(tmp_path / "out") == reference[1]
@@ -212,7 +222,8 @@ def test_rerun_skips_everything_and_redoes_exactly_what_changed(data, reference,
 
     assert main(batch_argv(data, out, "--workers", "1")) == 0
     assert manifest(out)["summary"] | {"seconds": 0} == {"done": 0, "skipped": 4, "failed": 0, "total": 4,
-                                                          "seconds": 0, "interrupted": False, "failed_captures": []}
+                                                          "seconds": 0, "interrupted": False, "warned": 0,
+                                                          "failed_captures": []}
     assert statuses(out) == {f"cap{i}.png": ("done", "skipped") for i in range(4)}
     assert tree_stats(out) == before  # not a single file rewritten
 
@@ -385,7 +396,8 @@ def test_a_killed_batch_resumes_from_its_journal_and_takes_over_its_lock(data, r
 
     rerun = run_cli(*batch_argv(data, out, "--workers", "2"))
     assert rerun.returncode == 0, rerun.stderr
-    assert rerun.stderr.splitlines() == [f"lfproc batch: note: took over the lock of process {proc.pid} on "
+    assert without_warnings(rerun.stderr).splitlines() == [
+                                         f"lfproc batch: note: took over the lock of process {proc.pid} on "
                                          f"{socket.gethostname()}, since {rerun.stderr.split('since ')[1].split(',')[0]}, "
                                          f"which is no longer running (interrupted or killed); resuming"]
     summary = manifest(out)["summary"]
@@ -508,3 +520,25 @@ def test_calib_only_fingerprints_the_recorded_white_image(data, tmp_path):
     os.utime(white, ns=(1, 1))  # the recorded white image changed: the capture is redone
     assert run_cli(*argv).returncode == 0
     assert json.loads((out / batch.MANIFEST_NAME).read_text())["summary"]["done"] == 1
+
+
+def test_warnings_are_recorded_per_capture_and_summed_up_once(data, tmp_path, capsys):
+    """Every LfprocWarning a capture gives is in its manifest entry, worded for the command line; the command
+    says how many captures warned and each distinct warning once (here a = 1.5: fewer than half the pixels of
+    these 21 x 28 lenses average all views, for every capture alike)."""
+    inputs = [str(data / "captures" / name) for name in ("cap0.png", "cap1.png")]
+    out = tmp_path / "out"
+    argv = ["batch", *inputs, "--camera", str(data / "camera.toml"), "--white", str(data / "white.png"),
+            "--a", "0,1.5", "--workers", "1", "-o", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    entries = manifest(out)["captures"]
+    for source in inputs:
+        said = entries[source]["warnings"]
+        assert len(said) == 1 and said[0].startswith(f"{source}: in 1 slice(s) (up to a=+1.5) fewer than half"), said
+    assert manifest(out)["summary"]["warned"] == 2
+    assert "2 of 2 captures processed warned" in err
+    assert err.count("fewer than half the pixels") == 1 and "(and 1 more capture(s) alike)" in err
+    assert main(argv) == 0                       # a rerun skips both: nothing new to say, the entries keep theirs
+    assert "warned" not in capsys.readouterr().err
+    assert [entries[s]["warnings"] for s in inputs] == [manifest(out)["captures"][s]["warnings"] for s in inputs]

@@ -100,7 +100,7 @@ def test_every_flag_is_an_option_of_a_command():
 
 
 @pytest.mark.parametrize("library, command", [
-    # the four forms, as the messages of lfproc/pipeline.py and the checks below it are written
+    # the four forms, as the messages of lfproc.prepare_decoding and the checks below it are written
     ("give white=... or white_dir=..., not both", "give --white WHITE or --white-dir DIR, not both"),
     ("give white=... (a white image), white_dir=... (a Lytro calibration folder) or grid=... (from lfproc "
      "calibrate)", "give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or --calib "

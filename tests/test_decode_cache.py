@@ -16,7 +16,7 @@ import lfproc
 from lfproc import Camera, LensGrid
 from lfproc import decoder_cache as dc
 from lfproc.io import write_image
-from lfproc.pipeline import DecodeSetup, load_lightfield, prepare_decoding
+from lfproc.api import DecodeSetup, prepare_decoding
 from lfproc.camera import MainLens
 
 GRID = LensGrid("hexagonal", 9.0, 0.4, (6.3, 5.8), 9, 12)
@@ -51,8 +51,8 @@ def folder(tmp_path, monkeypatch):
 
 
 def decode_with_calib(folder, camera=None, **options):
-    setup = prepare_decoding(camera or tiny_camera(), calib=str(folder / "grid.json"), **options)
-    return load_lightfield(str(folder / "capture.png"), setup)
+    setup = prepare_decoding(camera or tiny_camera(), grid=str(folder / "grid.json"), **options, cache=True)
+    return setup.decode(str(folder / "capture.png"))
 
 
 def cache_entries():
@@ -78,7 +78,7 @@ def test_second_decode_reuses_the_entry_and_gives_the_same_views(folder, monkeyp
 
 def test_cached_decoder_equals_a_fresh_one_field_by_field(folder):
     """Every field of the stored decoder (arrays, grids, settings) comes back exactly (generic by field)."""
-    setup = prepare_decoding(tiny_camera(), calib=str(folder / "grid.json"))
+    setup = prepare_decoding(tiny_camera(), grid=str(folder / "grid.json"), cache=True)
     fresh = setup._make_decoder((), "none")
     key = setup._cache_key((), "none")
     path = os.path.join(dc.cache_dir(), key + ".lfdec")
@@ -149,9 +149,9 @@ def test_every_input_of_the_state_is_in_the_key(folder, monkeypatch, change):
     elif change == "m_hat":
         after = key_of(folder, tiny_camera(micro_image_px=5))
     elif change == "interpolation":
-        after = key_of(folder, interpolation="cubic")
+        after = key_of(folder, decode_interpolation="cubic")
     elif change == "demosaic":
-        after = key_of(folder, demosaic_method="careful")
+        after = key_of(folder, demosaic="careful")
     elif change == "version":
         monkeypatch.setattr(lfproc, "__version__", lfproc.__version__ + ".post1")
         after = key_of(folder)
@@ -208,13 +208,13 @@ def test_failed_write_leaves_no_entry_and_no_temporary_file(folder, monkeypatch)
 
 
 def test_corrupt_or_foreign_entry_is_replaced(folder):
-    setup = prepare_decoding(tiny_camera(), calib=str(folder / "grid.json"))
+    setup = prepare_decoding(tiny_camera(), grid=str(folder / "grid.json"), cache=True)
     key = setup._cache_key((), "none")
     path = os.path.join(dc.cache_dir(), key + ".lfdec")
     good = open(path, "rb").read()
     open(path, "wb").write(good[: len(good) // 2])     # truncated (a disk error; never by lfproc itself)
     assert dc.load(path, key, type(setup.decoder_for((), "none"))) is None
-    first = load_lightfield(str(folder / "capture.png"), setup)
+    first = setup.decode(str(folder / "capture.png"))
     again = decode_with_calib(folder)                  # re-derived and stored whole again
     assert open(path, "rb").read() == good
     assert again.views.tobytes() == first.views.tobytes()
@@ -253,7 +253,7 @@ def test_cache_is_bounded_least_recently_used_first(folder, monkeypatch):
     (entry,) = cache_entries()
     size = dc.disk_bytes(entry)
     monkeypatch.setenv("LFPROC_CACHE_MAX_GB", str(1.5 * size / 1e9))
-    decode_with_calib(folder, interpolation="nearest")     # a second entry: the first one goes
+    decode_with_calib(folder, decode_interpolation="nearest")     # a second entry: the first one goes
     (left,) = cache_entries()
     assert left != entry
     assert dc.clear() == 1 and cache_entries() == []

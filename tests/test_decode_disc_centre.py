@@ -116,11 +116,11 @@ def test_lytro_sample_discs_are_centred():
     offset is found, nothing is re-centred."""
     from lfproc.io import read_capture
     from lfproc.cli.lytro_defaults import camera_for_captures
-    from lfproc.pipeline import prepare_decoding
+    from lfproc.api import prepare_decoding
 
     capture = str(SAMPLES / "lytro" / "IMG_0001.lfr")
     camera = camera_for_captures(None, [capture])
-    setup = prepare_decoding(camera, white_dir=str(SAMPLES / "lytro" / "caldata"), captures=[capture])
+    setup = prepare_decoding(camera, white_dir=str(SAMPLES / "lytro" / "caldata"), captures=[capture], cache=True)
     white = read_capture(setup.white_path, camera)
     sampling = view_sampling(white.data, setup.grid, camera.m_hat, white.cfa, "fast", "linear", 0.1)
     assert not sampling.centred

@@ -135,10 +135,10 @@ def test_a_calibrations_grid_error_moves_the_delivered_views_little():
     lens to the next at a hard border (docs/decoding.md). Measured: 43 dB, worst view 0.023 RMS."""
     from conftest import SAMPLES
     from lfproc.io import read_capture
-    from lfproc.pipeline import prepare_decoding
+    from lfproc.api import prepare_decoding
 
     camera = Camera.from_toml(str(SAMPLES / "sample" / "camera.toml"))
-    setup = prepare_decoding(camera, white=str(SAMPLES / "sample" / "white.png"))
+    setup = prepare_decoding(camera, white=str(SAMPLES / "sample" / "white.png"), cache=True)
     white = read_capture(str(SAMPLES / "sample" / "white.png"), camera)
     capture = read_capture(str(SAMPLES / "sample" / "capture.png"), camera)
     grid = setup.grid

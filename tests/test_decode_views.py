@@ -60,16 +60,16 @@ def _sample_views(sample):
     from conftest import SAMPLES
     from lfproc import Camera
     from lfproc.cli.lytro_defaults import camera_for_captures
-    from lfproc.pipeline import prepare_decoding
+    from lfproc.api import prepare_decoding
 
     if sample == "lytro":
         capture = str(SAMPLES / "lytro" / "IMG_0001.lfr")
         camera = camera_for_captures(None, [capture])
-        setup = prepare_decoding(camera, white_dir=str(SAMPLES / "lytro" / "caldata"), captures=[capture])
+        setup = prepare_decoding(camera, white_dir=str(SAMPLES / "lytro" / "caldata"), captures=[capture], cache=True)
     else:
         capture = str(SAMPLES / "sample" / "capture.png")
         camera = Camera.from_toml(str(SAMPLES / "sample" / "camera.toml"))
-        setup = prepare_decoding(camera, white=str(SAMPLES / "sample" / "white.png"), captures=[capture])
+        setup = prepare_decoding(camera, white=str(SAMPLES / "sample" / "white.png"), captures=[capture], cache=True)
     return np.asarray(setup.decoder_for((), "none").views_delivered), geometry.views_inside_aperture(camera)
 
 

@@ -16,7 +16,7 @@ from scipy import ndimage
 import lfproc
 from lfproc import Camera, LightField, geometry, simulate
 from lfproc.io import read_capture, read_metadata, write_image
-from lfproc.pipeline import DecodeSetup, load_lightfield
+from lfproc.api import DecodeSetup
 from lfproc.simulate import Noise, Plane, Scene, Uniform
 from lfproc.camera import MainLens
 
@@ -36,8 +36,7 @@ def scene(tmp_path_factory):
     write_image(folder / "capture.png", sim.raw)
     write_image(folder / "white.png", sim.white)
     (folder / "camera.toml").write_text(cam.to_toml())
-    decoded = load_lightfield(str(folder / "capture.png"),
-                              DecodeSetup(cam, sim.grid, read_capture(folder / "white.png", cam)))
+    decoded = DecodeSetup(cam, sim.grid, read_capture(folder / "white.png", cam)).decode(folder / "capture.png")
     truth_a = np.array([A_TRUE["card"], A_TRUE["blank"], A_TRUE["wall"]])[np.maximum(sim.plane_label, 0)]
     return {"camera": cam, "sim": sim, "folder": folder, "decoded": decoded, "truth_a": truth_a,
                 "ideal": LightField.from_views(sim.ideal_views, cam, sim.grid)}

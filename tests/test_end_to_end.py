@@ -11,7 +11,7 @@ from scipy import ndimage
 from lfproc import Camera, LightField, geometry
 from lfproc import simulate
 from lfproc.io import read_metadata, write_image
-from lfproc.pipeline import DecodeSetup, load_lightfield
+from lfproc.api import DecodeSetup
 from lfproc.io import read_capture
 from lfproc.refocus import refocus
 from lfproc.simulate import Checkerboard, Noise, Plane, Scene
@@ -35,8 +35,7 @@ def capture(tmp_path_factory):
     write_image(folder / "capture.png", sim.raw)
     write_image(folder / "white.png", sim.white)
     (folder / "camera.toml").write_text(cam.to_toml())
-    lf = load_lightfield(str(folder / "capture.png"),
-                         DecodeSetup(cam, sim.grid, read_capture(folder / "white.png", cam)))
+    lf = DecodeSetup(cam, sim.grid, read_capture(folder / "white.png", cam)).decode(folder / "capture.png")
     return dict(sim=sim, camera=cam, folder=folder, lf=lf, distances=(d_near, d_far))
 
 
@@ -247,7 +246,7 @@ def test_rgb_capture_without_white_image_decodes_with_a_warning(capture, tmp_pat
     """--calib whose recorded white image is gone: an RGB capture decodes (flat white), with a warning."""
     import warnings
 
-    from lfproc.pipeline import prepare_decoding
+    from lfproc.api import prepare_decoding
 
     cam = capture["camera"]
     grid_json = dict(capture["sim"].grid.to_json_dict(), white_image=str(tmp_path / "gone.png"))
@@ -256,9 +255,9 @@ def test_rgb_capture_without_white_image_decodes_with_a_warning(capture, tmp_pat
     write_image(tmp_path / "rgb.tif", rgb)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        setup = prepare_decoding(cam, calib=str(tmp_path / "grid.json"))
+        setup = prepare_decoding(cam, grid=str(tmp_path / "grid.json"), cache=True)
     assert any("devignetting" in str(w.message) for w in caught)
-    lf = load_lightfield(str(tmp_path / "rgb.tif"), setup)
+    lf = setup.decode(str(tmp_path / "rgb.tif"))
     assert lf.views.shape[-1] == 3 and np.all(np.isfinite(lf.views))
 
 

@@ -16,7 +16,7 @@ from scipy import ndimage
 from lfproc import Camera, geometry
 from lfproc import simulate
 from lfproc.io import write_image
-from lfproc.pipeline import load_lightfield, prepare_decoding
+from lfproc.api import prepare_decoding
 from lfproc.refocus import refocus
 from lfproc.simulate import Noise, Plane, Scene
 from lfproc.camera import MainLens
@@ -37,8 +37,8 @@ def decoded(tmp_path_factory):
     folder = tmp_path_factory.mktemp("exit_pupil")
     write_image(folder / "capture.png", sim.raw)
     write_image(folder / "white.png", sim.white)
-    setup = prepare_decoding(CAMERA, white=str(folder / "white.png"))        # calibrates the white image
-    lf = load_lightfield(str(folder / "capture.png"), setup)
+    setup = prepare_decoding(CAMERA, white=str(folder / "white.png"), cache=True)        # calibrates the white image
+    lf = setup.decode(str(folder / "capture.png"))
     return dict(sim=sim, lf=lf, grid=setup.grid, distances=(near, far))
 
 

@@ -324,8 +324,8 @@ def _grid_document():
 
 
 def _grid(path):
-    from lfproc.inputs import read_grid_record
-    read_grid_record(str(path))
+    from lfproc import LensGrid
+    LensGrid.load(path)
 
 
 @fuzz(60)

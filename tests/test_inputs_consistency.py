@@ -62,27 +62,30 @@ def test_the_right_camera_passes_and_old_sample_grids_still_load_and_are_checked
                    "-o", tmp_path / "x.lfp.npz")
     assert_clean_error(proc, str(sample_grid), "off.toml", "11.444 px", "-2.9 %")
     from lfproc.camera import Camera
-    from lfproc.inputs import check_grid_fits_camera, read_grid_record
-    check_grid_fits_camera(Camera.from_toml(camera), read_grid_record(str(old)))   # old file: accepted
+    from lfproc.grid import LensGrid
+    from lfproc.inputs import check_grid_fits_camera
+    check_grid_fits_camera(Camera.from_toml(camera), LensGrid.load(old))   # old file: accepted
 
 
 def test_the_exit_pupil_scale_is_part_of_the_predicted_pitch(tmp_path):
     """The micro image pitch is the lens pitch x (d_A + f_s)/d_A: a grid of a camera with a finite exit pupil
     fits that camera file and is refused by the same camera called telecentric, and vice versa."""
     from lfproc.camera import Camera
-    from lfproc.grid import LensGrid
-    from lfproc.inputs import GridRecord, check_grid_fits_camera
+    import dataclasses
+
+    from lfproc.grid import Calibration, LensGrid
+    from lfproc.inputs import check_grid_fits_camera
     from lfproc.errors import LfprocError
 
     near = Camera(0.0014, 0.02, 0.4, MainLens(50.0, 50.0, f_number=2.0, exit_pupil_distance_mm=20.0), grid="hexagonal")
     far = Camera(0.0014, 0.02, 0.4, MainLens(50.0, 50.0, f_number=2.0), grid="hexagonal")
     scale = (20.0 + 0.4) / 20.0                                      # 2 % wider micro image lattice
-    record = GridRecord("g.json", LensGrid("hexagonal", near.pitch_px * scale, 0.0, (5.0, 5.0), 10, 10),
-                        made_from=None, pitch_sigma_px=1e-4)
-    check_grid_fits_camera(near, record)                              # old grid: 5 % accepted either way
-    check_grid_fits_camera(far, record)
+    old = LensGrid("hexagonal", near.pitch_px * scale, 0.0, (5.0, 5.0), 10, 10,
+                   calibration=Calibration(made_from=None, pitch_sigma_px=1e-4), source="g.json")
+    check_grid_fits_camera(near, old)                                 # old grid: 5 % accepted either way
+    check_grid_fits_camera(far, old)
     recorded = {"camera": {"lens_pitch_px": near.pitch_px, "micro_image_scale": scale, "grid": "hexagonal"}}
-    fitted = GridRecord("g.json", record.grid, made_from=recorded, pitch_sigma_px=1e-4)
+    fitted = dataclasses.replace(old, calibration=Calibration(made_from=recorded, pitch_sigma_px=1e-4))
     check_grid_fits_camera(near, fitted)
     with pytest.raises(LfprocError, match="belongs to another camera"):
         check_grid_fits_camera(far, fitted)                           # 2 % > the 1 % floor, not the recorded camera
@@ -105,13 +108,14 @@ def test_sensor_size_and_bayer_pattern_must_match(sample_grid, tmp_path):
 
 def test_a_damaged_provenance_record_is_one_error_not_a_crash(sample_grid, tmp_path):
     from lfproc.errors import LfprocError
-    from lfproc.inputs import read_grid_record
+    from lfproc.grid import LensGrid
 
     data = json.loads(sample_grid.read_text())
     good = data["made_from"]
     for bad in (1, {"camera": 1}, {**good, "camera": {**good["camera"], "lens_pitch_px": "11"}},
-                {**good, "white": {**good["white"], "channels": [1]}}, {**good, "dark": {"path": [1], "hash": "x"}}):
+                {**good, "white": {**good["white"], "channels": [1]}}, {**good, "dark": {"path": [1], "hash": "x"}},
+                {**good, "dark": [1]}):
         path = tmp_path / "bad.json"
         path.write_text(json.dumps(dict(data, made_from=bad)))
         with pytest.raises(LfprocError, match="made_from"):
-            read_grid_record(str(path))
+            LensGrid.load(path)

@@ -10,7 +10,7 @@ from conftest import assert_clean_error, run_cli
 from PIL import Image
 
 from lfproc.camera import Camera, MainLens
-from lfproc.pipeline import load_lightfield, prepare_decoding
+from lfproc.api import prepare_decoding
 
 # an 8-bit monochrome camera (the sample's optics): a pedestal of 16-24 DN is 6-9 % of its range
 CAM = Camera(0.009, 0.1, 0.4, MainLens(50.0, 50.0, f_number=4.0), grid="rectangular", cfa="none", black_level=0, white_level=255, micro_image_px=11)
@@ -39,8 +39,8 @@ def files(tmp_path_factory):
 
 
 def _views(capture, white, dark=None, calib=None):
-    setup = prepare_decoding(CAM, calib, white, dark=dark, captures=[capture])
-    lf = load_lightfield(capture, setup)
+    setup = prepare_decoding(CAM, white=white, grid=calib, dark=dark, captures=[capture], cache=True)
+    lf = setup.decode(capture)
     return lf.views[..., 0], lf
 
 

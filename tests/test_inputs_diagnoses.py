@@ -32,7 +32,7 @@ def test_a_bad_capture_fails_before_the_white_image_is_calibrated(text_tif, monk
     import lfproc.calibrate
     from lfproc.camera import Camera
     from lfproc.errors import LfprocError
-    from lfproc.pipeline import prepare_decoding
+    from lfproc.api import prepare_decoding
 
     def no_calibration(*args, **kwargs):
         raise AssertionError("the white image was calibrated before the inputs were checked")
@@ -41,7 +41,7 @@ def test_a_bad_capture_fails_before_the_white_image_is_calibrated(text_tif, monk
     camera = Camera.from_toml(CAMERA)
     for kwargs in ({"captures": [str(text_tif)]}, {"captures": [str(SAMPLE / "capture.png")], "dark": str(text_tif)}):
         with pytest.raises(LfprocError, match="not a readable image"):
-            prepare_decoding(camera, white=str(SAMPLE / "white.png"), **kwargs)
+            prepare_decoding(camera, white=str(SAMPLE / "white.png"), **kwargs, cache=True)
 
 
 def test_calibrate_into_a_file_fails_before_any_work(tmp_path, monkeypatch):

@@ -26,7 +26,7 @@ from lfproc import simulate
 from lfproc.errors import LfprocError
 from lfproc.io import write_image
 from lfproc.cli.lytro_defaults import camera_for_captures
-from lfproc.pipeline import load_lightfield, prepare_decoding
+from lfproc.api import prepare_decoding
 from lfproc.simulate import Noise, Plane, Scene
 from lfproc.camera import MainLens
 
@@ -76,8 +76,9 @@ def written(request, tmp_path_factory):
 
 def decoded(camera, capture, white=None, white_dir=None):
     setup = prepare_decoding(camera, white=None if white is None else str(white),
-                             white_dir=None if white_dir is None else str(white_dir), captures=[str(capture)])
-    return load_lightfield(str(capture), setup).views
+                             white_dir=None if white_dir is None else str(white_dir), captures=[str(capture)],
+                             cache=True)
+    return setup.decode(str(capture)).views
 
 
 def test_lytro_files_decode_like_the_png(written):
@@ -153,7 +154,7 @@ def test_white_of_another_camera_or_zoom_is_refused_before_any_work(tmp_path):
     for white, fragment in ((other_camera, "white image of camera B0000000000, but"),
                             (other_zoom, "white image taken at another zoom (focal length 30.00 mm")):
         with pytest.raises(LfprocError, match=fragment.replace("(", r"\(")):
-            prepare_decoding(cam, white=str(white), captures=[str(capture)])
+            prepare_decoding(cam, white=str(white), captures=[str(capture)], cache=True)
         out = tmp_path / "out.lfp.npz"
         proc = run_cli("decode", capture, "--camera", cam_file, "--white", white, "-o", out)
         assert_clean_error(proc, str(white), fragment)
@@ -168,7 +169,7 @@ def test_a_capture_given_as_white_image_is_warned_about(tmp_path, capsys):
     from lfproc import LfprocWarning
 
     with pytest.raises(LfprocError), pytest.warns(LfprocWarning) as said:   # no lattice in a flat image; warned first
-        prepare_decoding(cam, white=str(capture), captures=[str(capture)])
+        prepare_decoding(cam, white=str(capture), captures=[str(capture)], cache=True)
     messages = [str(w.message) for w in said if "marks it as a capture" in str(w.message)]
     assert len(messages) == 1 and "marks it as a capture, not a white image" in messages[0] and \
         str(capture) in messages[0]

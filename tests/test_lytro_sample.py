@@ -12,7 +12,7 @@ import pytest
 from conftest import ROOT, SAMPLES
 from lfproc import geometry, refocus
 from lfproc.cli.lytro_defaults import camera_for_captures
-from lfproc.pipeline import load_lightfield, prepare_decoding
+from lfproc.api import prepare_decoding
 
 LYTRO = SAMPLES / "lytro"
 
@@ -31,9 +31,9 @@ def test_sample_is_small_and_what_the_script_makes(tmp_path):
 def test_sample_refocuses_on_each_plane(capsys):
     capture = str(LYTRO / "IMG_0001.lfr")
     camera = camera_for_captures(None, [capture])
-    setup = prepare_decoding(camera, white_dir=str(LYTRO / "caldata"), captures=[capture])
+    setup = prepare_decoding(camera, white_dir=str(LYTRO / "caldata"), captures=[capture], cache=True)
     assert "caldata/MOD_0000.RAW" in setup.white_note             # the matching zoom, not MOD_0001 (the commands print it)
-    lf = load_lightfield(capture, setup)
+    lf = setup.decode(capture)
     # the script put the planes where slices a = 1.25 (left half) and a = 0.25 (behind) focus: 9280.2 and
     # 45780.1 mm with its f_U 77.59 mm; the metadata's 77.5937 mm moves them by well under 1 %
     assert geometry.slice_distance_mm(camera, 1.25) == pytest.approx(9280.2, rel=0.01)

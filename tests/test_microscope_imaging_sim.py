@@ -115,7 +115,7 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
     """The whole chain on a rendered 60x/1.2 sensor image: its white image calibrates, the capture decodes,
     and the aplanatic sweep finds every bead at its z within half the slice's DOF."""
     from lfproc.io import write_image
-    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.api import prepare_decoding
 
     camera = Camera.from_toml(LFM_60X_FILE)
     beads = beads_at(camera, (0.07, -0.12, 0.2, 0.4))
@@ -125,7 +125,7 @@ def test_rendered_capture_through_calibration_and_decoding(tmp_path):
     white = render_microscope_sensor(camera, None, (size, size), pixel_samples=2, aperture_samples=1)
     write_image(str(tmp_path / "capture.tif"), np.round(60000 * image / image.max()).astype(np.uint16), {}, "tiff")
     write_image(str(tmp_path / "white.tif"), np.round(60000 * white).astype(np.uint16), {}, "tiff")
-    lf = load_lightfield(str(tmp_path / "capture.tif"), prepare_decoding(camera, white=str(tmp_path / "white.tif")))
+    lf = prepare_decoding(camera, white=str(tmp_path / "white.tif"), cache=True).decode(str(tmp_path / "capture.tif"))
     stack = lfproc.refocus(lf, A_SWEEP, interpolation="cubic-spline")
     geo = geometry.microscope_slices(camera, A_SWEEP)
     rows, cols = np.mgrid[:lf.lens_shape[0], :lf.lens_shape[1]]

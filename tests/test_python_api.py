@@ -246,6 +246,92 @@ def test_a_grid_file_and_a_saved_light_field_are_recorded(sample_api, sample_cli
     np.testing.assert_array_equal(fs.images, sample_api["fs"].images)
 
 
+def test_grid_save_writes_what_calibrate_writes_byte_for_byte(sample_api, tmp_path):
+    """``lfproc.calibrate_white(...).save(path)`` is ``lfproc calibrate -o``: the same bytes, ``made_from``
+    included; the file reads back (``LensGrid.load``) to the same lattice and calibration and saves to the same
+    bytes again; a grid prints in one line."""
+    from lfproc.cli import main
+
+    assert main(["calibrate", str(SAMPLE / "white.png"), "--camera", str(SAMPLE / "camera.toml"),
+                 "-o", str(tmp_path / "cli.json")]) == 0
+    grid = sample_api["grid"]
+    grid.save(tmp_path / "api.json")
+    assert (tmp_path / "api.json").read_bytes() == (tmp_path / "cli.json").read_bytes()
+    data = read_json(tmp_path / "api.json")
+    assert data["made_from"]["white"]["hash"] == "sha256:" + sha256(SAMPLE / "white.png")
+    assert data["camera"] == str(SAMPLE / "camera.toml") and data["white_image"] == str(SAMPLE / "white.png")
+    loaded = lfproc.LensGrid.load(tmp_path / "api.json")
+    assert loaded == grid and loaded.source == str(tmp_path / "api.json")
+    assert loaded.calibration.made_from == grid.calibration.made_from
+    assert loaded.calibration.pitch_sigma_px == grid.calibration.pitch_sigma_px
+    assert loaded.calibration.measured_centers_xy_px is None and len(grid.calibration.measured_centers_xy_px)
+    loaded.save(tmp_path / "again.json")
+    assert (tmp_path / "again.json").read_bytes() == (tmp_path / "api.json").read_bytes()
+    for shown in (grid, loaded, grid.calibration):
+        assert "\n" not in repr(shown) and len(repr(shown)) < 200, repr(shown)
+    assert "53 x 75 lenses" in repr(grid)
+
+
+def test_one_path_whether_inputs_are_files_arrays_or_objects(sample_api):
+    """The same views whether the capture and white image are files or arrays and the grid is fitted, a
+    `LensGrid` or a setup made once (``prepare_decoding``, picklable for batch workers)."""
+    import pickle
+
+    from lfproc.io import read_capture
+
+    cam = lfproc.Camera.from_toml(SAMPLE / "camera.toml")
+    white, capture = (read_capture(SAMPLE / name, cam).data for name in ("white.png", "capture.png"))
+    by_files, grid = sample_api["lf"], sample_api["grid"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", lfproc.LfprocWarning)
+        setup = lfproc.prepare_decoding(cam, white=SAMPLE / "white.png")
+        decoded = [lfproc.read_light_field(capture, cam, white=white),      # the grid fitted to the array
+                   lfproc.read_light_field(SAMPLE / "capture.png", cam, grid=grid),   # its white image devignettes
+                   lfproc.read_light_field(capture, cam, white=white, grid=grid),
+                   setup.decode(SAMPLE / "capture.png"), setup.decode(capture),
+                   pickle.loads(pickle.dumps(setup)).decode(SAMPLE / "capture.png")]
+    for lf in decoded:
+        np.testing.assert_array_equal(lf.views, by_files.views)
+        np.testing.assert_array_equal(lf.view_mask, by_files.view_mask)
+    assert list(lfproc.focal_stack(decoded[1], a=0.682).provenance["inputs"]) == ["capture", "camera", "white"]
+    assert list(lfproc.focal_stack(decoded[0], a=0.682).provenance["inputs"]) == ["camera"]
+    assert "\n" not in repr(setup) and "11x11 views" in repr(setup)
+
+
+def test_messages_tell_a_python_caller_what_to_call(tmp_path):
+    """A missing grid file names ``lfproc.calibrate_white(...).save(...)``, a folder given as the capture says
+    so and how to decode many captures in Python: no command, no flag (the commands word them as theirs)."""
+    camera = SAMPLE / "camera.toml"
+    with pytest.raises(lfproc.LfprocError) as missing:
+        lfproc.read_light_field(SAMPLE / "capture.png", camera, grid=tmp_path / "nope.json")
+    with pytest.raises(lfproc.LfprocError) as folder:
+        lfproc.read_light_field(SAMPLE, camera, white=SAMPLE / "white.png")
+    assert "lfproc.calibrate_white(white, camera).save(path)" in str(missing.value)
+    assert "is a folder" in str(folder.value) and "lfproc.prepare_decoding(" in str(folder.value)
+    for message in (str(missing.value), str(folder.value)):
+        assert "lfproc calibrate" not in message and "lfproc batch" not in message and "--" not in message
+    proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", camera, "--calib", tmp_path / "nope.json",
+                   "--a", "1", "-o", tmp_path / "out")
+    assert proc.returncode == 2 and "lfproc calibrate WHITE --camera CAM -o GRID.json" in proc.stderr, proc.stderr
+
+
+def test_viewer_serve_returns_the_running_server_and_prints_nothing(tmp_path, capfd):
+    import urllib.request
+
+    from lfproc import viewer
+
+    (tmp_path / "index.html").write_text("<p>a page</p>")
+    server = viewer.serve(str(tmp_path), port=0)
+    try:
+        assert server.url.startswith("http://127.0.0.1:")
+        with urllib.request.urlopen(server.url + "index.html", timeout=10) as response:
+            assert response.read() == b"<p>a page</p>"
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert capfd.readouterr() == ("", "")
+
+
 def test_distance_parameters_and_aperture(sample_api):
     lf, fs = sample_api["lf"], sample_api["fs"]
     by_distance = lfproc.focal_stack(lf, distance_mm=fs.distance_mm)
@@ -336,6 +422,29 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert sidecar["provenance"]["inputs"]["camera"]["sha256"] == sha256(lfm / "lfm.toml")
     fs.save(tmp_path / "api")
     assert_same_files(tmp_path / "api", tmp_path / "cli")
+
+
+def test_microscope_grid_views_and_depth_equal_the_commands(lfm, tmp_path):
+    """On a microscope render: ``calibrate_white(...).save`` writes ``lfproc calibrate``'s bytes, and the
+    views and depth map of ``read_light_field(grid=...)`` are what ``lfproc views`` and ``lfproc depth --calib``
+    write (files, sidecars and images)."""
+    from lfproc.cli import main
+
+    cli, camera, capture = tmp_path / "cli", str(lfm / "lfm.toml"), str(lfm / "capture.tif")
+    cli.mkdir()
+    assert main(["calibrate", str(lfm / "white.tif"), "--camera", camera, "-o", str(cli / "grid.json")]) == 0
+    for command in ("views", "depth"):
+        assert main([command, capture, "--camera", camera, "--calib", str(cli / "grid.json"), "-o",
+                     str(cli / command)]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", lfproc.LfprocWarning)
+        lfproc.calibrate_white(lfm / "white.tif", camera).save(tmp_path / "grid.json")
+        lf = lfproc.read_light_field(capture, camera, grid=cli / "grid.json")
+        lfproc.view_stack(lf).save(tmp_path / "views")
+        lfproc.depth_map(lf).save(tmp_path / "depth")
+    assert (tmp_path / "grid.json").read_bytes() == (cli / "grid.json").read_bytes()
+    assert_same_files(tmp_path / "views", cli / "views")
+    assert_same_files(tmp_path / "depth", cli / "depth")
 
 
 def test_each_input_is_hashed_once_per_process(tmp_path, monkeypatch):

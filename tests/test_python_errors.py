@@ -71,13 +71,14 @@ def grids(tmp_path_factory):
 
 
 def test_decode_setup_errors_name_python_arguments(cam, grids, tmp_path):
-    from lfproc.pipeline import prepare_decoding, white_from_folder
+    from lfproc import prepare_decoding
 
     capture = SAMPLE / "capture.png"
     error_of(lambda: prepare_decoding(cam), "white=", "white_dir=", "grid=")
     error_of(lambda: prepare_decoding(cam, white=str(SAMPLE / "white.png"), white_dir=str(tmp_path)),
              "white=", "white_dir=")
-    error_of(lambda: white_from_folder(str(tmp_path), None, str(capture)), f"white_dir={tmp_path}", "white=")
+    error_of(lambda: prepare_decoding(cam, white_dir=tmp_path, captures=[capture]), f"white_dir={tmp_path}",
+             "white=")
     error_of(lambda: lfproc.read_light_field(capture, cam, white=SAMPLE / "white.png", white_dir=tmp_path),
              "white=", "white_dir=")
     error_of(lambda: lfproc.read_light_field(capture, cam, grid=grids["changed"]), "has changed", "white=")

@@ -185,12 +185,12 @@ def test_mosaic_preview_is_enlarged_8bit_with_black_views_outside(scene, tmp_pat
 # ------------------------------------------------------------------ depth from focus and slice choice
 def test_page_depth_finds_each_plane_and_its_slice(scene):
     """The per-lens depth the page uses (lfproc.depth through estimate_depth) and the slice a click shows."""
-    from lfproc.pipeline import load_lightfield, prepare_decoding
+    from lfproc.api import prepare_decoding
     from lfproc.viewer import estimate_depth, scene_slices, sharpest_slice
     from lfproc.viewer._plan import slice_intervals_a
 
     folder, cam = scene["folder"], scene["camera"]
-    lf = load_lightfield(str(folder / "capture.png"), prepare_decoding(cam, calib=str(folder / "grid.json")))
+    lf = prepare_decoding(cam, grid=str(folder / "grid.json"), cache=True).decode(str(folder / "capture.png"))
     focus = estimate_depth(lf)
     a_values = scene_slices(cam, focus)
     geo = geometry.slice_geometry(cam, a_values)

@@ -105,7 +105,7 @@ def test_calibrate_accepts_a_dusty_low_level_uneven_8_bit_white(tmp_path, whites
 def test_white_is_white_reaches_the_decode_setup_of_every_command_and_batch(monkeypatch):
     """--white-is-white is an option of every command that reads a white image, and batch jobs carry it to
     prepare_decoding (without it changing a job's recorded parameters or fingerprint)."""
-    import lfproc.pipeline
+    import lfproc.api
     from lfproc import batch
     from lfproc.cli import build_parser
 
@@ -116,7 +116,7 @@ def test_white_is_white_reaches_the_decode_setup_of_every_command_and_batch(monk
                                   *extra.get(command, [])])
         assert args.white_is_white is True, command
     seen = {}
-    monkeypatch.setattr(lfproc.pipeline, "prepare_decoding", lambda *a, **k: seen.setdefault("kw", k))
+    monkeypatch.setattr(lfproc.api, "prepare_decoding", lambda *a, **k: seen.setdefault("kw", k))
     import lfproc.batch._worker as worker
     monkeypatch.setattr(worker, "_SETUP_CACHE", {})          # the stand-in setup stays in this test
     from conftest import SAMPLES

@@ -3,7 +3,10 @@
 What a notebook user writes, and what the commands, batch, demo and viewer are built on::
 
     grid = lfproc.calibrate_white("white.png", cam)                      # -> LensGrid
-    lf = lfproc.read_light_field("capture.png", cam, white="white.png")  # -> LightField
+    grid.save("grid.json")                                               # what `lfproc calibrate -o` writes
+    lf = lfproc.read_light_field("capture.png", cam, grid=grid)          # -> LightField
+    setup = lfproc.prepare_decoding(cam, white="white.png")              # -> DecodeSetup: many captures,
+    lfs = [setup.decode(path) for path in captures]                      #    the decoder derived once
     fs = lfproc.focal_stack(lf, a=[0.5, 1.0])                            # -> FocalStack (images + tags)
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthResult
@@ -14,19 +17,25 @@ make both), ``.records()`` are those sidecars, ``.save`` writes those files. Lib
 printed (warnings go through :mod:`warnings` as :class:`lfproc.LfprocWarning`), nothing is written unless a
 path is given (the decoder cache is opt-in: ``cache=True``), and errors name Python arguments.
 
-Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_read`` (captures,
-white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth``
-(depth maps). Importing this package is light (numpy only).
+Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_calibrate``
+(the one grid fitting), ``_prepare`` (inputs checked against each other → a decoding setup), ``_setup`` (the
+setup, which decodes captures), ``_read`` (a capture to a light field; how inputs are taken: files or arrays),
+``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth`` (depth maps). Importing this package is light
+(numpy only).
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
-from ._read import calibrate_white, read_light_field
+from ._calibrate import calibrate_white
+from ._prepare import prepare_decoding
+from ._read import read_light_field
+from ._setup import DecodeSetup
 from ._views import ViewStack, view_stack
 
-__all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
+__all__ = ["read_light_field", "calibrate_white", "prepare_decoding", "DecodeSetup", "focal_stack", "FocalStack",
+           "view_stack", "ViewStack",
            "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
            # the checks the commands share (worded with their flags there)
            "check_slices", "check_view_coverage", "check_z_step"]

@@ -1,8 +1,8 @@
-"""From files or arrays to a `LightField`: :func:`read_light_field` and :func:`calibrate_white`.
+"""From a file or an array to a `LightField`: :func:`read_light_field`, and how every call of the API takes its
+inputs (a camera or its file; a capture, white image or dark frame as a file or an array).
 
-The same steps as the commands (:mod:`lfproc.pipeline`: the cheap checks of :mod:`lfproc.inputs` first,
-then calibration and decoding), without their side effects: nothing printed, and the decoder cache
-(:mod:`lfproc.decoder_cache`, on disk) used only with ``cache=True``.
+Decoding goes the one way every command goes (:func:`lfproc.prepare_decoding`, then `DecodeSetup.decode`);
+nothing is printed, and the decoder cache (:mod:`lfproc.decoder_cache`, on disk) is used only with ``cache=True``.
 """
 
 from __future__ import annotations
@@ -14,45 +14,9 @@ import numpy as np
 
 from ..camera import Camera
 from ..errors import LfprocError, LfprocWarning
-from ..grid import LensGrid
 from ..lightfield import LightField, is_lightfield_file
 
 _PATH = (str, os.PathLike)
-
-
-def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -> LensGrid:
-    """The micro-lens grid fitted to a white image (what ``lfproc calibrate`` writes to GRID.json).
-
-    Parameters
-    ----------
-    white : str, os.PathLike or ndarray
-        The white image: a file (any image or raw the commands read, a Lytro raw) or its linear sensor
-        values ``(H, W)`` (a Bayer mosaic of ``camera.cfa``) or ``(H, W, C)``.
-    camera : Camera, str or os.PathLike
-        The camera, or a file that describes it (:func:`lfproc.read_camera`: a camera TOML, napari-LF's
-        ``metadata.txt``, a Lytro file).
-    dark : str, os.PathLike or ndarray, optional
-        A dark frame of the same size, subtracted from the white image.
-    white_is_white : bool
-        Say that ``white`` is a white image: skip the check that refuses a capture of a scene given as one
-        (the commands' ``--white-is-white``; docs/inputs.md).
-
-    Returns
-    -------
-    LensGrid
-
-    Warns
-    -----
-    LfprocWarning
-        An untrustworthy fit, or an exit pupil the camera file contradicts.
-    """
-    from ..inputs import subtract_dark
-    from ..pipeline import calibrate_white as fit
-
-    camera = _camera(camera)
-    dark_capture = None if dark is None else _capture(dark, camera, "dark")
-    white_capture = subtract_dark(_capture(white, camera, "white"), dark_capture, "white image")
-    return fit(white_capture, camera, white_is_white=white_is_white)
 
 
 def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, white_dir=None,
@@ -73,9 +37,10 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
     white : str, os.PathLike or ndarray, optional
         The white image: corrects vignetting, and the grid is fitted to it when ``grid`` is None.
     grid : LensGrid, str or os.PathLike, optional
-        The lens grid (:func:`calibrate_white`), or a GRID.json written by ``lfproc calibrate`` (whose
-        recorded white image then devignettes, if it still exists). One of ``white``, ``grid`` or
-        ``white_dir`` is needed; a grid without any white image decodes without devignetting (warned).
+        The lens grid (:func:`lfproc.calibrate_white`), or the grid file its ``save`` wrote (what ``lfproc
+        calibrate`` writes). The white image it was fitted to then devignettes, if that file is still there.
+        One of ``white``, ``grid`` or ``white_dir`` is needed; a grid without any white image decodes without
+        devignetting (warned).
     dark : str, os.PathLike or ndarray, optional
         A dark frame, subtracted from the white image and the capture.
     white_dir : str or os.PathLike, optional
@@ -90,6 +55,9 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
     white_is_white : bool
         Say that ``white`` is a white image: skip the check that refuses a capture of a scene given as one
         (the commands' ``--white-is-white``).
+
+    To decode many captures with one white image, make the setup once (:func:`lfproc.prepare_decoding`) and
+    call its ``decode`` for each: this function does both for one capture.
 
     Returns
     -------
@@ -106,41 +74,16 @@ def read_light_field(capture, camera=None, white=None, grid=None, dark=None, *, 
     if isinstance(capture, _PATH) and is_lightfield_file(capture):
         return _saved(capture, camera)
     if isinstance(capture, _PATH) and not os.path.isfile(capture):
-        raise LfprocError(f"{capture}: no such file; check the path")
-    camera = _camera(camera, capture)
-    if white_dir is not None:
-        white = _white_in_folder(white, white_dir, capture)
-    if isinstance(capture, _PATH) and _all_files(white, dark) and (grid is None or isinstance(grid, _PATH)
-                                                                   or white is not None):
-        from ..pipeline import load_lightfield, prepare_decoding
+        from ._setup import _missing_capture
+        raise LfprocError(_missing_capture(os.fspath(capture)))
+    from ._prepare import prepare_decoding
 
-        _check_white_given(white, grid, None)
-        with _warnings_said_once():
-            setup = prepare_decoding(camera, _path(grid), _path(white), interpolation=decode_interpolation,
-                                     demosaic_method=demosaic, grid=grid if isinstance(grid, LensGrid) else None,
-                                     captures=[os.fspath(capture)],
-                                     dark=_path(dark), cache=cache, white_is_white=white_is_white)
-        return load_lightfield(os.fspath(capture), setup)
-    return _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache, white_is_white)
-
-
-def _white_in_folder(white, folder, capture) -> str:
-    """The white image of a Lytro calibration folder that matches ``capture`` (same camera, nearest zoom and
-    focus steps; the commands' ``--white-dir``)."""
-    from ..io import is_lytro_file, pick_white_image, read_lytro_metadata
-
-    if white is not None:
-        raise LfprocError("give white= or white_dir=, not both")
-    if not isinstance(capture, _PATH) or not is_lytro_file(os.fspath(capture)):
-        raise LfprocError("white_dir= picks a white image by the metadata of a Lytro capture, but capture= is not a "
-                          "Lytro file; pass white= instead")
-    return pick_white_image(read_lytro_metadata(os.fspath(capture)), os.fspath(folder)).path
-
-
-def _check_white_given(white, grid, white_dir) -> None:
-    if white is None and grid is None and white_dir is None:
-        raise LfprocError("decoding a capture needs white= (a white image), grid= (a LensGrid from "
-                          "lfproc.calibrate_white, or a GRID.json) or white_dir= (a Lytro calibration folder)")
+    with _warnings_said_once():
+        setup = prepare_decoding(camera, white, grid, dark, white_dir=white_dir,
+                                 captures=[capture] if isinstance(capture, _PATH) else [],
+                                 decode_interpolation=decode_interpolation, demosaic=demosaic, cache=cache,
+                                 white_is_white=white_is_white)
+    return setup.decode(capture)
 
 
 def _saved(path, camera) -> LightField:
@@ -162,49 +105,16 @@ def _saved(path, camera) -> LightField:
     return lf
 
 
-def _from_arrays(capture, camera, white, grid, dark, decode_interpolation, demosaic, cache,
-                 white_is_white=False) -> LightField:
-    """The steps of :func:`lfproc.pipeline.prepare_decoding` for inputs given (partly) as arrays or objects."""
-    from ..inputs import measured_m_hat, read_grid_record, subtract_dark
-    from ..pipeline import DecodeSetup, camera_file, decode_capture, load_lightfield
-    from ..pipeline import calibrate_white as fit
-    from ..provenance import file_inputs
-
-    _check_white_given(white, grid, None)
-    dark_capture = None if dark is None else _capture(dark, camera, "dark")
-    white_capture = None if white is None else subtract_dark(_capture(white, camera, "white"), dark_capture,
-                                                             "white image")
-    if isinstance(grid, _PATH):
-        lattice = read_grid_record(os.fspath(grid)).grid
-    elif grid is not None:
-        if not isinstance(grid, LensGrid):
-            raise LfprocError(f"grid= must be a LensGrid (from lfproc.calibrate_white) or a GRID.json path, got "
-                              f"{type(grid).__name__}")
-        lattice = grid
-    else:
-        lattice = fit(white_capture, camera, white_is_white=white_is_white)
-    camera = measured_m_hat(camera, lattice.pitch_px, "grid").camera
-    if white_capture is None:
-        warnings.warn("no white image given: decoding without devignetting; pass white= to correct vignetting",
-                      LfprocWarning, stacklevel=3)
-    inputs = file_inputs(camera=camera_file(camera), grid=grid, white=white, dark=dark)
-    setup = DecodeSetup(camera, lattice, white_capture, decode_interpolation, demosaic, dark=dark_capture,
-                        cache=cache, inputs=inputs, white_is_white=white_is_white)
-    if isinstance(capture, _PATH):
-        return load_lightfield(os.fspath(capture), setup)
-    return decode_capture(_capture(capture, camera, "capture"), setup)
-
-
 def _capture(value, camera, what: str):
-    """A path read as the commands read it, or an array taken as linear sensor values."""
+    """A path read as the commands read it, a `Capture` as it is, or an array taken as linear sensor values."""
+    from ..io import Capture
+
     if isinstance(value, _PATH):
         from ..io import read_capture
 
-        if not os.path.isfile(value):
-            raise LfprocError(f"{value}: no such file (given as {what}=); check the path")
         return read_capture(os.fspath(value), camera)
-    from ..io import Capture
-
+    if isinstance(value, Capture):
+        return value
     data = np.asarray(value)
     if data.ndim not in (2, 3) or data.dtype.kind not in "fiub" or min(data.shape) < 1:
         raise LfprocError(f"{what}= must be a path or an array of sensor values shaped (H, W) or (H, W, C), "
@@ -213,6 +123,14 @@ def _capture(value, camera, what: str):
     if data.ndim == 3 and data.shape[2] == 1:
         data, cfa = data[:, :, 0], "none"
     return Capture(np.ascontiguousarray(data, dtype=np.float32), cfa, f"{what} array")
+
+
+def _probe(value, camera):
+    """The header facts (`lfproc.inputs.ImageFacts`) of a file (a missing file or a folder refused in one line);
+    None for an array."""
+    from ..inputs import probe_image
+
+    return probe_image(os.fspath(value), camera) if isinstance(value, _PATH) else None
 
 
 def _camera(camera, capture=None) -> Camera:
@@ -237,14 +155,6 @@ def _camera(camera, capture=None) -> Camera:
             return built.camera
     raise LfprocError("decoding a capture needs camera= (a Camera or a camera TOML file); only Lytro files carry "
                       "their camera in their metadata")
-
-
-def _path(value):
-    return os.fspath(value) if isinstance(value, _PATH) else None
-
-
-def _all_files(*values) -> bool:
-    return all(v is None or isinstance(v, _PATH) for v in values)
 
 
 class _warnings_said_once:

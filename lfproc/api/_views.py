@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import functools
 import os
 from dataclasses import dataclass
 
@@ -19,7 +20,8 @@ class ViewStack:
     Attributes
     ----------
     images : ndarray, float32, shape (K, Ny, Nx, C)
-        The views, row by row ([ky, kx] ascending).
+        The views, row by row ([ky, kx] ascending); gathered from the light field when first asked for
+        (``save`` writes them without).
     view : ndarray, int, shape (K, 2)
         Each view's index [ky, kx].
     position_mm : ndarray, shape (K, 2)
@@ -31,7 +33,6 @@ class ViewStack:
     provenance : dict
     """
 
-    images: np.ndarray
     view: np.ndarray
     position_mm: np.ndarray
     tilt_deg: np.ndarray
@@ -40,6 +41,12 @@ class ViewStack:
     inside_aperture: bool
     _lf: object
     _records: tuple
+
+    @functools.cached_property
+    def images(self) -> np.ndarray:
+        if not len(self.view):
+            return self._lf.views[:0, 0]
+        return self._lf.views[self.view[:, 0], self.view[:, 1]]
 
     def records(self) -> list[dict]:
         """One dict per view: the keys and values of ``lfproc views``'s sidecars."""
@@ -57,11 +64,11 @@ class ViewStack:
                               provenance=self.provenance)
 
     def __len__(self) -> int:
-        return int(self.images.shape[0])
+        return len(self.view)
 
     def __repr__(self) -> str:
-        k, ny, nx, c = self.images.shape
-        return f"<ViewStack of {k} view(s) {ny}x{nx}x{c}>"
+        _, _, ny, nx, c = self._lf.views.shape
+        return f"<ViewStack of {len(self)} view(s) {ny}x{nx}x{c}>"
 
 
 def view_stack(lf, *, inside_aperture: bool = False) -> ViewStack:
@@ -96,7 +103,6 @@ def view_stack(lf, *, inside_aperture: bool = False) -> ViewStack:
     chosen = [(ky, kx) for ky in range(lf.m_hat) for kx in range(lf.m_hat) if keep[ky, kx]]
     records = tuple(dict(source=source, **table[ky][kx].metadata(), provenance=prov) for ky, kx in chosen)
     index = np.array(chosen, dtype=int).reshape(-1, 2)
-    images = lf.views[index[:, 0], index[:, 1]] if len(chosen) else lf.views[:0, 0]
-    return ViewStack(images, index, np.array([r["position_mm"] for r in records], dtype=np.float64),
+    return ViewStack(index, np.array([r["position_mm"] for r in records], dtype=np.float64),
                      np.array([r["tilt_deg"] for r in records], dtype=np.float64), source, prov,
                      bool(inside_aperture), lf, records)

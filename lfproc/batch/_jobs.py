@@ -68,13 +68,15 @@ class Job:
 
 @dataclass(frozen=True)
 class JobResult:
-    """What became of one capture: ``outputs`` are image paths (each with its sidecar ``NAME.json``)."""
+    """What became of one capture: ``outputs`` are image paths (each with its sidecar ``NAME.json``);
+    ``warnings`` the :class:`lfproc.LfprocWarning` messages its processing gave (each distinct one once)."""
 
     source: str
     status: str                 # "done" | "failed" | "skipped" | "cancelled" (stopped by an interrupt: nothing written)
     outputs: tuple = ()
     error: str | None = None
     seconds: float = 0.0
+    warnings: tuple = ()
 
 
 def file_stamp(path: str | None) -> list | None:

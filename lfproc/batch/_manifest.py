@@ -82,11 +82,14 @@ class Manifest:
          "parameters": {...the last run's command-line parameters...},
          "captures": {"/abs/capture.png": {"status": "done" | "failed", "last_run": "done" | "failed" | "skipped",
                                            "fingerprint": "…", "parameters": {...}, "outputs": ["NAME.tif", …],
-                                           "error": null | "message", "seconds": 1.234}},
+                                           "error": null | "message", "warnings": ["message", …],
+                                           "seconds": 1.234}},
          "summary": {"done": 0, "skipped": 0, "failed": 0, "total": 0, "seconds": 0.0, "interrupted": false,
-                     "failed_captures": [{"source": "…", "error": "…"}]}}
+                     "warned": 0, "failed_captures": [{"source": "…", "error": "…"}]}}
 
-    ``outputs`` are image names relative to OUTDIR; each has its sidecar ``NAME.json`` beside it.
+    ``outputs`` are image names relative to OUTDIR; each has its sidecar ``NAME.json`` beside it. ``warnings``
+    are the capture's `lfproc.LfprocWarning` messages (each distinct one once; ``[]`` for none); ``warned`` counts
+    the captures of the run that had any.
     """
 
     def __init__(self, outdir: str, parameters: dict, save_interval_s: float = MANIFEST_SAVE_INTERVAL_S):
@@ -122,7 +125,7 @@ class Manifest:
             "status": result.status, "last_run": result.status, "fingerprint": fingerprint,
             "parameters": job.parameters(),
             "outputs": [os.path.relpath(p, self.outdir) for p in result.outputs],
-            "error": result.error, "seconds": round(result.seconds, 3)}
+            "error": result.error, "warnings": list(result.warnings), "seconds": round(result.seconds, 3)}
         line = (json.dumps([job.source, json_safe(entry)], allow_nan=False) + "\n").encode()
         try:
             fd = os.open(self.journal, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import time
+import warnings
 
 from ..errors import LfprocError
 from ._jobs import Job, JobResult, file_stamp
@@ -24,17 +26,17 @@ def setup_key(job: Job) -> tuple:
 
 
 def decode_setup(job: Job):
-    """The :class:`lfproc.pipeline.DecodeSetup` of a job: one calibration per process, reused for all its
-    captures (and handed to local pool processes ready-made, see :func:`run_local`)."""
+    """The :class:`lfproc.api.DecodeSetup` of a job (:func:`lfproc.prepare_decoding`): one calibration per
+    process, reused for all its captures (and handed to local pool processes ready-made, see :func:`run_local`)."""
     key = setup_key(job)
     setup = _SETUP_CACHE.get(key)
     if setup is None:
+        from ..api import prepare_decoding
         from ..camera import Camera
-        from ..pipeline import prepare_decoding
 
         camera = Camera.from_toml_string(job.camera_toml, source="batch camera")
-        setup = prepare_decoding(camera, job.calib, job.white, interpolation=job.decode_interpolation,
-                                 demosaic_method=job.demosaic, grid=_GRID_SEEDS.get(key), dark=job.dark,
+        setup = prepare_decoding(camera, job.white, _GRID_SEEDS.get(key) or job.calib, job.dark,
+                                 decode_interpolation=job.decode_interpolation, demosaic=job.demosaic, cache=True,
                                  white_is_white=job.white_is_white)
         if job.camera_path is not None:   # the camera file, by its path (the job carries its text)
             import dataclasses
@@ -60,7 +62,8 @@ def _portable_setups(jobs: list[Job]) -> dict:
 
 
 def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
-    """Process one capture; any error becomes a ``failed`` result (with its message), never an exception.
+    """Process one capture; any error becomes a ``failed`` result (with its message), never an exception, and
+    every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once).
 
     The capture's outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`):
     ``before_commit()`` runs when all are written, before the first is renamed into place, and may
@@ -68,20 +71,15 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     result. ``checkpoint()`` runs before each output file is begun and may raise it too. Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching
     them here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
     """
-    import warnings
-
     from ..api import focal_stack, view_stack
     from ..atomic import all_or_nothing
-    from ..errors import LfprocWarning
     from ..lightfield import LightField, is_lightfield_file
-    from ..pipeline import load_lightfield
 
     start = time.perf_counter()
+    said = []
     try:
-        with all_or_nothing(before_commit, checkpoint), warnings.catch_warnings():
-            warnings.simplefilter("ignore", LfprocWarning)   # the batch reports per capture, not per slice
-            lf = LightField.load(job.source) if is_lightfield_file(job.source) else \
-                load_lightfield(job.source, decode_setup(job))
+        with all_or_nothing(before_commit, checkpoint), _warnings_into(said):
+            lf = LightField.load(job.source) if is_lightfield_file(job.source) else decode_setup(job).decode(job.source)
             if lf.camera is None:
                 raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
             outputs = []
@@ -92,15 +90,37 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
             if job.views:
                 outputs += view_stack(lf, inside_aperture=job.inside_aperture).save(
                     job.outdir, job.stem, format=job.fmt, mosaic=job.mosaic, gif=job.gif)
-        return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start)
+        return JobResult(job.source, "done", tuple(outputs), None, time.perf_counter() - start, tuple(said))
     except Cancelled:
-        return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start)
+        return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start, tuple(said))
     except LfprocError as exc:
-        return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start)
+        return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start, tuple(said))
     except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
         return JobResult(job.source, "failed", (), f"{job.source}: unexpected {type(exc).__name__}: {exc} "
                                                    f"(a bug in lfproc; please report it)",
-                         time.perf_counter() - start)
+                         time.perf_counter() - start, tuple(said))
+
+
+@contextlib.contextmanager
+def _warnings_into(said: list):
+    """Every :class:`lfproc.LfprocWarning` raised inside is appended to ``said`` (each distinct message once), not
+    shown; other warnings go on to the usual handler."""
+    from ..errors import LfprocWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            others = []
+            for item in caught:
+                if issubclass(item.category, LfprocWarning):
+                    if str(item.message) not in said:
+                        said.append(str(item.message))
+                else:
+                    others.append(item)
+    for item in others:
+        warnings.warn_explicit(item.message, item.category, item.filename, item.lineno)
 
 
 def worker_threads(workers: int) -> int:

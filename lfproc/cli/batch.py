@@ -109,8 +109,9 @@ def run(args) -> int:
         if camera is None:
             raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
     if args.calib and to_decode:   # a grid of another camera: refused here, naming the camera file
-        from ..inputs import check_grid_fits_camera, read_grid_record
-        check_grid_fits_camera(camera, read_grid_record(args.calib))
+        from ..grid import LensGrid
+        from ..inputs import check_grid_fits_camera
+        check_grid_fits_camera(camera, LensGrid.load(args.calib))
     if args.views:
         check_view_options(args, camera)
     if args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None:
@@ -122,9 +123,10 @@ def run(args) -> int:
     require_output_folder(args.outdir)
     white = _abs(white_image_for(to_decode, args.white, args.white_dir)) if to_decode else None
     if args.calib and not white:  # decode with the white image the grid file recorded (as lfproc refocus
-        from ..inputs import read_grid_record  # does), and let its file stamp into every capture's fingerprint
+        from ..grid import LensGrid  # does), and let its file stamp into every capture's fingerprint
 
-        recorded = read_grid_record(args.calib).white_image
+        fit = LensGrid.load(args.calib).calibration
+        recorded = fit.white_image if fit is not None else None
         white = os.path.abspath(recorded) if recorded and os.path.isfile(recorded) else None
     stems = unique_stems(sources)
     outdir = os.path.abspath(args.outdir)
@@ -197,7 +199,7 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     from .. import batch
 
     fingerprints = {job.source: job.fingerprint() for job in jobs}
-    todo, counts, failures = [], {"done": 0, "skipped": 0, "failed": 0}, []
+    todo, counts, failures, warned = [], {"done": 0, "skipped": 0, "failed": 0}, [], []
     for job in jobs:
         if manifest.is_complete(job, fingerprints[job.source]):
             counts["skipped"] += 1
@@ -219,8 +221,11 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
-                if result.error:   # worded for Python by the library: the manifest and stderr use the flags
-                    result = dataclasses.replace(result, error=command_words(result.error))
+                # worded for Python by the library: the manifest and stderr use the flags
+                result = dataclasses.replace(result, error=result.error and command_words(result.error),
+                                             warnings=tuple(command_words(line) for line in result.warnings))
+                if result.warnings:
+                    warned.append((job.source, result.warnings))
                 counts[result.status] += 1
                 manifest.record(job, result, fingerprints[job.source])
                 manifest.save_soon()
@@ -244,10 +249,12 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
             batch.remove_stale_partial_files(manifest.outdir)
     finally:
         summary = dict(counts, total=len(jobs), seconds=round(time.perf_counter() - start, 3),
-                       interrupted=interrupted,
+                       interrupted=interrupted, warned=len(warned),
                        failed_captures=[{"source": s, "error": e} for s, e in failures])
         manifest.save(summary)
     print(format_summary(summary, manifest.path))
+    if warned and not interrupted:     # interrupted: one line says so (the manifest has the warnings)
+        print(warnings_summary(warned, counts["done"] + counts["failed"]), file=sys.stderr)
     if interrupted:
         left = len(jobs) - counts["done"] - counts["skipped"] - counts["failed"]
         print(f"lfproc batch: interrupted with {counts['done']} done, {counts['skipped']} skipped, "
@@ -284,6 +291,20 @@ def format_summary(summary: dict, manifest_path: str) -> str:
         lines.append(f"failed: {error if error.startswith(item['source']) else item['source'] + ': ' + error}")
     lines.append(f"manifest: {manifest_path}")
     return "\n".join(lines)
+
+
+def warnings_summary(warned: list, processed: int) -> str:
+    """How many of the ``processed`` captures warned (their warnings are in the manifest) and each distinct warning once: the
+    capture's own path in a message is left out of the comparison, so a warning every capture gives is one line."""
+    distinct = {}
+    for source, lines in warned:
+        for line in lines:
+            distinct.setdefault(line.replace(source, "CAPTURE"), [line, 0])[1] += 1
+    text = [f"lfproc batch: {len(warned)} of {processed} captures processed warned (each capture's warnings are in "
+            f"the manifest):"]
+    for line, count in distinct.values():
+        text.append(f"  {line}" + (f" (and {count - 1} more capture(s) alike)" if count > 1 else ""))
+    return "\n".join(text)
 
 
 def _without_pictures(inputs, sources):

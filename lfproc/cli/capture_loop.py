@@ -59,7 +59,7 @@ class Inputs:
 
     ``camera`` is the camera that plans slices before the first capture is read: ``--camera`` when
     given, else the one the first decoded light field carries. ``setup`` (a
-    :class:`lfproc.pipeline.DecodeSetup`) is ``None`` when every input is already decoded.
+    :class:`lfproc.api.DecodeSetup`) is ``None`` when every input is already decoded.
     """
 
     paths: tuple
@@ -74,7 +74,11 @@ class Inputs:
         return self.setup.camera
 
     def load(self, path: str):
-        """The light field of one input: read it if decoded, else decode the capture."""
+        """The light field of one input: read it if decoded, else decode the capture (its provenance hash is
+        computed meanwhile, for the outputs to find ready)."""
+        from ..provenance import sha256_soon
+
+        sha256_soon(path)
         if is_lightfield_file(path):
             from ..lightfield import LightField
             lf = LightField.load(path)
@@ -82,8 +86,7 @@ class Inputs:
                 raise LfprocError(f"{path}: this light field carries no camera; decode it again with "
                                   f"'lfproc decode --camera CAM'")
             return lf
-        from ..pipeline import load_lightfield
-        return load_lightfield(path, self.setup)
+        return self.setup.decode(path)
 
 
 def input_camera(args, paths):
@@ -117,6 +120,10 @@ def prepare_inputs(args, paths, camera=None) -> Inputs:
     camera = camera or input_camera(args, paths)
     to_decode = [p for p in paths if not is_lightfield_file(p)]
     setup = setup_from_args(args, camera, to_decode) if to_decode else None
+    if setup is not None:   # the camera, grid, white image and dark frame every output's provenance names
+        from ..provenance import sha256_soon
+        for input_path in setup.inputs.values():
+            sha256_soon(input_path)
     return Inputs(paths, camera, setup)
 
 
@@ -139,13 +146,14 @@ def setup_from_args(args, camera=None, captures=None):
     ``captures`` (default: the command's RAW arguments) are the inputs to decode: ``--white-dir``
     picks the white image for the first, and a Lytro white image is checked against it.
     """
-    from ..pipeline import prepare_decoding
+    from ..api import prepare_decoding
 
     camera = camera or camera_from_args(args)
-    setup = prepare_decoding(camera, args.calib, args.white, interpolation=args.decode_interpolation,
-                             demosaic_method=args.demosaic, white_dir=getattr(args, "white_dir", None),
+    setup = prepare_decoding(camera, args.white, args.calib, getattr(args, "dark", None),
+                             white_dir=getattr(args, "white_dir", None),
                              captures=captures_of(args) if captures is None else list(captures),
-                             dark=getattr(args, "dark", None), white_is_white=getattr(args, "white_is_white", False))
+                             decode_interpolation=args.decode_interpolation, demosaic=args.demosaic, cache=True,
+                             white_is_white=getattr(args, "white_is_white", False))
     for note in (setup.white_note, setup.m_hat_note):
         if note:
             print(f"lfproc: {note}", file=sys.stderr)

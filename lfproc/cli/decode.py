@@ -16,11 +16,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..pipeline import load_lightfield
-
     require_output_file(args.output, "-o LF_FILE", "capture.lfp.npz")
-    setup = setup_from_args(args)
-    lf = load_lightfield(args.raw, setup)
+    lf = setup_from_args(args).decode(args.raw)
     lf.save(args.output)
     m, _, ny, nx, ch = lf.views.shape
     lit = int((lf.views != 0).any(axis=(2, 3, 4)).sum())

@@ -39,7 +39,6 @@ def run(args) -> int:
     from .. import geometry
     from ..camera import Camera
     from ..api import calibrate_white, depth_map, focal_stack, read_light_field
-    from ..atomic import write_json_atomic
     from ..outputs import shown_views, write_mosaic_preview, write_slice_gif, write_view_gif, write_view_mosaic
     from ..viewer import build_page, calibration_summary
 
@@ -64,7 +63,7 @@ def run(args) -> int:
     grid = calibrate_white(sample / "white.png", camera)
     out.mkdir(parents=True, exist_ok=True)
     grid_path = out / "grid.json"
-    write_json_atomic(grid_path, dict(grid.to_json_dict(), white_image=str((sample / "white.png").resolve())))
+    grid.save(grid_path)      # what `lfproc calibrate` writes
     step(f"calibrated {grid.rows}x{grid.cols} {grid.kind} lenses: pitch {grid.pitch_px:.4f} px, rotation "
          f"{grid.rotation_deg:.4f} deg, residual {grid.residual_rms_px:.4f} px -> {grid_path}")
 

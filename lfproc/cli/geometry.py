@@ -136,11 +136,11 @@ def grid_geometry_inputs(camera, calib: str, f_number):
     from .. import geometry
     from ..errors import LfprocWarning
     from ..outputs import summed_views_metadata
-    from ..pipeline import prepare_decoding
+    from ..api import prepare_decoding
 
     with warnings.catch_warnings():       # what decoding would warn of is decoding's to say, not geometry's
         warnings.simplefilter("ignore", LfprocWarning)
-        setup = prepare_decoding(camera, calib, cache=True)
+        setup = prepare_decoding(camera, grid=calib, cache=True)
     camera = setup.camera
     mask = setup.decoder_for((), "none").views_delivered if setup.has_white else None
     if mask is None:

@@ -7,6 +7,7 @@ an `lfproc.LfprocWarning`, and ``white_dir=`` picks silently.
 
 from __future__ import annotations
 
+import os
 import sys
 
 from ..camera import Camera
@@ -15,16 +16,20 @@ from ..errors import LfprocError
 
 def white_image_for(captures, white: str | None = None, white_dir: str | None = None) -> str | None:
     """``--white`` as given, or the white image ``--white-dir`` picks for the first capture (said on stderr)."""
-    from ..pipeline import lytro_metadata_of, white_from_folder
+    from ..io import pick_white_image
 
     if white is not None and white_dir is not None:
         raise LfprocError("give --white WHITE or --white-dir DIR, not both")
     if white_dir is None:
         return white
     first = captures[0] if captures else None
-    path, reason = white_from_folder(white_dir, lytro_metadata_of(first), first)
-    print(f"lfproc: {reason}", file=sys.stderr)
-    return path
+    metadata = _lytro_metadata(first)
+    if metadata is None:
+        raise LfprocError(f"--white-dir {white_dir}: picks a white image by the metadata of Lytro captures, but "
+                          f"{first or 'no capture'} is not a Lytro file; pass --white WHITE instead")
+    choice = pick_white_image(metadata, white_dir)
+    print(f"lfproc: {choice.reason}", file=sys.stderr)
+    return choice.path
 
 
 def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: float | None = None) -> Camera:
@@ -34,11 +39,10 @@ def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: fl
     ``focus_distance_mm``), and one line on stderr says so and how to fix it.
     """
     from ..io import lytro_camera
-    from ..pipeline import lytro_metadata_of
 
     if camera_file is not None:
         return Camera.from_toml(camera_file)
-    first = lytro_metadata_of(captures[0]) if captures else None
+    first = _lytro_metadata(captures[0]) if captures else None
     if first is None:
         where = f"{captures[0]}: " if captures else ""
         raise LfprocError(f"{where}decoding a capture needs --camera CAM (a camera TOML file); only Lytro files "
@@ -50,3 +54,12 @@ def camera_for_captures(camera_file: str | None, captures, focus_distance_mm: fl
           f"settings write it with 'lfproc camera {first.source} -o camera.toml' and pass --camera",
           file=sys.stderr)
     return built.camera
+
+
+def _lytro_metadata(path):
+    """The Lytro metadata of the file ``path``, or None (no path, or not a Lytro file)."""
+    from ..io import is_lytro_file, read_lytro_metadata
+
+    if path is None or not os.path.isfile(path) or not is_lytro_file(path):
+        return None
+    return read_lytro_metadata(path)

@@ -41,7 +41,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from ..outputs import unique_stems
-    from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, serve, write_index
+    from ..viewer import PageOptions, build_page, calibration_summary, make_server, page_entry, write_index
     from ..viewpoints import with_aperture
 
     if _pictures(args):
@@ -73,9 +73,8 @@ def run(args) -> int:
                                         view_extent=summed_extent(lf.camera, args.aperture, lf.view_mask))
             check_view_coverage(lf.camera, a_values, lf.lens_shape, path, lf.view_mask)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
-        setup = inputs.setup
-        grid = lf.grid if lf.grid is not None else getattr(setup, "grid", None)
-        white = getattr(getattr(setup, "white", None), "source", None)
+        grid = lf.grid if lf.grid is not None else getattr(inputs.setup, "grid", None)
+        white = getattr(inputs.setup, "white_path", None)
         pages[path] = build_page(lf, folder, source=os.path.abspath(path), stem=stems[path], a_values=a_values,
                                  calibration=calibration_summary(grid, white),
                                  index_href="../index.html" if several else None, options=options)
@@ -92,7 +91,7 @@ def run(args) -> int:
         return status
     print(f"viewer: {os.path.abspath(index)}")
     if args.serve:
-        serve(os.path.abspath(args.outdir), args.port)
+        serve_until_interrupted(os.path.abspath(args.outdir), args.port)
     return status
 
 
@@ -107,7 +106,7 @@ def _pictures(args) -> bool:
         raise LfprocError(f"{pictures[0]}: a processed Lytro picture among captures; view pictures and captures in "
                           f"separate runs")
     from ..outputs import unique_stems
-    from ..viewer import build_picture_pages, make_server, serve
+    from ..viewer import build_picture_pages, make_server
 
     require_output_folder(args.outdir)
     if args.serve:
@@ -115,5 +114,23 @@ def _pictures(args) -> bool:
     index = build_picture_pages(args.raw, args.outdir, unique_stems(args.raw))
     print(f"viewer: {os.path.abspath(index)}")
     if args.serve:
-        serve(os.path.abspath(args.outdir), args.port)
+        serve_until_interrupted(os.path.abspath(args.outdir), args.port)
     return True
+
+
+def serve_until_interrupted(folder: str, port: int) -> None:
+    """Serve ``folder`` (:func:`lfproc.viewer.serve`), print its address, and stop at Ctrl-C."""
+    import sys
+    import threading
+
+    from ..viewer import serve
+
+    server = serve(folder, port)
+    print(f"serving {folder} at {server.url} (Ctrl-C to stop)", flush=True)
+    try:
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        print("stopped", file=sys.stderr)
+    finally:
+        server.shutdown()
+        server.server_close()

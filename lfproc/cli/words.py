@@ -14,7 +14,8 @@ library (Python)       command                     e.g.
 =====================  ==========================  ===========================================
 
 A few messages name a command's positional argument (``WHITE`` of ``lfproc calibrate``) where Python
-has a keyword: :data:`PHRASES` words those whole, before the table is applied.
+has a keyword, or tell a Python caller how to make a lens grid (``lfproc.calibrate_white``) where a command's
+user runs ``lfproc calibrate``: :data:`PHRASES` words those whole, before the table is applied.
 """
 
 from __future__ import annotations
@@ -51,6 +52,10 @@ FLAGS = {
 #: whole phrases the commands word otherwise than the table would (their positional WHITE; a warning that
 #: also gave the Python spelling before the library spoke Python)
 PHRASES = {
+    "lfproc.calibrate_white(white, camera).save(path)": "lfproc calibrate WHITE --camera CAM -o GRID.json",
+    "lfproc.read_light_field(...).save(path)": "'lfproc decode'",
+    "check the grid (lfproc.calibrate_white)": "check the grid (lfproc calibrate)",
+    "(a LensGrid from lfproc.calibrate_white, or its saved file)": "(from lfproc calibrate)",
     "as white=, or pass white_is_white=True": "as WHITE, or pass --white-is-white",
     "pass the white image as white= and": "pass the white image as WHITE (--white) and",
     "say so with white_is_white=True": "say so with --white-is-white (white_is_white=True)",

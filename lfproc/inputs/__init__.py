@@ -2,7 +2,7 @@
 frame and capture against each other, before anything is decoded (issues 20, 21 and 23).
 
 Public names: `ImageFacts` and `probe_image` (header facts of any input, with the diagnosis ``lfproc info``
-gives), `file_hash`; `GridRecord`, `read_grid_record` and `made_from` (GRID.json's provenance);
+gives), `file_hash`; `made_from` (what a lens grid was fitted from: its calibration's record);
 `check_grid_fits_camera`, `check_same_sensor`, `check_fits_grid_extent`, `reference_facts` (mismatches
 refused in one line naming both files); `read_dark`, `subtract_dark` (``--dark``); `check_white_is_white`,
 `check_capture_is_not_white`, `lens_scene_contrast`, `white_evidence` (swapped white image and capture;
@@ -18,12 +18,12 @@ from ._kind import (SCENE_CONTRAST_LIMIT, SCENE_CORRELATION_LIMIT, TEXTURE_LIMIT
                     white_evidence)
 from ._match import (PITCH_MATCH_FLOOR, PITCH_TOLERANCE_WITHOUT_RECORD, camera_name, check_fits_grid_extent,
                      check_grid_fits_camera, check_same_sensor, expected_pitch_px, pitch_tolerance, reference_facts)
-from ._provenance import GridRecord, made_from, read_grid_record
+from ._provenance import made_from
 
-__all__ = ["GridRecord", "MeasuredMHat", "measured_m_hat", "ImageFacts", "PITCH_MATCH_FLOOR",
+__all__ = ["MeasuredMHat", "measured_m_hat", "ImageFacts", "PITCH_MATCH_FLOOR",
            "PITCH_TOLERANCE_WITHOUT_RECORD", "SCENE_CONTRAST_LIMIT", "SCENE_CORRELATION_LIMIT",
            "TEXTURE_LIMIT", "WhiteEvidence", "white_evidence",
            "WHITE_FLATNESS", "camera_name", "check_capture_is_not_white", "check_fits_grid_extent",
            "check_grid_fits_camera", "check_same_sensor", "check_white_is_white", "expected_pitch_px", "file_hash",
-           "lens_flatness", "lens_scene_contrast", "made_from", "pitch_tolerance", "probe_image", "read_dark", "read_grid_record",
+           "lens_flatness", "lens_scene_contrast", "made_from", "pitch_tolerance", "probe_image", "read_dark",
            "reference_facts", "same_file_content", "subtract_dark"]

@@ -279,6 +279,11 @@ def lens_scene_contrast(image, cfa: str, grid) -> tuple[float, float]:
     return float(np.sqrt(max(0.25 * (plus - minus), 0.0))), float(np.clip((plus - minus) / signal, -1.0, 1.0))
 
 
+#: most interior lenses per view `lens_flatness` judges: a larger light field is judged on a regular subsample
+#: (every s-th lens along both axes), which keeps its 99th percentile and costs a fraction of the whole
+FLATNESS_SAMPLE_LENSES = 20_000
+
+
 def lens_flatness(views: np.ndarray, view_mask=None) -> float:
     """How much a decoded light field's views vary from lens to lens (module docstring).
 
@@ -286,20 +291,25 @@ def lens_flatness(views: np.ndarray, view_mask=None) -> float:
     percentile of |V / median5x5(V) − 1| over the interior lit lenses (channels averaged); the median of
     these. Each view is a pinhole image of the scene, sharp at every depth, so scene detail shows at lens
     resolution however far the scene is from the focus plane. ``inf`` where too few lenses tell (fewer than
-    `MIN_LENSES_PER_SIDE` per side).
+    `MIN_LENSES_PER_SIDE` per side). Over `FLATNESS_SAMPLE_LENSES` interior lenses, every s-th lens along
+    both axes is judged (the fewest s that keep it under that; the median of each judged lens's full 5 × 5
+    neighbourhood): an Illum-sized light field takes a fifth of the time of all its lenses.
     """
-    from scipy import ndimage
-
     views = np.asarray(views)
     m = views.shape[0]
     mask = np.ones((m, m), bool) if view_mask is None else np.asarray(view_mask, bool)
     c, h = (m - 1) // 2, max(1, (m - 1) // 4)
     chosen = [(ky, kx) for ky, kx in ((c, c), (c - h, c), (c + h, c), (c, c - h), (c, c + h)) if mask[ky, kx]]
-    if not chosen or min(views.shape[2:4]) < MIN_LENSES_PER_SIDE:
+    ny, nx = views.shape[2:4]
+    if not chosen or min(ny, nx) < MIN_LENSES_PER_SIDE:
         return float("inf")
+    step = int(np.ceil(np.sqrt((ny - 4) * (nx - 4) / FLATNESS_SAMPLE_LENSES)))
+    rows, cols = np.arange(2, ny - 2, step), np.arange(2, nx - 2, step)
     stack = np.stack([views[ky, kx].mean(axis=-1) for ky, kx in chosen]).astype(np.float32)   # (V, Ny, Nx)
-    trend = ndimage.median_filter(stack, size=(1, 5, 5), mode="nearest")[:, 2:-2, 2:-2]
-    inner = stack[:, 2:-2, 2:-2]
+    near = np.arange(-2, 3)
+    around = stack[:, (rows[:, None] + near)[:, None, :, None], (cols[:, None] + near)[None, :, None, :]]
+    trend = np.median(around.reshape(*around.shape[:3], 25), axis=-1)       # (V, rows, cols): median of 5 x 5
+    inner = stack[:, rows[:, None], cols[None, :]]
     values = []
     for view, level in zip(inner, trend):
         top = float(np.percentile(level, 95))

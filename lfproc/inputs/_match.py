@@ -1,6 +1,6 @@
 """Do camera, grid, white image, dark frame and capture belong together? One-line refusals naming both files.
 
-Checked before anything is decoded (every command goes through `lfproc.pipeline`, which calls these):
+Checked before anything is decoded (every decoding goes through `lfproc.prepare_decoding`, which calls these):
 
 * **lattice kind and Bayer pattern**: the grid's ``grid`` equals the camera file's ``mla.grid``, and the
   camera file's ``sensor.cfa`` is the one the grid was calibrated with (where recorded);
@@ -41,37 +41,41 @@ def expected_pitch_px(camera) -> float:
     return float(camera.pitch_px) * float(micro_image_scale(camera))
 
 
-def check_grid_fits_camera(camera, record) -> None:
-    """Refuse a grid (`GridRecord`) made for another camera: lattice kind and micro image pitch (module docstring)."""
-    grid, cam = record.grid, camera_name(camera)
+def check_grid_fits_camera(camera, grid) -> None:
+    """Refuse a `LensGrid` made for another camera: lattice kind and micro image pitch (module docstring)."""
+    from ..grid import MAKE_GRID
+
+    cam, name = camera_name(camera), grid.source or "the grid"
     if grid.kind != camera.grid:
-        raise LfprocError(f"{record.path}: holds a {grid.kind} lens grid but {cam} says mla.grid = "
-                          f"\"{camera.grid}\"; use the camera file the grid was calibrated with, or calibrate again "
-                          f"with 'lfproc calibrate WHITE --camera {cam} -o GRID.json'")
+        raise LfprocError(f"{name}: holds a {grid.kind} lens grid but {cam} says mla.grid = "
+                          f"\"{camera.grid}\"; use the camera file the grid was calibrated with, or fit the grid "
+                          f"again with {MAKE_GRID}")
     expected = expected_pitch_px(camera)
     deviation = grid.pitch_px / expected - 1.0
-    tolerance, recorded = pitch_tolerance(record)
+    tolerance, recorded = pitch_tolerance(grid)
     if abs(deviation) <= tolerance or _same_camera(camera, recorded):
-        recorded_cfa = (record.camera_facts or {}).get("cfa")
+        recorded_cfa = (recorded or {}).get("cfa")
         if recorded_cfa is not None and recorded_cfa != camera.cfa:
-            raise LfprocError(f"{record.path}: was calibrated with sensor.cfa = \"{recorded_cfa}\" but {cam} says "
+            raise LfprocError(f"{name}: was calibrated with sensor.cfa = \"{recorded_cfa}\" but {cam} says "
                               f"\"{camera.cfa}\"; use the camera file the grid was calibrated with, or calibrate again")
         return
     made_for = "" if recorded is None else \
         f", and it was calibrated for {recorded.get('lens_pitch_px', float('nan')):.3f} px per lens"
-    raise LfprocError(f"{record.path}: its micro image pitch is {grid.pitch_px:.3f} px but {cam} predicts "
+    raise LfprocError(f"{name}: its micro image pitch is {grid.pitch_px:.3f} px but {cam} predicts "
                       f"{expected:.3f} px (mla.pitch_mm / sensor.pixel_pitch_mm x the exit pupil's scale; "
                       f"{100 * deviation:+.1f} %, more than the {100 * tolerance:.1f} % accepted{made_for}): the grid "
                       f"belongs to another camera; pass the camera file it was made for, or calibrate again")
 
 
-def pitch_tolerance(record) -> tuple[float, dict | None]:
-    """The accepted relative pitch difference of a grid record, and its recorded camera facts (or None)."""
-    recorded = record.camera_facts
+def pitch_tolerance(grid) -> tuple[float, dict | None]:
+    """The accepted relative pitch difference of a `LensGrid`, and the camera facts its calibration recorded
+    (or None)."""
+    calibration = grid.calibration
+    recorded = None if calibration is None else calibration.camera_facts
     if recorded is None:
         return PITCH_TOLERANCE_WITHOUT_RECORD, None
-    sigma = record.pitch_sigma_px
-    own = 3.0 * sigma / record.grid.pitch_px + 1e-4 if sigma is not None and math.isfinite(sigma) else 0.0
+    sigma = calibration.pitch_sigma_px
+    own = 3.0 * sigma / grid.pitch_px + 1e-4 if sigma is not None and math.isfinite(sigma) else 0.0
     return max(own, PITCH_MATCH_FLOOR), recorded
 
 
@@ -84,16 +88,17 @@ def _same_camera(camera, recorded: dict | None) -> bool:
             and abs(micro_image_scale(camera) / recorded["micro_image_scale"] - 1.0) <= SAME_CAMERA_TOLERANCE)
 
 
-def reference_facts(record, white_facts=None):
-    """What every sensor image must match: the given (or recorded) white image's facts, else the record's."""
+def reference_facts(grid, white_facts=None):
+    """What every sensor image must match: the given white image's facts, else those the grid's calibration
+    recorded of its white image (None where neither is known)."""
     from ._facts import ImageFacts
 
     if white_facts is not None:
         return white_facts
-    facts = record.white_facts if record is not None else None
+    facts = grid.calibration.white_facts if grid is not None and grid.calibration is not None else None
     if facts:
-        return ImageFacts(facts.get("path") or record.path, facts["height"], facts["width"], facts.get("cfa"),
-                          int(facts.get("channels") or 1))
+        return ImageFacts(facts.get("path") or grid.source or "the grid", facts["height"], facts["width"],
+                          facts.get("cfa"), int(facts.get("channels") or 1))
     return None
 
 
@@ -114,15 +119,14 @@ def check_same_sensor(facts, reference, what: str = "capture", reference_what: s
                           f"{reference.path} has {reference.channels}; save both the same way (raw mosaic or RGB)")
 
 
-def check_fits_grid_extent(facts, record, what: str = "capture") -> None:
-    """For grid files without a white image record: the lenses must lie on this sensor."""
+def check_fits_grid_extent(facts, grid, what: str = "capture") -> None:
+    """For grids without a record of their white image: the lenses must lie on this sensor."""
     import numpy as np
 
-    grid = record.grid
     xy = grid.centers_xy_px().reshape(-1, 2)
     margin = grid.pitch_px
     if xy[:, 0].max() > facts.width - 1 + margin or xy[:, 1].max() > facts.height - 1 + margin \
             or xy.min() < -margin or not np.isfinite(xy).all():
-        raise LfprocError(f"{facts.path}: this {what} is {facts.size} pixels but the lenses of {record.path} reach "
+        raise LfprocError(f"{facts.path}: this {what} is {facts.size} pixels but the lenses of {grid.source or 'the grid'} reach "
                           f"to x = {xy[:, 0].max():.0f}, y = {xy[:, 1].max():.0f}: the grid was calibrated on "
                           f"another sensor; calibrate again with this camera's white image")

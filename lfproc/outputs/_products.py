@@ -106,7 +106,8 @@ def write_views(outdir: str, stem: str, source: str, camera, views: np.ndarray, 
     from ..io import write_image, write_sidecar
 
     jobs = []
-    tone, tone_meta = display_exposure(views if keep is None else views[np.asarray(keep, bool)], fmt)
+    shown = views if keep is None or fmt != "jpeg" else views[np.asarray(keep, bool)]   # a copy for JPEGs only
+    tone, tone_meta = display_exposure(shown, fmt)
     real = _real_view_tags(camera, centre)
     tail = {} if provenance is None else {"provenance": provenance}
     for row in viewpoint_geometry(camera, centre):

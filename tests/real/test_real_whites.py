@@ -34,8 +34,8 @@ def test_hylfm_flat_calibrates_to_its_independent_reference(tmp_path, real_dir):
     assert not [line for line in lines if "scene" in line], lines
     # pitch 19.222 px vs the camera file's 19.215 px (+0.04 %): inside the fit's uncertainty, no relay warning
     assert not [line for line in lines if "relay" in line], lines
-    from lfproc.inputs import read_grid_record
-    grid = read_grid_record(str(tmp_path / "grid.json")).grid
+    from lfproc import LensGrid
+    grid = LensGrid.load(tmp_path / "grid.json")
     centres = grid.centers_xy_px().reshape(-1, 2)
     assert np.min(np.hypot(*(centres - [803.83, 608.60]).T)) < 0.5
 
