@@ -7,6 +7,7 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     fs = lfproc.focal_stack(lf, a=[0.5, 1.0])                            # -> FocalStack (images + tags)
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthResult
+    vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 
 Results are frozen; their tags are the numbers the commands write in their sidecars (the same functions
@@ -16,10 +17,11 @@ path is given (the decoder cache is opt-in: ``cache=True``), and errors name Pyt
 
 Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_read`` (captures,
 white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth``
-(depth maps). Importing this package is light (numpy only).
+(depth maps), ``_deconvolve`` (a microscope's volume by wave-optics deconvolution, :mod:`lfproc.wave`). Importing this package is light (numpy only).
 """
 
 from ._checks import check_refocused_area, check_slice_meaning, check_view_coverage, lowest_meaningful_a
+from ._deconvolve import Volume, deconvolve
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
@@ -27,6 +29,6 @@ from ._read import calibrate_white, read_light_field
 from ._views import ViewStack, view_stack
 
 __all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
-           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
+           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume",
            # the checks the commands share (worded with their flags there)
            "check_refocused_area", "check_slice_meaning", "check_view_coverage", "lowest_meaningful_a"]

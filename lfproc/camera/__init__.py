@@ -11,7 +11,7 @@ lens, relay of a light-field microscope), ``_toml`` (reading and writing the con
 from ._camera import Camera
 from ._lens import DEFAULT_LENS_WAVELENGTH_NM, LensPrescription, Surface
 from ._main_optics import NATIVE_PLANE_UM, SENSOR_MM, MainLens, MainOptics, ObjectSpace, PositionNames, SliceNames
-from ._microscope import Microscope
+from ._microscope import Microscope, WaveOptics
 from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
 from ._optics import image_distance_for_focus, largest_odd_at_most
 from ._toml import KNOWN_KEYS, parse_provenance
@@ -19,5 +19,5 @@ from ._zmx import read_zmx
 from ._validation import CFA_PATTERNS, GRIDS, TOML_KEYS
 
 __all__ = ["Camera", "MainLens", "MainOptics", "ObjectSpace", "PositionNames", "SliceNames", "SENSOR_MM", "NATIVE_PLANE_UM", "RayTransfer",
-           "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
+           "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "WaveOptics", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
            "CFA_PATTERNS", "GRIDS", "TOML_KEYS"]

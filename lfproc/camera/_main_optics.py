@@ -133,6 +133,11 @@ class MainOptics(Protocol):
     def wave_depth_of_field(self) -> float:
         """The diffraction term added to every slice's geometric DOF, in :attr:`object_space` units."""
 
+    @property
+    def wave_optics(self):
+        """The objective's parameters for a wave-optics model (:class:`~._microscope.WaveOptics`: NA, immersion,
+        magnification, focal lengths, wavelength), or ``None`` where the optics have none (a main lens)."""
+
     def describe(self) -> str:
         """A short human description (``f/4 main lens, f_U 100 mm`` / ``20x/0.5 objective``)."""
 
@@ -167,6 +172,8 @@ class MainLens:
     object_space = SENSOR_MM
     relay_magnification = 1.0
     views_are_orthographic = False
+    #: no wave-optics model of a photographic main lens (deconvolution needs a microscope's)
+    wave_optics = None
 
     @property
     def image_aperture_sine(self) -> float | None:

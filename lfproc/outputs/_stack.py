@@ -138,6 +138,37 @@ def _even(z: np.ndarray) -> bool:
 
 def _label(record: dict) -> str:
     if "z_um" in record:
-        return f"a={record['a']:.6g} z={record['z_um']:.6g} um"
+        where = f"z={record['z_um']:.6g} um"
+        return f"a={record['a']:.6g} {where}" if "a" in record else where
     distance = record.get("distance_mm", math.nan)
     return f"a={record['a']:.6g} d={'inf' if not math.isfinite(distance) else f'{distance:.6g}'} mm"
+
+
+def volume_paths(outdir: str, stem: str) -> tuple[str, str]:
+    """``lfproc deconvolve``'s two files: ``OUTDIR/STEM_volume.ome.tif`` and ``OUTDIR/STEM_volume.json``."""
+    import os
+
+    base = os.path.join(outdir, stem + "_volume")
+    return base + ".ome.tif", base + ".json"
+
+
+def write_volume(outdir: str, stem: str, data: np.ndarray, voxel_um, record: dict) -> list[str]:
+    """A deconvolved volume ``data`` (Z, Y, X) as an OME-TIFF z-stack with its voxel size in µm (planes ordered by
+    ``record["z_um"]``, their records in its Description) and ``record`` as ``STEM_volume.json``; both or neither
+    (the stack is removed if the record cannot be written). Returns the two paths."""
+    import contextlib
+    import os
+
+    from ..atomic import write_json_atomic
+
+    stack, sidecar = volume_paths(outdir, stem)
+    planes = [{"z_um": float(z), "plane": i} for i, z in enumerate(record["z_um"])]
+    write_focal_stack(stack, np.asarray(data, dtype=np.float32)[..., None], planes, kind="ome",
+                      lens_um=float(voxel_um[2]), upsample=1)
+    try:
+        write_json_atomic(sidecar, record)
+    except BaseException:
+        with contextlib.suppress(OSError):      # inside an all_or_nothing group it was never renamed into place
+            os.remove(stack)
+        raise
+    return [stack, sidecar]
