@@ -178,9 +178,9 @@ def decoder_key(*, white: str, camera, grid: LensGrid, interpolation: str, demos
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()
 
 
-def operators_key(camera, z_um, superres: int, sample_shift=(0.0, 0.0)) -> str:
-    """The cache key of a microscope's deconvolution operators (:func:`lfproc.wave.build_operators` with its
-    default sampling): the optics, the lenslets, m̂, the depths, S, the view centre, lfproc and ``wave/``."""
+def operators_key(camera, z_um, superres: int, sample_shift=(0.0, 0.0), oversample=None) -> str:
+    """The cache key of a microscope's deconvolution operators (:func:`lfproc.wave.build_operators`): the optics,
+    the lenslets, m̂, the depths, S, the view centre, the field's sampling, lfproc and ``wave/``."""
     from . import __version__
 
     optics = camera.main_optics.wave_optics
@@ -189,7 +189,7 @@ def operators_key(camera, z_um, superres: int, sample_shift=(0.0, 0.0)) -> str:
                         optics.wavelength_nm],
              "lenslets": [camera.mla_pitch_mm, camera.mla_focal_length_mm, camera.m_hat, camera.grid],
              "z_um": [float(v) for v in z_um], "superres": int(superres),
-             "sample_shift": [float(v) for v in sample_shift]}
+             "sample_shift": [float(v) for v in sample_shift], "oversample": oversample}
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()
 
 

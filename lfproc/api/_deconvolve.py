@@ -4,8 +4,10 @@ The measurement the wave-optics model predicts (docs/deconvolution.md): the deco
 white image (which takes out the lens-to-lens gains, dust and the pixels' vignetting of the real instrument)
 and the model's own white image puts the optics' light distribution back, view by view, so the data are
 ``views[u] · white_model[u]`` in the model's units: a uniform plane of voxels of value 1 reproduces a capture
-equal to the white image. Views outside the objective's NA (or dark in the white image) and lenses whose every
-lit view is 0 (lenses the white image left dark) are not measurements (weight 0).
+equal to the white image. Views outside the objective's NA (or dark in the white image: the light field's view
+mask) are not measurements (weight 0); every sample of the other views is, a sample the decoder left at 0
+because the white image is dark there (a lenslet under dust so thick that it passes under a tenth of the light)
+included: it reads as "no light" there.
 """
 
 from __future__ import annotations
@@ -112,7 +114,7 @@ class Volume:
 def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, iterations: int = 8,
                superres: int = 3, background="auto", tolerance: float | None = None, antialias: bool = True,
                operators=None, cache: bool = False, backend: str = "numpy", memory_mb: float = 512,
-               progress=None) -> Volume:
+               oversample: int | None = None, progress=None) -> Volume:
     """Deconvolve a light-field microscope capture into a volume (Richardson–Lucy with a wave-optics model).
 
     Parameters
@@ -145,6 +147,9 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
         Where the arithmetic runs (CuPy needs a GPU; never required).
     memory_mb : float
         Budget of the projections' per-frequency matrices, in MB (larger: fewer, larger tiles).
+    oversample : int, optional
+        Field sub-samples per pixel and axis of the operators (odd; default: above the field's Nyquist rate;
+        1 samples the field once per pixel, as pyolaf does).
     progress : callable, optional
         ``progress(stage, done, total)`` with stage "operators" (per plane) or "iterations".
 
@@ -184,7 +189,7 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
     z = wave.check_z(z_um, optics, camera.mla_pitch_mm * 1000.0, lenses)
     shift = lf.view_centre or (0.0, 0.0)
     if operators is None:
-        operators = _operators(camera, z, superres, shift, lenses, cache, progress)
+        operators = _operators(camera, z, superres, shift, lenses, cache, progress, oversample)
     else:
         _check_operators(operators, camera, z, superres, shift)
     views, weights, data, level = _measurement(lf, operators, background_level)
@@ -215,19 +220,20 @@ def _background_argument(background):
     return value
 
 
-def _operators(camera, z, superres, shift, lenses, cache, progress):
+def _operators(camera, z, superres, shift, lenses, cache, progress, oversample):
     """The operators for this camera, from the cache on disk when ``cache`` (built and stored there otherwise)."""
     from .. import wave
 
     def build():
         step = None if progress is None else (lambda done, total: progress("operators", done, total))
-        return wave.build_operators(camera, z, superres, sample_shift=shift, lenses=lenses, progress=step)
+        return wave.build_operators(camera, z, superres, sample_shift=shift, lenses=lenses, progress=step,
+                                    oversample=oversample)
 
     if not cache:
         return build()
     from ..decoder_cache import cached_entry, operators_key
 
-    return cached_entry(operators_key(camera, z, superres, shift), build, wave.WaveOperators)
+    return cached_entry(operators_key(camera, z, superres, shift, oversample), build, wave.WaveOperators)
 
 
 def _check_operators(operators, camera, z, superres, shift) -> None:
@@ -258,8 +264,7 @@ def _measurement(lf, operators, background_level):
     samples = lf.views[picked[:, 0], picked[:, 1]].mean(axis=-1, dtype=np.float64)          # (U', Ny, Nx)
     finite = np.isfinite(samples)
     samples = np.where(finite, samples, 0.0)
-    live_lens = (samples != 0).any(axis=0)                 # a lens whose every lit view is 0: the white left it dark
-    weights = (finite & live_lens[None]).astype(np.float32)
+    weights = finite.astype(np.float32)
     if background_level is None:
         measured = samples[weights > 0]
         background_level = max(float(np.percentile(measured, BACKGROUND_PERCENTILE)), 0.0) if measured.size else 0.0

@@ -8,10 +8,11 @@ left dark) the multiplicative update that increases the Poisson likelihood is
     x ← x · Hᵀ(w·y / (H·x + b)) / Hᵀw
 
 followed by the depth-adaptive anti-aliasing filter of each plane (:mod:`._filter`). Guards: voxels whose
-Hᵀw is below ``SEEN_SHARE`` of the median are not estimated (0; at most the volume's outermost voxels,
+Hᵀw is below ``SEEN_SHARE`` of its largest value are not estimated (0; at most the volume's outermost voxels,
 which little of the measurement sees: dividing by a tiny Hᵀw is how pyolaf's reconstruction diverged at
 the border), the prediction is floored at a tiny positive value, negative and non-finite data count as 0
-with weight 0, so no NaN or infinity can arise. Each iteration records the relative misfit
+with weight 0. No NaN or infinity can arise: the update keeps Σ x·Hᵀw ≤ Σ w·y (the light measured), so every
+voxel stays below Σ w·y / (``SEEN_SHARE``·max Hᵀw). Each iteration records the relative misfit
 ‖w·(H·x + b − y)‖ / ‖w·y‖ of its result; an optional tolerance stops when an iteration improves it by less
 than that fraction.
 """
@@ -22,7 +23,7 @@ import numpy as np
 
 from ._filter import apply_filter
 
-#: voxels seen by less than this share of the median Hᵀw are left at 0
+#: voxels seen by less than this share of the largest Hᵀw are left at 0
 SEEN_SHARE = 0.05
 #: the prediction's floor, as a share of the data's mean
 PREDICTION_FLOOR = 1e-6
@@ -85,9 +86,7 @@ def richardson_lucy(projector, data, weights, background, iterations: int, *, su
     b = xp.broadcast_to(be.asarray(np.asarray(background, dtype=np.float32).reshape(-1, 1, 1)), y.shape)
     wy = w * y
     seen = projector.backward(w)
-    positive = seen[seen > 0]
-    level = float(xp.median(positive)) if positive.size else 0.0
-    live = seen > SEEN_SHARE * level
+    live = seen > SEEN_SHARE * float(seen.max())
     norm = xp.where(live, seen, 1).astype(xp.float32)
     z_count = projector.inputs // (superres * superres)
     x = live.astype(xp.float32)
