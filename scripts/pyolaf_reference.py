@@ -140,6 +140,7 @@ def deconvolve(optics: dict, image: str, out: str) -> None:
 
     lf_image = np.load(image).astype(np.float32)
     optics = dict(optics, image_px=list(lf_image.shape))
+    shape = np.array(lf_image.shape)
     t0, c0 = time.time(), _cpu()
     camera, centres, resolution = _geometry(optics)
     t_geometry = time.time() - t0
@@ -150,15 +151,14 @@ def deconvolve(optics: dict, image: str, out: str) -> None:
     kernel = lanczosfft(volume_size, LFM_computeDepthAdaptiveWidth(camera, resolution), optics.get("lanczos_window", 4))
     crange = camera["range"]
     ones = np.ones(volume_size, dtype=np.float32)
-    ones_forward = LFM_forwardProject(h, ones, centres, resolution, lf_image.shape, crange, step=8)
+    ones_forward = LFM_forwardProject(h, ones, centres, resolution, shape, crange, step=8)
     ones_back = LFM_backwardProject(ht, ones_forward, centres, resolution, tex, crange, step=8)
     t_operators, c_operators = time.time() - t0, _cpu() - c0
     volume = ones.copy()
     per_iteration = []
     for i in range(int(optics.get("iterations", 8))):
         t1 = time.time()
-        guess = ones_forward if i == 0 else LFM_forwardProject(h, volume, centres, resolution, lf_image.shape, crange,
-                                                                 step=10)
+        guess = ones_forward if i == 0 else LFM_forwardProject(h, volume, centres, resolution, shape, crange, step=10)
         with np.errstate(divide="ignore", invalid="ignore"):
             error = lf_image / guess * ones_forward
         error[~np.isfinite(error)] = 0

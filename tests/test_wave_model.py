@@ -182,3 +182,15 @@ def test_refusals_are_one_line():
         build_operators(photo, [0.0], 1)
     with pytest.raises(LfprocError, match="rectangular lenslet grids only"):
         build_operators(microscope_camera(m_hat=9, grid="hexagonal"), [0.0], 1)
+
+
+def test_an_off_centre_view_centre_reads_the_neighbouring_samples():
+    """A decoder that reads the views around an off-centre NA disc (``LightField.view_centre``): with the central
+    view one sample off the lens centre, view u reads where view u + 1 read before."""
+    camera = microscope_camera(m_hat=7)
+    optics = camera.main_optics.wave_optics
+    r = lens_radius(optics, 125.0, 25.0)
+    centred = voxel_patterns(optics, 125.0, 2433.0, 7, 3, 25.0, [(10.0, -20.0)], r)[0]
+    moved = voxel_patterns(optics, 125.0, 2433.0, 7, 3, 25.0, [(10.0, -20.0)], r, sample_shift=(0.0, 1.0))[0]
+    assert np.abs(moved[:, :-1] - centred[:, 1:]).max() < 1e-3 * centred.max()
+    assert np.abs(moved[:, 1:] - centred[:, 1:]).max() > 0.1 * centred.max()     # and it did move

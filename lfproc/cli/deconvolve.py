@@ -58,6 +58,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from ..api import deconvolve
+    from ..atomic import all_or_nothing
     from ..errors import LfprocError
     from ..outputs import output_stem
     from ..wave import check_superres, check_z, wave_optics_of
@@ -82,7 +83,8 @@ def run(args) -> int:
 
         volume = deconvolve(lf, z_um=z, iterations=args.iterations, superres=args.superres, background=background,
                             tolerance=args.tolerance, antialias=not args.no_filter, cache=True, progress=progress)
-    stack, sidecar = volume.save(args.outdir, stem)
+    with all_or_nothing():                                   # both files or neither, even when interrupted
+        stack, sidecar = volume.save(args.outdir, stem)
     print(f"{args.raw}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "
           f"{os.path.basename(sidecar)}")
     return 0
