@@ -59,7 +59,8 @@ CACHE_FORMAT = 2
 MAGIC = b"LFPDEC01"
 ALIGN = 4096
 DEFAULT_MAX_GB = 4.0
-_CODE_DIGEST: dict = {}
+_CODE_DIGEST: list = []
+_WAVE_DIGEST: list = []
 
 
 # ----------------------------------------------------------------------------- where
@@ -139,21 +140,30 @@ def array_digest(array: np.ndarray, cfa: str = "none") -> str:
     return sha.hexdigest()
 
 
-def code_digest(stages=("decode", "io")) -> str:
-    """SHA-256 of the source of the code the prepared state comes from (by default decoding, reading, the grid;
-    the operators': ``("wave",)``), and of this module."""
-    stages = tuple(stages)
-    if stages not in _CODE_DIGEST:
-        here = os.path.dirname(os.path.abspath(__file__))
-        files = sorted([name for stage in stages for name in glob.glob(os.path.join(here, stage, "*.py"))]
-                       + [os.path.join(here, "grid.py"), os.path.abspath(__file__)])
-        sha = hashlib.sha256()
-        for name in files:
-            sha.update(os.path.relpath(name, here).encode() + b"\0")
-            with open(name, "rb") as fh:
-                sha.update(fh.read())
-        _CODE_DIGEST[stages] = sha.hexdigest()
-    return _CODE_DIGEST[stages]
+def code_digest() -> str:
+    """SHA-256 of the source of the code the prepared state comes from (decoding, reading, the grid)."""
+    if not _CODE_DIGEST:
+        _CODE_DIGEST.append(_source_digest(("decode", "io")))
+    return _CODE_DIGEST[0]
+
+
+def wave_code_digest() -> str:
+    """SHA-256 of the source of the deconvolution's operators (``wave/``)."""
+    if not _WAVE_DIGEST:
+        _WAVE_DIGEST.append(_source_digest(("wave",)))
+    return _WAVE_DIGEST[0]
+
+
+def _source_digest(stages) -> str:
+    here = os.path.dirname(os.path.abspath(__file__))
+    files = sorted([name for stage in stages for name in glob.glob(os.path.join(here, stage, "*.py"))]
+                   + [os.path.join(here, "grid.py"), os.path.abspath(__file__)])
+    sha = hashlib.sha256()
+    for name in files:
+        sha.update(os.path.relpath(name, here).encode() + b"\0")
+        with open(name, "rb") as fh:
+            sha.update(fh.read())
+    return sha.hexdigest()
 
 
 def grid_identity(grid: LensGrid) -> dict:
@@ -184,7 +194,7 @@ def operators_key(camera, z_um, superres: int, sample_shift=(0.0, 0.0), oversamp
     from . import __version__
 
     optics = camera.main_optics.wave_optics
-    parts = {"format": CACHE_FORMAT, "kind": "wave-operators", "lfproc": __version__, "code": code_digest(("wave",)),
+    parts = {"format": CACHE_FORMAT, "kind": "wave-operators", "lfproc": __version__, "code": wave_code_digest(),
              "optics": [optics.numerical_aperture, optics.immersion_index, optics.objective_magnification,
                         optics.wavelength_nm],
              "lenslets": [camera.mla_pitch_mm, camera.mla_focal_length_mm, camera.m_hat, camera.grid],

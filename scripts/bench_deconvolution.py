@@ -11,8 +11,11 @@ resident memory, wall time):
 
 1. ``lfproc deconvolve`` end to end (decoding, the operators with an empty cache, 8 iterations, the files);
    then again with the operators in the cache (a rig's second capture);
-2. lfproc's steps timed one by one (operators, projection set-up, each iteration), with the background at 0
-   and, for the comparison with pyolaf at its own sampling, once more with ``oversample=1``;
+2. lfproc's steps timed one by one (operators, projection set-up, each iteration), with the background at 0;
+   then twice more for the comparison: at pyolaf's sampling (``oversample=1``), and "as pyolaf" — its sampling,
+   its filter widths (oLaF's formula takes the depth in air, z·M², where the image lies z·M²/n behind the
+   lenslets) and its update (its example divides by Hᵀ·H·1 and multiplies the ratio by H·1: Richardson–Lucy
+   weighted by H·1);
 3. pyolaf 0.2.1 (its own venv; scripts/pyolaf_reference.py) on the same measurement: lfproc's decoded light
    field as the rectified image at 15 pixels per lens (pyolaf's lenslet finder hangs on the full sea-urchin
    white, so lfproc's grid stands in for it), its operators, then Richardson–Lucy as its example runs it.
@@ -76,8 +79,18 @@ def child_command(folder: str, cache: str) -> dict:
     return {"status": status, "wall_s": time.perf_counter() - start, **_usage()}
 
 
-def child_steps(folder: str, oversample: str) -> dict:
-    """lfproc's steps one by one; saves the volume and the measurement (rectified) for pyolaf."""
+def olaf_widths(ops) -> np.ndarray:
+    """oLaF's anti-aliasing widths (lfproc.wave.filter_widths with the depth in air: Δ = z·M²)."""
+    import dataclasses
+
+    from lfproc import wave
+
+    return wave.filter_widths(dataclasses.replace(ops, immersion_index=1.0))
+
+
+def child_steps(folder: str, variant: str) -> dict:
+    """lfproc's steps one by one (``variant``: "default", "1" for oversample 1, "pyolaf" for pyolaf's sampling,
+    widths and weights); saves the volume and the measurement (rectified) for pyolaf."""
     import warnings
 
     import lfproc
@@ -85,7 +98,7 @@ def child_steps(folder: str, oversample: str) -> dict:
     from lfproc.api._deconvolve import _measurement
 
     warnings.simplefilter("ignore")
-    q = None if oversample == "default" else int(oversample)
+    q = None if variant == "default" else 1
     marks = {}
 
     def mark(name):
@@ -102,11 +115,13 @@ def child_steps(folder: str, oversample: str) -> dict:
     projector = wave.Projector(ops, lf.lens_shape, views)
     mark("projector")
     iteration_marks = []
+    if variant == "pyolaf":
+        weights = weights * projector.forward(np.ones((projector.inputs,) + lf.lens_shape, np.float32))
     volume, misfits = wave.richardson_lucy(projector, data, weights, 0.0, ITERATIONS, superres=SUPERRES,
-                                           widths=wave.filter_widths(ops),
+                                           widths=olaf_widths(ops) if variant == "pyolaf" else wave.filter_widths(ops),
                                            callback=lambda *_: iteration_marks.append(time.perf_counter()))
     mark("iterations")
-    np.save(os.path.join(folder, f"lfproc_volume_{oversample}.npy"), volume)
+    np.save(os.path.join(folder, f"lfproc_volume_{variant}.npy"), volume)
     ny, nx = lf.lens_shape
     full = np.zeros((M_HAT, M_HAT, ny, nx), np.float32)
     picked = ops.views[views]
@@ -168,6 +183,19 @@ def compare_volumes(mine: np.ndarray, theirs: np.ndarray, voxel_offset) -> list:
     return out
 
 
+def figure(volume_path: str, png: str, planes=(0, 3, 5, 7, 10)) -> None:
+    """Five planes of the command's volume and its maximum projection, side by side (each scaled to its
+    99.8th percentile), half size: docs/deconvolution-seaurchin.png."""
+    import tifffile
+    from PIL import Image
+
+    volume = tifffile.imread(volume_path)
+    tiles = [volume[i] for i in planes] + [volume.max(axis=0)]
+    row = np.concatenate([np.clip(t / max(np.percentile(t, 99.8), 1e-12), 0, 1) for t in tiles], axis=1)
+    image = Image.fromarray((row * 255).astype(np.uint8))
+    image.resize((row.shape[1] // 2, row.shape[0] // 2), Image.LANCZOS).save(png, optimize=True)
+
+
 def markdown(results: dict) -> str:
     lf, po = results["lfproc_steps"], results.get("pyolaf")
     cold, warm = results["command_cold"], results["command_warm"]
@@ -213,6 +241,8 @@ def markdown(results: dict) -> str:
                   f"NA, matrices {lf['matrix_mb']:.0f} MB, kernels {lf['kernels_mb']:.0f} MB, field sampled "
                   f"{lf['oversample']} × {lf['oversample']} per pixel. Misfit after each iteration: "
                   + ", ".join(f"{v:.3f}" for v in lf["misfits"]) + "."]
+    if results.get("pyolaf_reused"):
+        lines += ["", "(pyolaf's run is reused from an earlier run of this script with the same settings, `--keep`.)"]
     if "ncc" in results:
         lines += ["", "The volumes, plane by plane (NCC after each plane is standardised, 8 lenses from the border "
                       "left out; both with the background at 0 and the filter on):", "",
@@ -229,6 +259,11 @@ def main(argv=None) -> int:
     parser.add_argument("--threads", type=int, help="BLAS/OpenMP/numba threads of every run")
     parser.add_argument("--markdown", default=os.path.join(ROOT, "docs", "benchmarks-deconvolution.md"))
     parser.add_argument("--json", default=os.path.join(ROOT, "docs", "benchmarks-deconvolution.json"))
+    parser.add_argument("--keep", metavar="DIR", help="keep the volumes and pyolaf's result here (default: a temporary "
+                                                  "folder); with --reuse-pyolaf, pyolaf's result found there is used")
+    parser.add_argument("--reuse-pyolaf", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--figure", default=os.path.join(ROOT, "docs", "deconvolution-seaurchin.png"),
+                        help="the figure of the command's volume (default docs/deconvolution-seaurchin.png)")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
@@ -244,21 +279,33 @@ def main(argv=None) -> int:
                                  "--pyolaf-python PYTHON" if args.pyolaf_python else "") if a)
     results = {"date": time.strftime("%Y-%m-%d"), "machine": f"{platform.machine()}, {os.cpu_count()} CPUs",
                "load_before": round(os.getloadavg()[0], 1), "threads": args.threads or "default", "arguments": shown}
-    with tempfile.TemporaryDirectory() as folder:
-        cache = os.path.join(folder, "cache")
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = args.keep or scratch
+        os.makedirs(folder, exist_ok=True)
+        cache = os.path.join(scratch, "cache")
         results["command_cold"] = run_child(["command", folder, cache], env)
         results["command_warm"] = run_child(["command", folder, cache], env)
+        figure(os.path.join(folder, "out", "light_field_volume.ome.tif"), args.figure)
         results["lfproc_steps_q1"] = run_child(["steps", folder, "1"], env)
+        results["lfproc_steps_as_pyolaf"] = run_child(["steps", folder, "pyolaf"], env)
         results["lfproc_steps"] = run_child(["steps", folder, "default"], env)      # last: its measurement is pyolaf's
         lf = results["lfproc_steps"]
         results["lfproc_cpu_s"] = lf["operators"]["cpu_s"] + lf["projector"]["cpu_s"] + lf["iterations"]["cpu_s"]
         if args.pyolaf_python:
-            po = run_pyolaf(args.pyolaf_python, folder, env)
+            kept = os.path.join(folder, "pyolaf.npz")
+            if args.reuse_pyolaf and os.path.exists(kept):
+                with np.load(kept) as data:
+                    po = {name: data[name] for name in data.files}
+                results["pyolaf_reused"] = True
+            else:
+                po = run_pyolaf(args.pyolaf_python, folder, env)
             assert (po["lens_px"][0, 0] == (M_HAT - 1) // 2).all()   # pyolaf's lenses sit where lfproc's do
             offset = po["lens_vox"][0, 0] - (SUPERRES - 1) // 2
-            results["ncc"] = {f"lfproc (oversample {q}) against pyolaf": compare_volumes(
-                np.load(os.path.join(folder, f"lfproc_volume_{name}.npy")), po["volume"], offset)
-                for q, name in ((results["lfproc_steps"]["oversample"], "default"), (1, "1"))}
+            labels = {"default": f"lfproc (its default: field {results['lfproc_steps']['oversample']}² per pixel)",
+                      "1": "lfproc at pyolaf's sampling (1 per pixel)",
+                      "pyolaf": "lfproc as pyolaf (its sampling, filter widths and update)"}
+            results["ncc"] = {label: compare_volumes(np.load(os.path.join(folder, f"lfproc_volume_{name}.npy")),
+                                                     po["volume"], offset) for name, label in labels.items()}
             results["pyolaf"] = {key: (value.tolist() if isinstance(value, np.ndarray) and key != "volume" else value)
                                  for key, value in po.items() if key not in ("volume", "lens_px", "lens_vox")}
             results["pyolaf_cpu_s"] = float(po["cpu_s"])            # its process from the geometry to the last iteration

@@ -137,9 +137,8 @@ def _even(z: np.ndarray) -> bool:
 
 
 def _label(record: dict) -> str:
-    if "z_um" in record:
-        where = f"z={record['z_um']:.6g} um"
-        return f"a={record['a']:.6g} {where}" if "a" in record else where
+    if "z_um" in record:     # a deconvolved volume's planes have no a
+        return (f"a={record['a']:.6g} " if "a" in record else "") + f"z={record['z_um']:.6g} um"
     distance = record.get("distance_mm", math.nan)
     return f"a={record['a']:.6g} d={'inf' if not math.isfinite(distance) else f'{distance:.6g}'} mm"
 
