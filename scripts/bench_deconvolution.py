@@ -167,11 +167,11 @@ def run_pyolaf(python: str, folder: str, env: dict) -> dict:
     return result
 
 
-def compare_volumes(mine: np.ndarray, theirs: np.ndarray, voxel_offset) -> list:
-    """NCC per plane of two volumes (mine (Z, Y, X); pyolaf's (Y, X, Z), its voxel v at mine's v − offset), each
-    plane standardised, away from the border."""
+def compare_volumes(mine: np.ndarray, theirs: np.ndarray, voxel_offset, shift=(0, 0)) -> list:
+    """NCC per plane of two volumes (mine (Z, Y, X); pyolaf's (Y, X, Z), its voxel v at mine's v − offset, and
+    moved by ``shift`` voxels), each plane standardised, away from the border."""
     dy, dx = (int(v) for v in voxel_offset)
-    theirs = np.moveaxis(theirs, 2, 0)[:, dy:, dx:]
+    theirs = np.roll(np.moveaxis(theirs, 2, 0)[:, dy:, dx:], shift, axis=(1, 2))
     z, y, x = mine.shape
     h, w = min(y, theirs.shape[1]), min(x, theirs.shape[2])
     b = BORDER_LENSES * SUPERRES
@@ -181,6 +181,14 @@ def compare_volumes(mine: np.ndarray, theirs: np.ndarray, voxel_offset) -> list:
         a, c = (a - a.mean()) / (a.std() or 1.0), (c - c.mean()) / (c.std() or 1.0)
         out.append(float((a * c).mean()))
     return out
+
+
+def best_shift(mine: np.ndarray, theirs: np.ndarray, voxel_offset, reach: int = 4):
+    """The whole-voxel shift of pyolaf's volume (within ±``reach``) that agrees best with ``mine`` (mean NCC):
+    its example's filter step, fftshift(ifft2(K·fft2(v))) on odd sizes, moves the volume one voxel up and left
+    at every iteration, which its updates only partly pull back."""
+    shifts = [(sy, sx) for sy in range(-reach, reach + 1) for sx in range(-reach, reach + 1)]
+    return max(shifts, key=lambda s: float(np.mean(compare_volumes(mine, theirs, voxel_offset, s))))
 
 
 def figure(volume_path: str, png: str, planes=(0, 3, 5, 7, 10)) -> None:
@@ -304,8 +312,14 @@ def main(argv=None) -> int:
             labels = {"default": f"lfproc (its default: field {results['lfproc_steps']['oversample']}² per pixel)",
                       "1": "lfproc at pyolaf's sampling (1 per pixel)",
                       "pyolaf": "lfproc as pyolaf (its sampling, filter widths and update)"}
-            results["ncc"] = {label: compare_volumes(np.load(os.path.join(folder, f"lfproc_volume_{name}.npy")),
-                                                     po["volume"], offset) for name, label in labels.items()}
+            volumes = {name: np.load(os.path.join(folder, f"lfproc_volume_{name}.npy")) for name in labels}
+            results["ncc"] = {label: compare_volumes(volumes[name], po["volume"], offset)
+                              for name, label in labels.items()}
+            moved = best_shift(volumes["pyolaf"], po["volume"], offset)
+            results["pyolaf_shift"] = list(moved)
+            results["ncc"].update({f"{label}, pyolaf's volume moved by {moved} voxels":
+                                   compare_volumes(volumes[name], po["volume"], offset, moved)
+                                   for name, label in labels.items()})
             results["pyolaf"] = {key: (value.tolist() if isinstance(value, np.ndarray) and key != "volume" else value)
                                  for key, value in po.items() if key not in ("volume", "lens_px", "lens_vox")}
             results["pyolaf_cpu_s"] = float(po["cpu_s"])            # its process from the geometry to the last iteration

@@ -21,7 +21,7 @@ white images and grids to light fields), ``_focal`` (focal stacks), ``_views`` (
 """
 
 from ._checks import check_refocused_area, check_slice_meaning, check_view_coverage, lowest_meaningful_a
-from ._deconvolve import Volume, deconvolve
+from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
@@ -29,6 +29,6 @@ from ._read import calibrate_white, read_light_field
 from ._views import ViewStack, view_stack
 
 __all__ = ["read_light_field", "calibrate_white", "focal_stack", "FocalStack", "view_stack", "ViewStack",
-           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume",
+           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume", "DEFAULT_SUPERRES",
            # the checks the commands share (worded with their flags there)
            "check_refocused_area", "check_slice_meaning", "check_view_coverage", "lowest_meaningful_a"]

@@ -20,6 +20,8 @@ import numpy as np
 
 from ..errors import LfprocError
 
+#: voxels per lens pitch when neither superres= nor operators= say (the commands' --superres default)
+DEFAULT_SUPERRES = 3
 #: the background's estimate: this percentile of the measured samples (devignetted: the white image's level is 1)
 BACKGROUND_PERCENTILE = 1.0
 #: the sidecar keys of a volume (contract: z_um, voxel_um, iterations, superres, the optics, provenance)
@@ -112,7 +114,7 @@ class Volume:
 
 
 def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, iterations: int = 8,
-               superres: int = 3, background="auto", tolerance: float | None = None, antialias: bool = True,
+               superres: int | None = None, background="auto", tolerance: float | None = None, antialias: bool = True,
                operators=None, cache: bool = False, backend: str = "numpy", memory_mb: float = 512,
                oversample: int | None = None, progress=None) -> Volume:
     """Deconvolve a light-field microscope capture into a volume (Richardson–Lucy with a wave-optics model).
@@ -129,8 +131,8 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
         ``operators``).
     iterations : int
         The most Richardson–Lucy updates (default 8).
-    superres : int
-        S, voxels per lens pitch each way (1 … m̂; default 3).
+    superres : int, optional
+        S, voxels per lens pitch each way (1 … m̂); default: that of ``operators``, else 3.
     background : "auto" or float
         The background per sample in the devignetted light field's units (the white image's level is 1):
         ``"auto"`` takes the 1st percentile of the measured samples, 0 assumes none.
@@ -177,9 +179,11 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
     optics = wave.wave_optics_of(camera, camera.source or "camera")
     if isinstance(iterations, bool) or not float(iterations).is_integer() or iterations < 1:
         raise LfprocError(f"iterations= must be a whole number of at least 1, got {iterations!r}")
-    if tolerance is not None and not (0 < float(tolerance) < 1):
+    if tolerance is not None and not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
         raise LfprocError(f"tolerance= must be a fraction between 0 and 1, got {tolerance!r}")
     background_level = _background_argument(background)
+    if superres is None:
+        superres = DEFAULT_SUPERRES if operators is None else operators.superres
     superres = wave.check_superres(superres, camera.m_hat)
     if z_um is None:
         if operators is None:

@@ -6,6 +6,7 @@ import math
 import os
 import sys
 
+from ..api import DEFAULT_SUPERRES
 from .capture_loop import add_decode_options, add_output_folder_option, input_camera, prepare_inputs, require_output_folder
 
 
@@ -24,7 +25,7 @@ def register(sub) -> None:
                    help="the planes, micrometres from the native object plane (positive towards the objective), "
                         "from Z0 to Z1 in steps of STEP, e.g. -100:100:20")
     p.add_argument("--iterations", type=int, default=8, metavar="N", help="Richardson-Lucy iterations (default 8)")
-    p.add_argument("--superres", type=int, default=3, metavar="S",
+    p.add_argument("--superres", type=int, default=DEFAULT_SUPERRES, metavar="S",
                    help="voxels per lenslet pitch along x and y (1 to the samples per lens; default 3)")
     p.add_argument("--background", default="auto", metavar="B",
                    help="background per sample, the white image's level being 1 (default auto: the 1st percentile)")
