@@ -8,6 +8,7 @@ pyolaf's package) is written here after its example, with the guard on the back-
 needs (a plane diverged to 7.5e11 without it).
 
     python pyolaf_reference.py layout OPTICS.json OUT.npz         # where its lenses and voxels sit
+    python pyolaf_reference.py filter-shift OPTICS.json OUT.npz    # where its example's filter step moves a voxel
     python pyolaf_reference.py patterns OPTICS.json OUT.npz       # forward patterns H for the depths
     python pyolaf_reference.py project OPTICS.json VOLUMES.npz OUT.npz      # H·volume (pyolaf's layout)
     python pyolaf_reference.py deconvolve OPTICS.json IMAGE.npy OUT.npz     # operators + RL on a rectified image
@@ -99,6 +100,19 @@ def layout(optics: dict, out: str) -> None:
     np.savez(out, tex_px=tex, **_layout(centres, resolution, image_px, tex))
 
 
+def filter_shift(optics: dict, out: str) -> None:
+    """Where pyolaf's example's filter step (``abs(fftshift(ifft2(K·fft2(v))))`` with K from its own
+    ``lanczosfft``) moves a single voxel of an odd-sized plane, with the identity kernel (width 1)."""
+    from pyolaf.aliasing import lanczosfft
+
+    size = 9
+    kernel = lanczosfft(np.array([size, size, 1]), np.array([[1, 1]]), 4)[:, :, 0]
+    plane = np.zeros((size, size))
+    plane[size // 2, size // 2] = 1.0
+    moved = np.abs(np.fft.fftshift(np.fft.ifft2(kernel * np.fft.fft2(plane))))
+    np.savez(out, shift=np.argwhere(moved > 0.5)[0] - size // 2)
+
+
 def patterns(optics: dict, out: str) -> None:
     from pyolaf import lf
 
@@ -181,4 +195,4 @@ def deconvolve(optics: dict, image: str, out: str) -> None:
 
 if __name__ == "__main__":
     mode, config = sys.argv[1], json.loads(open(sys.argv[2]).read())
-    {"layout": layout, "patterns": patterns, "project": project, "deconvolve": deconvolve}[mode](config, *sys.argv[3:])
+    {"layout": layout, "filter-shift": filter_shift, "patterns": patterns, "project": project, "deconvolve": deconvolve}[mode](config, *sys.argv[3:])
