@@ -237,3 +237,17 @@ def test_the_command_refuses_in_one_line_before_any_work(bead_sample, tmp_path, 
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and words in err[0], err
         assert not (tmp_path / "o").exists()
+
+
+def test_to_xarray_labels_the_axes_in_micrometres(small):
+    lf, ops = small
+    vol = lfproc.deconvolve(lf, iterations=1, operators=ops)
+    try:
+        import xarray  # noqa: F401
+    except ImportError:
+        with pytest.raises(LfprocError, match="pip install xarray"):
+            vol.to_xarray()
+        return
+    array = vol.to_xarray()
+    assert array.dims == ("z", "y", "x") and list(array["z"].values) == [-20.0, 0.0, 10.0]
+    assert float(array["x"][1] - array["x"][0]) == pytest.approx(vol.voxel_um[2])
