@@ -34,6 +34,7 @@ _LAZY = {
     "focal_stack": ("lfproc.api", "focal_stack"),
     "view_stack": ("lfproc.api", "view_stack"),
     "depth_map": ("lfproc.api", "depth_map"),
+    "deconvolve": ("lfproc.api", "deconvolve"),
 }
 
 __all__ = ["Camera", "LensGrid", "LightField", "LfprocError", "LfprocWarning", "viewpoints", "with_aperture", "sample_path", *_LAZY]

@@ -1,4 +1,5 @@
-"""Derive once, reuse: the decoder's prepared state, cached on disk by the content of what it is made of.
+"""Derive once, reuse: the decoder's prepared state (and a microscope's deconvolution operators), cached on
+disk by the content of what it is made of.
 
 Preparing a :class:`lfproc.decode.Decoder` (the views it delivers, the lenses it keeps, the white
 image's resampled inverse) costs more than decoding a capture with it, and depends only on the white
@@ -25,6 +26,11 @@ image (and a dark frame, when one is subtracted), the camera, the grid and the d
   ``~/.cache/lfproc/decoders``); ``LFPROC_NO_CACHE=1`` disables it (every command derives again);
   ``lfproc info --cache`` says where it is and what it holds (:func:`summary`), ``lfproc info
   --clear-cache`` empties it (or remove the folder: nothing else lives there).
+
+The deconvolution's operators (:class:`lfproc.wave.WaveOperators`: the light-field PSFs of a microscope's
+voxels) are entries of the same cache (:func:`cached_entry`), keyed by the optics, m̂, the lattice, the depths,
+the sampling and the source of ``wave/`` (:func:`operators_key`): every capture of one rig and one z range,
+and every process of a batch, shares them.
 
 A cache that cannot be written (read-only or full disk) is skipped with one warning: decoding never
 fails because of it.
@@ -54,6 +60,7 @@ MAGIC = b"LFPDEC01"
 ALIGN = 4096
 DEFAULT_MAX_GB = 4.0
 _CODE_DIGEST: list = []
+_WAVE_DIGEST: list = []
 
 
 # ----------------------------------------------------------------------------- where
@@ -139,16 +146,27 @@ def array_digest(array: np.ndarray, cfa: str = "none") -> str:
 def code_digest() -> str:
     """SHA-256 of the source of the code the prepared state comes from (decoding, reading, the grid)."""
     if not _CODE_DIGEST:
-        here = os.path.dirname(os.path.abspath(__file__))
-        files = sorted(glob.glob(os.path.join(here, "decode", "*.py")) + glob.glob(os.path.join(here, "io", "*.py"))
-                       + [os.path.join(here, "grid.py"), os.path.abspath(__file__)])
-        sha = hashlib.sha256()
-        for name in files:
-            sha.update(os.path.relpath(name, here).encode() + b"\0")
-            with open(name, "rb") as fh:
-                sha.update(fh.read())
-        _CODE_DIGEST.append(sha.hexdigest())
+        _CODE_DIGEST.append(_source_digest(("decode", "io")))
     return _CODE_DIGEST[0]
+
+
+def wave_code_digest() -> str:
+    """SHA-256 of the source of the deconvolution's operators (``wave/``)."""
+    if not _WAVE_DIGEST:
+        _WAVE_DIGEST.append(_source_digest(("wave",)))
+    return _WAVE_DIGEST[0]
+
+
+def _source_digest(stages) -> str:
+    here = os.path.dirname(os.path.abspath(__file__))
+    files = sorted([name for stage in stages for name in glob.glob(os.path.join(here, stage, "*.py"))]
+                   + [os.path.join(here, "grid.py"), os.path.abspath(__file__)])
+    sha = hashlib.sha256()
+    for name in files:
+        sha.update(os.path.relpath(name, here).encode() + b"\0")
+        with open(name, "rb") as fh:
+            sha.update(fh.read())
+    return sha.hexdigest()
 
 
 def grid_identity(grid: LensGrid) -> dict:
@@ -171,6 +189,21 @@ def decoder_key(*, white: str, camera, grid: LensGrid, interpolation: str, demos
              "camera": camera.to_toml(), "grid": grid_identity(grid), "interpolation": interpolation,
              "demosaic_method": demosaic_method, "options": options or {}}
     return hashlib.sha256(json.dumps(parts, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def operators_key(camera, z_um, superres: int, sample_shift=(0.0, 0.0), oversample=None) -> str:
+    """The cache key of a microscope's deconvolution operators (:func:`lfproc.wave.build_operators`): the optics,
+    the lenslets, m̂, the depths, S, the view centre, the field's sampling, lfproc and ``wave/``."""
+    from . import __version__
+
+    optics = camera.main_optics.wave_optics
+    parts = {"format": CACHE_FORMAT, "kind": "wave-operators", "lfproc": __version__, "code": wave_code_digest(),
+             "optics": [optics.numerical_aperture, optics.immersion_index, optics.objective_magnification,
+                        optics.wavelength_nm],
+             "lenslets": [camera.mla_pitch_mm, camera.mla_focal_length_mm, camera.m_hat, camera.grid],
+             "z_um": [float(v) for v in z_um], "superres": int(superres),
+             "sample_shift": [float(v) for v in sample_shift], "oversample": oversample}
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()
 
 
 # ----------------------------------------------------------------------------- entries
@@ -326,11 +359,17 @@ def cached_decoder(key: str, build):
     """
     from .decode import Decoder
 
+    return cached_entry(key, build, Decoder)
+
+
+def cached_entry(key: str, build, cls):
+    """The entry of ``key`` (a frozen dataclass ``cls`` of arrays, grids and plain values) from the cache, else
+    ``build()`` stored there (one builder per key at a time); ``build()`` alone without a writable cache."""
     folder = cache_dir()
     if folder is None:
         return build()
     path = os.path.join(folder, key + ".lfdec")
-    found = load(path, key, Decoder)
+    found = load(path, key, cls)
     if found is not None:
         return found
     try:
@@ -338,20 +377,20 @@ def cached_decoder(key: str, build):
         lock = _locked(os.path.join(folder, key + ".lock"))
         lock.__enter__()
     except OSError as exc:
-        warnings.warn(f"decoder cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
+        warnings.warn(f"lfproc cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
                       f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)", LfprocWarning, stacklevel=2)
         return build()
     try:
-        found = load(path, key, Decoder)   # another process may have derived it while we waited
+        found = load(path, key, cls)   # another process may have derived it while we waited
         if found is not None:
             return found
-        decoder = build()
+        entry = build()
         try:
-            store(path, key, decoder)
+            store(path, key, entry)
             prune(folder, max_bytes(), keep=path)
         except Exception as exc:  # noqa: BLE001 - a full or read-only disk must not fail the decode
-            warnings.warn(f"decoder cache {folder}: could not store an entry ({exc}); continuing without it",
+            warnings.warn(f"lfproc cache {folder}: could not store an entry ({exc}); continuing without it",
                           LfprocWarning, stacklevel=2)
-        return decoder
+        return entry
     finally:
         lock.__exit__(None, None, None)

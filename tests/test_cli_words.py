@@ -23,6 +23,9 @@ NOT_ARGUMENTS = {
     "view_mask": "LightField.from_views(views, camera, view_mask=...): Python only",
     "main_optics": "the Camera constructor: Python only",
     "microscope": "the Camera constructor: Python only",
+    "backend": "lfproc.deconvolve(backend=...): Python only",
+    "operators": "lfproc.deconvolve(operators=...): Python only (the command keeps them in the cache)",
+    "oversample": "lfproc.deconvolve / lfproc.wave.build_operators(oversample=...): Python only",
 }
 
 

@@ -10,6 +10,7 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     fs = lfproc.focal_stack(lf, a=[0.5, 1.0])                            # -> FocalStack (images + tags)
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthResult
+    vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 
 Results are frozen; their tags are the numbers the commands write in their sidecars (the same functions
@@ -20,11 +21,12 @@ path is given (the decoder cache is opt-in: ``cache=True``), and errors name Pyt
 Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters that make sense), ``_calibrate``
 (the one grid fitting), ``_prepare`` (inputs checked against each other → a decoding setup), ``_setup`` (the
 setup, which decodes captures), ``_read`` (a capture to a light field; how inputs are taken: files or arrays),
-``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth`` (depth maps). Importing this package is light
-(numpy only).
+``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth`` (depth maps), ``_deconvolve`` (a microscope's
+volume by wave-optics deconvolution, :mod:`lfproc.wave`). Importing this package is light (numpy only).
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
+from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
@@ -36,6 +38,6 @@ from ._views import ViewStack, view_stack
 
 __all__ = ["read_light_field", "calibrate_white", "prepare_decoding", "DecodeSetup", "focal_stack", "FocalStack",
            "view_stack", "ViewStack",
-           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION",
+           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume", "DEFAULT_SUPERRES",
            # the checks the commands share (worded with their flags there)
            "check_slices", "check_view_coverage", "check_z_step"]

@@ -14,7 +14,7 @@ from ._camera import Camera
 from ._lens import DEFAULT_LENS_WAVELENGTH_NM, LensPrescription, Surface
 from ._main_lens import MainLens
 from ._main_optics import MainOptics, UsableRange, ViewPlacement, ViewPupil
-from ._microscope import Microscope
+from ._microscope import Microscope, WaveOptics
 from ._space import NATIVE_PLANE_UM, SENSOR_MM, ObjectSpace
 from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
 from ._optics import image_distance_for_focus, largest_odd_at_most
@@ -24,5 +24,5 @@ from ._validation import CFA_PATTERNS, GRIDS, TOML_KEYS
 
 __all__ = ["Camera", "MainLens", "MainOptics", "ObjectSpace", "UsableRange", "ViewPlacement", "ViewPupil", "SENSOR_MM",
            "NATIVE_PLANE_UM", "RayTransfer",
-           "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
+           "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "WaveOptics", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
            "CFA_PATTERNS", "GRIDS", "TOML_KEYS"]

@@ -58,6 +58,8 @@ class MainLens:
 
     object_space = SENSOR_MM
     relay_magnification = 1.0
+    #: no wave-optics model of a photographic main lens (deconvolution needs a microscope's)
+    wave_optics = None
 
     def validate(self, where: str) -> None:
         """Raise `LfprocError` naming the ``main_lens.`` key of an impossible value (``where``: the file)."""

@@ -176,6 +176,11 @@ class MainOptics(Protocol):
     def summary(self, camera) -> dict:
         """The numbers that describe the optics in this camera, JSON-ready (``lfproc geometry --json``)."""
 
+    @property
+    def wave_optics(self):
+        """The objective's parameters for a wave-optics model (:class:`~._microscope.WaveOptics`: NA, immersion,
+        magnification, focal lengths, wavelength), or ``None`` where the optics have none (a main lens)."""
+
     def describe(self) -> str:
         """A short human description (``f/4 main lens, f_U 100 mm`` / ``20x/0.5 objective``)."""
 

@@ -30,9 +30,42 @@ from ._main_optics import UsableRange, ViewPlacement, ViewPupil, slope_step
 from ._space import NATIVE_PLANE_UM
 from ._transfer import RayTransfer, gap, lens
 
+#: λ where the camera file gives no microscope.wavelength_nm
+DEFAULT_WAVELENGTH_NM = 550.0
 #: camera-file key of each Microscope field (error messages)
 MICROSCOPE_KEYS = ("objective_magnification", "numerical_aperture", "immersion_index",
                    "tube_lens_focal_length_mm", "relay_magnification", "wavelength_nm", "aplanatic")
+
+
+@dataclass(frozen=True)
+class WaveOptics:
+    """What a wave-optics model of a light-field microscope needs of its objective (Broxton et al., Opt.
+    Express 21(21), 2013): an aplanatic objective with its tube lens, infinity corrected and telecentric.
+
+    Attributes
+    ----------
+    numerical_aperture : float
+        NA = n·sin α.
+    immersion_index : float
+        n between sample and objective.
+    objective_magnification : float
+        M, with its tube lens.
+    objective_focal_length_mm, tube_lens_focal_length_mm : float
+        f_obj = f_tube / M and f_tube.
+    wavelength_nm : float
+        λ in vacuum (the camera file's ``microscope.wavelength_nm``; 550 where it gives none).
+    """
+
+    numerical_aperture: float
+    immersion_index: float
+    objective_magnification: float
+    objective_focal_length_mm: float
+    tube_lens_focal_length_mm: float
+    wavelength_nm: float
+
+    def describe(self) -> str:
+        return (f"{self.objective_magnification:g}x/{self.numerical_aperture:g} (n {self.immersion_index:g}), "
+                f"{self.wavelength_nm:g} nm")
 
 
 @dataclass(frozen=True)
@@ -131,7 +164,7 @@ class Microscope:
     @property
     def wavelength_mm(self) -> float:
         """λ in millimetres (550 nm where the camera file gives none)."""
-        return (550.0 if self.wavelength_nm is None else self.wavelength_nm) * 1e-6
+        return (DEFAULT_WAVELENGTH_NM if self.wavelength_nm is None else self.wavelength_nm) * 1e-6
 
     # ----------------------------------------------------------------- the main-optics interface (._main_optics)
     object_space = NATIVE_PLANE_UM
@@ -255,6 +288,12 @@ class Microscope:
                     na_views=self.na_view_extent(camera.sample_pitch_mm, camera.mla_focal_length_mm,
                                                  camera.center_index),
                     wavelength_nm=self.wavelength_mm * 1e6)
+    @property
+    def wave_optics(self) -> WaveOptics:
+        """The objective's parameters for wave optics (deconvolution, :mod:`lfproc.wave`)."""
+        return WaveOptics(self.numerical_aperture, self.immersion_index, self.objective_magnification,
+                          self.objective_focal_length_mm, self.tube_lens_focal_length_mm,
+                          DEFAULT_WAVELENGTH_NM if self.wavelength_nm is None else float(self.wavelength_nm))
 
     def describe(self) -> str:
         return f"{self.objective_magnification:g}x/{self.numerical_aperture:g} objective"

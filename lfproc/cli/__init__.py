@@ -18,8 +18,8 @@ from ..errors import LfprocError
 from .words import command_words
 
 #: subcommand modules in the order ``lfproc --help`` lists them
-COMMANDS = ("geometry", "info", "camera", "simulate", "calibrate", "decode", "refocus", "views", "depth", "viewer",
-            "batch", "export", "demo")
+COMMANDS = ("geometry", "info", "camera", "simulate", "calibrate", "decode", "refocus", "views", "depth", "deconvolve",
+            "viewer", "batch", "export", "demo")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -25,6 +25,7 @@ import re
 #: Python argument -> (the commands' flag, or None for a positional argument; the metavar)
 FLAGS = {
     "aperture": ("--aperture", "F"),
+    "background": ("--background", "B"),
     "camera": ("--camera", "CAM.toml"),
     "capture": (None, "RAW"),
     "dark": ("--dark", "DARK"),
@@ -37,10 +38,13 @@ FLAGS = {
     "grid": ("--calib", "GRID.json"),
     "inside_aperture": ("--inside-aperture", None),
     "interpolation": ("--interpolation", "METHOD"),
+    "iterations": ("--iterations", "N"),
     "min_confidence": ("--min-confidence", "C"),
     "outdir": ("-o", "OUTDIR"),
     "port": ("--port", "PORT"),
     "scheduler": ("--scheduler", "ADDRESS"),
+    "superres": ("--superres", "S"),
+    "tolerance": ("--tolerance", "T"),
     "white": ("--white", "WHITE"),
     "white_dir": ("--white-dir", "DIR"),
     "white_is_white": ("--white-is-white", None),

@@ -10,7 +10,7 @@ Modules: ``_names`` (file names), ``_optics_tags`` (what the camera's main optic
 space, views at positions or angles, aperture tags), ``_products`` (linear outputs with metadata), ``_tone`` (exposure
 and sRGB), ``_display`` (upscaling, labels, metres), ``_previews`` (GIFs and PNG previews),
 ``_view_set`` (what ``lfproc views`` writes), ``_stack`` (a focal
-stack as one ImageJ or OME-TIFF file with its physical spacing), ``_lytro_pictures`` (``lfproc export``: a processed
+stack as one ImageJ or OME-TIFF file with its physical spacing; a deconvolved volume and its record), ``_lytro_pictures`` (``lfproc export``: a processed
 Lytro picture's stack, depth and views). The depth colour scale lives in :mod:`lfproc.colours` and the 8-bit
 picture writers (:func:`write_png_preview`, :func:`write_gif_frames`) in :mod:`lfproc.io`; both are re-exported here. Pillow and
 OpenImageIO load only when something is written.
@@ -26,7 +26,7 @@ from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_labe
                         write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
 from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
                         write_view_mosaic, write_views)
-from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, write_focal_stack
+from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, volume_paths, write_focal_stack, write_volume
 from ._tone import ToneMap
 from ._view_set import ViewSet, shown_views, write_view_set
 
@@ -37,4 +37,5 @@ __all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "output_stem", "
            "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
            "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
            "mosaic_of_shown", "aperture_tags", "stack_f_number",
-           "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture"]
+           "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture", "volume_paths",
+           "write_volume"]

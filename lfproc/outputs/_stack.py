@@ -50,11 +50,13 @@ def stack_path(outdir: str, stem: str, kind: str) -> str:
 
 
 def stack_axis(records: list[dict], space) -> tuple[np.ndarray, np.ndarray]:
-    """The stack's order (indices into ``records``: increasing ``a``) and each slice's position in ``space``
-    (the record's ``space.position_key``: ``z_um`` of a microscope, ``distance_mm`` of a camera; NaN without)."""
-    a = np.array([r["a"] for r in records], dtype=np.float64)
-    order = np.argsort(a, kind="stable")
-    return order, np.array([r.get(space.position_key, math.nan) for r in records], dtype=np.float64)[order]
+    """The stack's order (indices into ``records``: increasing ``a``, or increasing position where the records
+    have no ``a``, as a deconvolved volume's planes) and each slice's position in ``space`` (the record's
+    ``space.position_key``: ``z_um`` of a microscope, ``distance_mm`` of a camera; NaN without)."""
+    position = np.array([r.get(space.position_key, math.nan) for r in records], dtype=np.float64)
+    key = np.array([r["a"] for r in records], dtype=np.float64) if all("a" in r for r in records) else position
+    order = np.argsort(key, kind="stable")
+    return order, position[order]
 
 
 def z_spacing_um(z_um: np.ndarray) -> float:
@@ -134,4 +136,36 @@ def _even(z: np.ndarray) -> bool:
 
 def _label(record: dict, space) -> str:
     position = record.get(space.position_key, math.nan)
-    return f"a={record['a']:.6g} {space.letter}={'inf' if not math.isfinite(position) else f'{position:.6g}'} {space.symbol}"
+    a = f"a={record['a']:.6g} " if "a" in record else ""      # a deconvolved volume's planes have no a
+    return f"{a}{space.letter}={'inf' if not math.isfinite(position) else f'{position:.6g}'} {space.symbol}"
+
+
+def volume_paths(outdir: str, stem: str) -> tuple[str, str]:
+    """``lfproc deconvolve``'s two files: ``OUTDIR/STEM_volume.ome.tif`` and ``OUTDIR/STEM_volume.json``."""
+    import os
+
+    base = os.path.join(outdir, stem + "_volume")
+    return base + ".ome.tif", base + ".json"
+
+
+def write_volume(outdir: str, stem: str, data: np.ndarray, voxel_um, record: dict, space) -> list[str]:
+    """A deconvolved volume ``data`` (Z, Y, X) as an OME-TIFF z-stack with its voxel size in µm (planes ordered by
+    ``record["z_um"]``, their records in its Description; ``space``: the object space of those depths) and
+    ``record`` as ``STEM_volume.json``; both or neither (the stack is removed if the record cannot be written).
+    Returns the two paths."""
+    import contextlib
+    import os
+
+    from ..atomic import write_json_atomic
+
+    stack, sidecar = volume_paths(outdir, stem)
+    planes = [{"z_um": float(z), "plane": i} for i, z in enumerate(record["z_um"])]
+    write_focal_stack(stack, np.asarray(data, dtype=np.float32)[..., None], planes, space, kind="ome",
+                      lens_um=float(voxel_um[2]), upsample=1)
+    try:
+        write_json_atomic(sidecar, record)
+    except BaseException:
+        with contextlib.suppress(OSError):      # inside an all_or_nothing group it was never renamed into place
+            os.remove(stack)
+        raise
+    return [stack, sidecar]
