@@ -113,7 +113,7 @@ STAGE_PAGES = [
     "[geometry and triangulation](benchmarks-geometry.md) (`scripts/bench_geometry.py`), "
     "[depth maps](benchmarks-depth.md) (`scripts/bench_depth.py`), [the viewer](benchmarks-viewer.md) "
     "(`scripts/bench_viewer.py`), [whole commands: time, peak memory, view writing against the disk]"
-    "(benchmarks-commands.md) (`scripts/bench_commands.py`), [refocusing](../README.md#refocusing-speed) "
+    "(benchmarks-commands.md) (`scripts/bench_commands.py`), [refocusing](benchmarks-refocus.md) "
     "(`scripts/bench_refocus.py`). The tables below (`scripts/bench.py`) predate this wave's calibration "
     "and decoding changes where those pages give newer numbers. Their headline numbers (Illum-sized "
     "inputs, 2 cores, 2026-11-23; each page has the method, the load and the floor of its run):",

@@ -194,7 +194,7 @@ def main() -> None:
         "",
         f"lfproc is {plain['seconds'] / median:.1f} × faster than the straightforward implementation; "
         f"{write_floor / median:.0%} of its time is writing the images. The rest is the depth estimate (a sweep "
-        f"of refocused slices, see the README's viewer section), the refocused stack and the tone mapping.",
+        f"of refocused slices, see docs/commands.md's viewer section), the refocused stack and the tone mapping.",
         "",
         f"Machine: {info['cpu_model']}, {info['cpus_usable']} usable cores, {info['memory_gb']:.0f} GB; "
         f"numba {info['numba']} ({info['numba_threads']} threads), numpy {info['numpy']}, Python {info['python']}; "

@@ -197,7 +197,7 @@ def test_the_preview_tells_no_light_from_unknown_depth():
 # ----------------------------------------------------------------------------- real-data tests anywhere
 def test_the_real_data_tests_follow_lfproc_real_data_and_docs_count_them(tmp_path):
     """`LFPROC_REAL_DATA` points tests/real at a copy of the real data; without it they all skip, and
-    docs/real-data.md says how many."""
+    docs/real-data.md and the README say how many."""
     import os
     import re
     import subprocess
@@ -211,5 +211,6 @@ def test_the_real_data_tests_follow_lfproc_real_data_and_docs_count_them(tmp_pat
     skipped = re.search(r"(\d+) skipped", proc.stdout)
     assert proc.returncode == 0 and skipped and " passed" not in proc.stdout, proc.stdout[-2000:]
     assert f"{tmp_path / 'nowhere'}: the real data folder is absent; set LFPROC_REAL_DATA" in proc.stdout
-    stated = re.search(r"without them its\s+(\d+) tests skip", (root / "docs" / "real-data.md").read_text())
-    assert stated and int(stated.group(1)) == int(skipped.group(1))
+    for page in ("docs/real-data.md", "README.md"):
+        stated = re.search(r"without them its\s+(\d+) tests skip", (root / page).read_text())
+        assert stated and int(stated.group(1)) == int(skipped.group(1)), page

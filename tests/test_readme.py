@@ -1,12 +1,17 @@
-"""The README's two set-up commands are the ones CI runs, and its examples are real."""
+"""The README's two set-up commands are the ones CI runs, the demo prints what the README shows, and every
+block of "Your own data" runs as written: on the bundled sample (the command line and Python writing the same
+files), the bundled Lytro file and a rendered light-field microscope (tests/real/test_real_readme.py walks the
+microscope block on the real sea urchin)."""
 
+import json
 import re
 
+import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, run_cli
+from readme_walk import README, blocks, commands, own_data_section, run_commands, run_python, same_outputs
 
-README = (ROOT / "README.md").read_text()
 CI = (ROOT / ".ci" / "run").read_text()
 
 
@@ -22,33 +27,132 @@ def test_readme_first_screen_has_both_commands():
     assert re.search(r"^python3 -m venv .*pytest.*$", first_screen, re.M)
 
 
-def _blocks(language):
-    return re.findall(rf"```{language}\n(.*?)```", README, re.S)
+def test_the_readme_is_short_and_states_no_dated_number():
+    assert len(README.splitlines()) <= 250
+    assert not re.search(r"20\d\d-\d\d-\d\d", README)                     # dates and the timings they date
+    assert "<!--n:" not in README and "<!--p:" not in README               # measurements live in docs/
 
 
-def test_python_example_runs(monkeypatch, capsys, tmp_path):
-    """The README's example runs, and what it prints and saves is what ``lfproc refocus`` writes (the tags of
-    the views that carry light: 722-1236 mm around a = 0.682, not the full micro image's 754-1174 mm)."""
-    import json
-
-    (code,) = _blocks("python")
-    code = code.replace("/tmp/lfproc-readme", str(tmp_path / "out"))
-    monkeypatch.chdir(ROOT)
-    namespace = {}
-    exec(compile(code, "README.md", "exec"), namespace)
-    assert "'distance_mm': 650.0" in capsys.readouterr().out
-    fs = namespace["fs"]
-    sidecars = sorted((tmp_path / "out").glob("capture_*_a*.json"))   # named in focus order: far first
-    assert len(sidecars) == 2
-    assert [json.loads(p.read_text())["distance_mm"] for p in sidecars] == pytest.approx([1200.0, 650.0])
-    records = fs.records()
-    assert json.loads(sidecars[1].read_text()) == json.loads(json.dumps(records[0]))
-    assert fs.views_summed == 89
+def test_the_demo_prints_what_the_readme_shows(tmp_path):
+    shown = blocks(README[README.index("## Set-up"):README.index("## Your own data")], "text")[0].splitlines()
+    proc = run_cli("demo", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    printed = proc.stdout.splitlines()
+    assert len(printed) == len(shown)
+    for ours, theirs in zip(printed, shown):
+        if theirs.startswith("viewer: "):
+            assert ours.startswith("viewer: ") and ours.endswith("lfproc-demo/viewer/index.html")
+        elif theirs.startswith("done in"):
+            assert re.sub(r"done in [\d.]+ s", "done in … s", ours) == theirs
+        else:
+            assert ours == theirs
 
 
-def test_camera_file_example_is_the_paper_camera():
+def test_the_commands_table_lists_every_command():
+    from lfproc.cli import COMMANDS
+
+    table = README[README.index("## Commands"):README.index("`INPUT` is a capture")]
+    assert re.findall(r"^\| `lfproc (\w+)", table, re.M) == list(COMMANDS)
+
+
+def test_the_camera_file_is_the_paper_camera():
     from lfproc import Camera
 
-    toml = next(block for block in _blocks("toml") if "[main_lens]" in block)
-    text = "\n".join(line.strip() for line in toml.splitlines())
-    assert Camera.from_toml_string(text) == Camera.from_toml(ROOT / "samples" / "cameras" / "paper-f100.toml")
+    toml = next(block for block in blocks(own_data_section("A camera of your own"), "toml"))
+    assert Camera.from_toml_string(toml) == Camera.from_toml(ROOT / "samples" / "cameras" / "paper-f100.toml")
+
+
+def _folder_with_samples(path):
+    path.mkdir()
+    (path / "samples").symlink_to(ROOT / "samples")
+    return path
+
+
+def test_your_own_camera_on_the_command_line_and_in_python_writes_the_same_files(tmp_path):
+    section = own_data_section("A camera of your own")
+    cli, python = _folder_with_samples(tmp_path / "cli"), _folder_with_samples(tmp_path / "python")
+    procs = run_commands(section, cli)
+    namespace = run_python(section, python)
+    assert same_outputs(cli / "out", python / "out", ["grid.json", "slices", "views", "depth"]) > 10
+    # the geometry with the grid gives the slices' own numbers, as the sidecars
+    geometry = procs[-1].stdout
+    for record in namespace["slices"].records():
+        assert f"{record['distance_mm']:.3f}" in geometry, (record["distance_mm"], geometry)
+    assert namespace["slices"].images.shape[0] == 2
+    assert json.loads((cli / "out" / "grid.json").read_text())["made_from"]
+
+
+def test_a_lytro_picture_as_the_readme_says(tmp_path):
+    section = own_data_section("A Lytro picture")
+    folder = _folder_with_samples(tmp_path / "lytro")
+    run_commands(section, folder)
+    assert sorted(p.suffix for p in (folder / "out" / "lytro-slices").iterdir())
+    namespace = run_python(section, folder)
+    distances = [r["distance_mm"] for r in namespace["lytro_slices"].records()]
+    assert distances == pytest.approx([10000.0, 30000.0], rel=1e-9)
+
+
+#: napari-LF's "calibrate" table for the rendered microscope (the keys of its metadata.txt; µm, mm for the tube)
+RENDERED_SCOPE = {"pixel_size": 13.0, "ulens_pitch": 125, "ulens_focal_length": 2433, "ulens_focal_distance": 2433,
+                  "objective_magnification": 20, "objective_na": 0.5, "tubelens_focal_length": 200.0,
+                  "center_wavelength": 510, "medium_index": 1.33}
+
+
+def write_rendered_scope(folder):
+    """A microscope folder as the README names it: napari-LF's metadata.txt, white, dark and a capture of two
+    beads and a sheet, rendered by lfproc's ray-traced microscope simulator with a dark offset."""
+    import tifffile
+
+    import lfproc
+    from lfproc.simulate import Bead, MicroscopeScene, Sheet, render_microscope_sensor
+
+    folder.mkdir()
+    (folder / "metadata.txt").write_text(json.dumps({"calibrate": RENDERED_SCOPE, "rectify": {}}))
+    camera = lfproc.read_camera(folder / "metadata.txt")
+    scene = MicroscopeScene(beads=(Bead(-30.0, 20.0, -20.0), Bead(25.0, -30.0, 20.0)),
+                            sheets=(Sheet(z_um=0.0, period_um=40.0),))
+    white = render_microscope_sensor(camera, None, (231, 231))
+    light = render_microscope_sensor(camera, scene, (231, 231))
+    rng = np.random.default_rng(5)
+    dark = 500.0 + rng.normal(0.0, 3.0, white.shape)
+    for name, image in (("white.tif", 500.0 + white / white.max() * 50000), ("dark.tif", dark),
+                        ("capture.tif", 500.0 + rng.poisson(light / light.max() * 20000))):
+        tifffile.imwrite(folder / name, np.round(image).astype(np.uint16))
+    return folder
+
+
+def test_a_microscope_as_the_readme_says(tmp_path):
+    section = own_data_section("A light-field microscope")
+    scope = write_rendered_scope(tmp_path / "scope")
+    run_commands(section, tmp_path)
+    namespace = run_python(section, tmp_path)
+    stack, volume = namespace["z_stack"], namespace["volume"]
+    assert list(stack.z_um) == [-40.0, -30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0]
+    assert list(volume.z_um) == list(stack.z_um) and np.isfinite(volume.data).all()
+    cli_volume = json.loads(next((scope / "volume").glob("*_volume.json")).read_text())
+    saved = json.loads(next((scope / "volume").glob("*_volume.json")).read_text())
+    assert cli_volume["z_um"] == saved["z_um"]
+
+
+def _anchor(heading: str) -> str:
+    """GitHub's anchor of a Markdown heading."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def test_every_relative_link_of_the_readme_and_docs_reaches_its_file_and_heading():
+    broken = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)\s]+)\)", re.sub(r"```.*?```", "", text, flags=re.S)):
+            if re.match(r"[a-z]+:", target) or not ("." in target or target.startswith("#")):
+                continue                                      # a web address, or maths such as x[k](j)
+            path, _, anchor = target.partition("#")
+            linked = (page.parent / path).resolve() if path else page
+            if not linked.exists():
+                broken.append(f"{page.name}: {target}")
+            elif anchor and linked.suffix == ".md":
+                headings = re.findall(r"^#+ (.*)$", re.sub(r"```.*?```", "", linked.read_text(encoding="utf-8"),
+                                                              flags=re.S), re.M)
+                if anchor not in {_anchor(h) for h in headings}:
+                    broken.append(f"{page.name}: {target} (no such heading)")
+    assert not broken, "\n".join(broken)

@@ -84,8 +84,9 @@ def run(args) -> int:
     paths = stack.save(str(refocus_dir), "sample")
     gif = write_slice_gif(str(out), "sample", stack.images[::-1], camera, a_values[::-1],   # near to far, labelled
                           view_mask=lf.view_mask)
-    step(f"refocused {len(a_values)} slices covering {near:.0f}..{far:.0f} mm -> {refocus_dir}/ (+ sidecars), {gif}")
-    geo = geometry.slice_geometry(camera, a_values, extent)
+    geo = geometry.slice_geometry(camera, a_values, extent)     # the slices' own DOFs, as their sidecars say
+    step(f"refocused {len(a_values)} slices covering {min(geo.near_mm):.0f}..{max(geo.far_mm):.0f} mm -> "
+         f"{refocus_dir}/ (+ sidecars), {gif}")
     for d in distances:
         hits = [f"a={a:+.3f} [{lo:.0f}, {hi:.0f}] mm" for a, lo, hi in zip(a_values, geo.near_mm, geo.far_mm)
                 if lo <= d <= hi]

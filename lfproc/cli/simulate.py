@@ -17,7 +17,7 @@ def register(sub) -> None:
                                    "exit pupil also the lens grid).")
     p.add_argument("scene", metavar="SCENE.toml",
                    help="scene file: a commented example ships with lfproc as sample/scene.toml (lfproc info "
-                        "--samples prints its path); the README's 'Render your own scene' describes the format")
+                        "--samples prints its path); docs/scene-format.md describes the format")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--seed", type=int, default=None, help="override [render] seed")
     p.set_defaults(func=run)
