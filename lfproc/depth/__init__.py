@@ -8,25 +8,12 @@ options before reading a capture). Importing this package
 is light; numba and the writers load on first use.
 """
 
-import sys
-import types
-
 from ._confidence import MIN_CONFIDENCE, UNLIT_FRACTION, lit_lenses
-from ._estimate import METHOD, DepthMap, depth
+from ._estimate import depth
+from ._result import METHOD, DepthMap
 from ._outputs import summary_line, write_depth_outputs
 from ._preview import preview_image, write_preview
 from ._search import search_range_a
 
 __all__ = ["METHOD", "DepthMap", "depth", "summary_line", "write_depth_outputs", "MIN_CONFIDENCE", "search_range_a",
            "preview_image", "write_preview", "UNLIT_FRACTION", "lit_lenses"]
-
-
-class _CallableModule(types.ModuleType):
-    """``import lfproc.depth`` binds the package attribute ``lfproc.depth`` to this package; calling it calls
-    :func:`depth`, so ``lfproc.depth(lf)`` works whatever was imported first (as ``lfproc.refocus`` does)."""
-
-    def __call__(self, *args, **kwargs):
-        return depth(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

@@ -2,7 +2,7 @@
 distances in metres (``lfproc viewer``).
 
 :func:`build_page` writes one capture's page (its slices planned for the scene, the views inside the
-aperture, a depth map (:func:`lfproc.depth`) and the geometry of everything, see ``_build``); the slices and
+aperture, a depth map (:func:`lfproc.depth_map`) and the geometry of everything, see ``_build``); the slices and
 views are the Python API's (:func:`lfproc.focal_stack`, :func:`lfproc.view_stack`) with their tags; :func:`write_index`
 links several; :func:`serve` serves a folder on 127.0.0.1 (from a background thread; it returns the running
 server, whose ``url`` the command prints). Pages are self-contained: inline CSS,

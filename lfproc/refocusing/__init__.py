@@ -66,9 +66,6 @@ takes a half (cubic) to a sixth (linear) of the CPU time of the per-row ring of 
 which still serves upsampled slices (bit-identical results).
 """
 
-import sys
-import types
-
 from ._block import refocus_view_block, view_weight_inside
 from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, full_view_fraction,
                         max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
@@ -79,15 +76,3 @@ __all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction"
            "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
            "usable_a_bound", "slice_sharpness", "SHARPNESS_BAND", "refocus_view_block",
            "view_weight_inside"]
-
-
-class _CallableModule(types.ModuleType):
-    """``import lfproc.refocus`` binds the package attribute ``lfproc.refocus`` to this package (Python
-    sets it after the import), shadowing the lazily exported function; calling the package calls
-    :func:`refocus`, so ``lfproc.refocus(lf, a)`` works whatever was imported first."""
-
-    def __call__(self, *args, **kwargs):
-        return refocus(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule
