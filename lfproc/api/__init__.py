@@ -23,6 +23,9 @@ Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters
 setup, which decodes captures), ``_read`` (a capture to a light field; how inputs are taken: files or arrays),
 ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth`` (depth maps), ``_deconvolve`` (a microscope's
 volume by wave-optics deconvolution, :mod:`lfproc.wave`). Importing this package is light (numpy only).
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
@@ -35,9 +38,3 @@ from ._prepare import prepare_decoding
 from ._read import read_light_field
 from ._setup import DecodeSetup
 from ._views import ViewStack, view_stack
-
-__all__ = ["read_light_field", "calibrate_white", "prepare_decoding", "DecodeSetup", "focal_stack", "FocalStack",
-           "view_stack", "ViewStack",
-           "depth_map", "DEFAULT_INTERPOLATION", "deconvolve", "Volume", "DEFAULT_SUPERRES",
-           # the checks the commands share (worded with their flags there)
-           "check_slices", "check_view_coverage", "check_z_step"]
