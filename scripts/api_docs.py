@@ -35,7 +35,7 @@ Every other package (`lfproc.api`, `lfproc.io`, `lfproc.refocusing`, `lfproc.dep
 names serve lfproc's own stages and commands and may change without notice. Shapes follow the contract's
 array layout: views `(m, m, Ny, Nx, C)` (m̂ × m̂ views of Ny × Nx lenses, C channels), slices `(K, Ny, Nx, C)`;
 lengths are in millimetres (`_mm`) or micrometres (`_um`) as the names say. Equations are the paper's
-(docs/paper-notes.md).
+(Hahne et al., Optics Express 22(22), 2014).
 """
 
 _SECTION = re.compile(r"^\s*(Parameters|Returns|Yields|Raises|Warns|Attributes|Notes|Examples|See Also)\s*\n\s*-{3,}\s*$",
