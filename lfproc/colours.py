@@ -1,7 +1,7 @@
 """The colour scale of depth maps: viridis (perceptually uniform, readable in grey and by most colour-blind
 viewers), far = dark purple, near = yellow; unknown depths are mid grey.
 
-One scale for the depth preview (`lfproc.depth`) and the viewer (`lfproc.viewer`); numpy only, so both
+One scale for the depth preview (`lfproc.depth_map`) and the viewer (`lfproc.viewer`); numpy only, so both
 stages import it from here (`lfproc.outputs` re-exports it under the same names)."""
 
 from __future__ import annotations

@@ -45,11 +45,10 @@ import hashlib
 import json
 import os
 import struct
-import warnings
 
 import numpy as np
 
-from .errors import LfprocError, LfprocWarning
+from .errors import LfprocError, warn
 from .grid import LensGrid
 
 #: arrays at least this large are mapped from the entry, smaller ones copied (ordinary writable arrays)
@@ -377,8 +376,8 @@ def cached_entry(key: str, build, cls):
         lock = _locked(os.path.join(folder, key + ".lock"))
         lock.__enter__()
     except OSError as exc:
-        warnings.warn(f"lfproc cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
-                      f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)", LfprocWarning, stacklevel=2)
+        warn(f"lfproc cache {folder}: not writable ({exc.strerror or exc}); deriving without it "
+             f"(set LFPROC_CACHE_DIR, or LFPROC_NO_CACHE=1)")
         return build()
     try:
         found = load(path, key, cls)   # another process may have derived it while we waited
@@ -389,8 +388,7 @@ def cached_entry(key: str, build, cls):
             store(path, key, entry)
             prune(folder, max_bytes(), keep=path)
         except Exception as exc:  # noqa: BLE001 - a full or read-only disk must not fail the decode
-            warnings.warn(f"lfproc cache {folder}: could not store an entry ({exc}); continuing without it",
-                          LfprocWarning, stacklevel=2)
+            warn(f"lfproc cache {folder}: could not store an entry ({exc}); continuing without it")
         return entry
     finally:
         lock.__exit__(None, None, None)

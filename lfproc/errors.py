@@ -6,6 +6,12 @@ switch), never as a command's flag. The commands reword what they report with th
 (:mod:`lfproc.cli.words`, one table).
 """
 
+import os
+import sys
+import warnings
+
+_PACKAGE = os.path.dirname(os.path.abspath(__file__))
+
 
 class LfprocError(Exception):
     """An error the user caused and can fix: a bad file, an impossible camera, an `a` out of range.
@@ -26,3 +32,24 @@ class LfprocWarning(UserWarning):
     notebook can filter them (``warnings.simplefilter("ignore", lfproc.LfprocWarning)``). The commands
     print each as one line on stderr.
     """
+
+
+def warn(message: str, category: type = LfprocWarning) -> None:
+    """Warn ``message`` (an :class:`LfprocWarning` unless ``category`` says otherwise) at the caller's line: the
+    first frame outside the lfproc package, however deep inside lfproc the warning is raised.
+
+    Parameters
+    ----------
+    message : str
+        One line naming the input and what to do (Python argument names, never flags).
+    category : type, optional
+        A ``Warning`` subclass (default :class:`LfprocWarning`).
+
+    Returns
+    -------
+    None
+    """
+    frame, level = sys._getframe(1), 2   # stacklevel 2: the frame that called warn()
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE + os.sep):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)

@@ -34,6 +34,14 @@ SAVE_AGAIN = "lfproc.read_light_field(...).save(path)"
 FILE_FORMAT = "lfproc-lightfield-1"
 
 
+def output_stem(path: str) -> str:
+    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
+    name = os.path.basename(path)
+    if name.lower().endswith(".lfp.npz"):
+        return name[:-len(".lfp.npz")]
+    return os.path.splitext(name)[0]
+
+
 def is_lightfield_file(path) -> bool:
     """A light field written by ``lfproc decode`` (``NAME.lfp.npz``; any ``.npz``, any case), by its name."""
     return os.fspath(path).lower().endswith(".npz")
@@ -57,6 +65,18 @@ class LightField:
     ``inputs``, optional: the files it was made from, role (``"capture"``, ``"camera"``, ``"white"``,
     ``"dark"``, ``"grid"``, ``"light_field"``) → path as given (or an already hashed ``{"path", "sha256"}``
     record); outputs record them as their provenance (:mod:`lfproc.provenance`). ``None``: unknown (arrays).
+
+    Attributes
+    ----------
+    views : ndarray, shape (m̂, m̂, Ny, Nx, C)
+        The views (Eq. 32), linear; float32 as decoded.
+    camera : Camera or None
+    grid : LensGrid or None
+        The lattice the views were decoded along (pixels of the sensor).
+    view_mask : ndarray (m̂, m̂) bool or None
+    view_centre : (float, float) or None
+    inputs : dict or None
+        As above.
     """
 
     views: np.ndarray

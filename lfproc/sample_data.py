@@ -34,6 +34,15 @@ def sample_path(name: str = "") -> Path:
     ------
     LfprocError
         For a name that is not in the package (the message lists what is).
+
+    Parameters
+    ----------
+    name : str
+        A path inside the bundled samples (``""``: their folder).
+
+    Returns
+    -------
+    pathlib.Path
     """
     path = SAMPLES_DIR / name
     if not path.exists():

@@ -29,6 +29,11 @@ def viewpoints(lf: LightField, *, inside_aperture: bool = False) -> np.ndarray:
         If true, views whose virtual centre lies outside the main lens stop (vignetted corners,
         see :func:`lfproc.geometry.views_inside_aperture`) are set to 0; needs a camera with
         ``f_number``.
+
+    Returns
+    -------
+    ndarray, shape (m̂, m̂, Ny, Nx, C)
+        ``lf.views`` itself (no copy) unless ``inside_aperture`` masks some.
     """
     if not inside_aperture:
         return lf.views
@@ -56,6 +61,18 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
     LfprocError
         Without a camera, for an f-number wider than the main lens's or narrower than one view, or
         when no view that carries light is inside the aperture.
+
+    Parameters
+    ----------
+    lf : LightField
+        With its camera (a main lens's f-number).
+    f_number : float or None
+        The synthetic aperture's f-number, at least the main lens's.
+
+    Returns
+    -------
+    LightField
+        The same views with a narrower ``view_mask`` (``lf`` itself for ``None``).
     """
     if f_number is None:
         return lf

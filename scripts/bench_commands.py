@@ -182,7 +182,7 @@ import numpy, cv2, lfproc
 from lfproc import Camera, LightField
 from lfproc.io import read_capture
 from lfproc import prepare_decoding
-from lfproc.refocus import refocus
+from lfproc.refocusing import refocus
 from lfproc.outputs import write_slices
 from lfproc.camera import MainLens
 mark("imports (numpy, OpenCV, OpenImageIO, numba)")

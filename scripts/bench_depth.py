@@ -123,7 +123,7 @@ def accuracy_rows(quick: bool):
         ideal = LightField.from_views(sim.ideal_views, camera, sim.grid)
         for source, lf, options in (("ideal views", ideal, {}), ("decoded", decoded, {}),
                                     ("decoded, outer ring of views in", decoded, {"outer_views": True})):
-            depth_map = lfproc.depth(lf, **options)
+            depth_map = lfproc.depth_map(lf, **options)
             naive_a = naive_estimate(lf, float(depth_map.a_searched[0]), float(depth_map.a_searched[-1]))
             naive_d = geometry.slice_distance_mm(camera, naive_a)
             for index, role in roles.items():
@@ -199,12 +199,12 @@ def speed_rows(repeats: int):
                                                                    float(geometry.slice_distance_mm(camera, 0.0)))})]
     rows, steps = [], []
     for label, kwargs in cases:
-        total, best, depth_map = median_time(lambda kwargs=kwargs: lfproc.depth(lf, **kwargs), repeats)
+        total, best, depth_map = median_time(lambda kwargs=kwargs: lfproc.depth_map(lf, **kwargs), repeats)
         rows.append([label, str(len(depth_map.a_searched)), str(depth_map.view_step), total, best, total / one_linear,
                      "PASS" if total <= TARGET_SECONDS else "FAIL"])
         steps.append((label, depth_map.timings_s))
     # the straightforward sweep: one refocus call per slice over all views (no fusion, no view step)
-    a_values = lfproc.depth(lf, **cases[2][1]).a_searched
+    a_values = lfproc.depth_map(lf, **cases[2][1]).a_searched
     full = sweep_views(sweep_luminance(lf.views, 1, None, geometry.views_inside_aperture(camera)))
     t0 = time.perf_counter()
     for a in a_values:

@@ -8,7 +8,7 @@ the cubic spline through each view) and, as the reference without interpolation,
   power ∝ 1/f^e, lens integration, aliasing), the sharpest slice of a sweep in steps of 0.001 minus the
   true a — the worst over a0 = 0.02 … 1.98 in steps of 0.04 (photographic, m̂ = 9) and over
   a0 = −0.25 … 0.25 in steps of 0.01 (microscope, m̂ = 15). Two sharpness measures: ``band`` —
-  :func:`lfproc.refocus.slice_sharpness`, the power below a quarter cycle per lens (what lfproc
+  :func:`lfproc.refocusing.slice_sharpness`, the power below a quarter cycle per lens (what lfproc
   recommends) — and ``full`` — the slice's variance, every frequency (aliased detail included).
   ``--exponents`` sets the spectra, ``--coarse`` takes every other a0.
 * **speed**: 101 real slices in one call on an Illum-sized light field (15 × 15 views of 434 × 625 × 3
@@ -48,9 +48,9 @@ def microscope_a0(coarse=False):
 
 
 def sharpness(stack, a, m, measure):
-    """``band``: :func:`lfproc.refocus.slice_sharpness`; ``full``: the variance; inside the border
+    """``band``: :func:`lfproc.refocusing.slice_sharpness`; ``full``: the variance; inside the border
     that every view reaches."""
-    from lfproc.refocus import slice_sharpness
+    from lfproc.refocusing import slice_sharpness
 
     border = int(np.ceil(np.abs(a).max() * (m - 1) / 2)) + 3
     if measure == "band":

@@ -38,7 +38,7 @@ def light_field(n: int):
 def measure(n: int, repeat: int) -> tuple[float, float]:
     from lfproc import geometry
     from lfproc.outputs import write_slice_previews, write_slices
-    from lfproc.refocus import refocus
+    from lfproc.refocusing import refocus
 
     lf = light_field(n)
     a = list(geometry.plan_z_range(lf.camera, -20, 20, 1.0))

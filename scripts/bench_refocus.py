@@ -85,8 +85,8 @@ def main(argv=None) -> int:
 
     start = time.perf_counter()
     from lfproc import LightField
-    from lfproc.refocus import refocus
-    rf = importlib.import_module("lfproc.refocus._refocus")
+    from lfproc.refocusing import refocus
+    rf = importlib.import_module("lfproc.refocusing._refocus")
     import_s = time.perf_counter() - start
     compile_gather_s = first_call_seconds(refocus, "linear", 1.0)
     compile_interp_s = first_call_seconds(refocus, "linear", 0.5)
@@ -125,7 +125,7 @@ def main(argv=None) -> int:
 
     print(f"light field {shape} float32 = {gb:.3f} GB; threads {rf._thread_count()}, CPUs {os.cpu_count()}; "
           f"median and minimum of {r} runs (baseline: {max(1, min(r, 3))})")
-    print(f"import lfproc.refocus {import_s:.2f} s; first call (compile, or load from numba's cache): "
+    print(f"import lfproc.refocusing {import_s:.2f} s; first call (compile, or load from numba's cache): "
           f"gather {compile_gather_s:.2f} s, interpolated {compile_interp_s:.2f} s")
     print(f"{'case':40s} {'median s':>9s} {'min s':>8s} {'GB/s':>7s}")
     for name, (median, minimum) in t.items():
@@ -153,7 +153,7 @@ def main(argv=None) -> int:
 # ----------------------------------------------------------------------------- the stage of scripts/bench.py
 def first_refocus_calls() -> dict:
     """First calls in this process on a tiny light field: numba compile or load from its on-disk cache."""
-    from lfproc.refocus import refocus
+    from lfproc.refocusing import refocus
 
     tiny = np.ones((3, 3, 4, 5, 3), dtype=np.float32)
     _, gather = bl.time_once(lambda: refocus(tiny, 1.0))
@@ -164,7 +164,7 @@ def first_refocus_calls() -> dict:
 def fresh_compile_seconds() -> dict:
     """The same first calls in a subprocess whose numba cache is empty: the compile time of a fresh install."""
     code = ("import time, numpy as np\n"
-            "t = time.perf_counter(); from lfproc.refocus import refocus; imp = time.perf_counter() - t\n"
+            "t = time.perf_counter(); from lfproc.refocusing import refocus; imp = time.perf_counter() - t\n"
             "v = np.ones((3, 3, 4, 5, 3), np.float32)\n"
             "t = time.perf_counter(); refocus(v, 1.0); g = time.perf_counter() - t\n"
             "t = time.perf_counter(); refocus(v, 0.5); i = time.perf_counter() - t\n"
@@ -179,7 +179,7 @@ def fresh_compile_seconds() -> dict:
 
 def stage_refocus(views: np.ndarray, s: suite.Settings, first_calls: dict) -> dict:
     """Refocus timings on the decoded light field, accuracy on a crop and on an analytic plane."""
-    from lfproc.refocus import refocus
+    from lfproc.refocusing import refocus
 
     gb = views.nbytes / 1e9
     floor = bl.measure(lambda: views.sum(axis=(0, 1)), s.cheap_repeats)

@@ -122,7 +122,7 @@ def straightforward_page(lf, outdir: str) -> None:
 
     from lfproc import geometry
     from lfproc.io import srgb_encode
-    from lfproc.refocus import refocus
+    from lfproc.refocusing import refocus
     from lfproc.viewer._focus import sweep, sweep_range
 
     camera = lf.camera

@@ -27,7 +27,7 @@ def test_geometry_command_loads_no_heavy_library(paper_camera):
 
 
 def test_contract_callables_whatever_was_imported_first():
-    code = ("import numpy as np, lfproc, lfproc.refocus, lfproc.viewpoints, lfproc.outputs\n"
+    code = ("import numpy as np, lfproc, lfproc.refocusing, lfproc.viewpoints, lfproc.outputs\n"
             "v = np.arange(3 * 3 * 4 * 5, dtype=np.float32).reshape(3, 3, 4, 5, 1)\n"
             "lf = lfproc.LightField.from_views(v)\n"
             "print(lfproc.refocus(lf, 1).shape, lfproc.refocus(lf, [0, 1.5]).shape, lfproc.viewpoints(lf).shape)")

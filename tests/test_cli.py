@@ -233,7 +233,7 @@ def test_an_a_whose_refocused_area_is_under_half_is_refused_with_the_usable_rang
     where that area is under half the image is refused, with the usable range in a and distance, far end
     first (the old check offered "from 133.2 mm (a=+17.3) to 67.6 mm (a=-17.3)")."""
     from lfproc.lightfield import LightField
-    from lfproc.refocus import usable_a_bound
+    from lfproc.refocusing import usable_a_bound
     camera = Camera.from_toml(sample / "camera.toml")
     proc = run_cli("decode", sample / "capture.png", *decode_args(sample), "-o", tmp_path / "cap.lfp.npz")
     assert proc.returncode == 0, proc.stderr

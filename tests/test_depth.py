@@ -61,7 +61,7 @@ def scores(depth_map, camera, truth_a, mask):
 
 @pytest.fixture(scope="module")
 def ideal_depth(scene):
-    return lfproc.depth(scene["ideal"])
+    return lfproc.depth_map(scene["ideal"])
 
 
 @pytest.mark.parametrize("plane", [0, 2])
@@ -78,7 +78,7 @@ def test_decoded_capture_keeps_every_lens_within_its_dof(scene):
     """Decoding adds its own bias (the sharpest slice of decoded views sits a few % farther, decode's issue;
     most of it from the outer rings of views), so the 5 % median target is checked on ideal views; BadPix
     and the bounds must hold here too."""
-    depth_map = lfproc.depth(scene["decoded"])
+    depth_map = lfproc.depth_map(scene["decoded"])
     for plane in (0, 2):
         mask = region(scene["sim"], plane, scene["camera"])
         median, badpix, inside = scores(depth_map, scene["camera"], scene["truth_a"], mask)
@@ -87,7 +87,7 @@ def test_decoded_capture_keeps_every_lens_within_its_dof(scene):
 
 @pytest.mark.parametrize("source", ["ideal", "decoded"])
 def test_textureless_card_has_no_confident_wrong_value(scene, ideal_depth, source):
-    depth_map = ideal_depth if source == "ideal" else lfproc.depth(scene["decoded"])
+    depth_map = ideal_depth if source == "ideal" else lfproc.depth_map(scene["decoded"])
     mask = region(scene["sim"], 1, scene["camera"], margin=1)
     assert mask.sum() > 100
     truth = geometry.slice_geometry(scene["camera"], A_TRUE["blank"])
@@ -143,7 +143,7 @@ def test_all_in_focus_is_sharper_than_any_single_slice(scene, ideal_depth):
 def test_depth_range_limits_the_search_and_leaves_outside_surfaces_unknown(scene):
     cam = scene["camera"]
     near = float(geometry.slice_distance_mm(cam, 0.9))
-    depth_map = lfproc.depth(scene["ideal"], depth_range_mm=(near, math.inf))
+    depth_map = lfproc.depth_map(scene["ideal"], depth_range_mm=(near, math.inf))
     assert depth_map.a_searched[-1] <= 0.9 + 0.25 and depth_map.a_searched[0] <= 0.0
     card = region(scene["sim"], 0, cam)                      # the card (a = 1.43) is nearer than the range
     assert np.isnan(depth_map.distance_mm[card]).mean() > 0.9
@@ -166,7 +166,7 @@ def test_outer_ring_with_compressed_parallax_is_left_out_by_default(scene):
     lf = LightField.from_views(views, cam, scene["sim"].grid)
     mask = region(scene["sim"], 2, cam)
     bias = lambda d: np.nanmedian(d.a[mask] - scene["truth_a"][mask])
-    with_ring, without = lfproc.depth(lf, outer_views=True), lfproc.depth(lf)
+    with_ring, without = lfproc.depth_map(lf, outer_views=True), lfproc.depth_map(lf)
     assert bias(with_ring) < -0.02 and abs(bias(without)) < 0.01, (bias(with_ring), bias(without))
 
 
@@ -174,7 +174,7 @@ def test_coarse_pass_narrows_the_sweep_to_the_occupied_range(scene, ideal_depth)
     """The scene spans a = 0.57 … 1.43: the fine sweep covers that, and much less than the default 0 … 3."""
     a = ideal_depth.a_searched
     assert a[0] <= 0.57 - 0.2 and a[-1] >= 1.43 + 0.2
-    full = lfproc.depth(scene["ideal"], coarse_pass=False)
+    full = lfproc.depth_map(scene["ideal"], coarse_pass=False)
     assert full.a_searched[-1] >= 3.0 and len(a) < 0.7 * len(full.a_searched)
     known = np.isfinite(ideal_depth.a) & np.isfinite(full.a)
     assert known.mean() > 0.6 and np.median(np.abs(ideal_depth.a[known] - full.a[known])) < 1e-6
@@ -187,26 +187,27 @@ def test_views_delivered_as_zero_are_left_out(scene):
     dead[:2], dead[-2:], dead[:, :2], dead[:, -2:] = True, True, True, True
     dead[3, 6] = dead[7, 4] = True
     views[dead] = 0.0
-    depth_map = lfproc.depth(LightField.from_views(views, scene["camera"], scene["sim"].grid))
+    depth_map = lfproc.depth_map(LightField.from_views(views, scene["camera"], scene["sim"].grid))
     for plane in (0, 2):
         mask = region(scene["sim"], plane, scene["camera"])
         median, badpix, inside = scores(depth_map, scene["camera"], scene["truth_a"], mask)
         assert median <= 0.05 and badpix <= 0.05 and inside >= 0.90, (plane, median, badpix, inside)
     views[5, 5] = 0.0
     with pytest.raises(lfproc.LfprocError, match="central view"):
-        lfproc.depth(LightField.from_views(views, scene["camera"]))
+        lfproc.depth_map(LightField.from_views(views, scene["camera"]))
 
 
-def test_callable_both_ways_and_errors(scene):
+def test_one_depth_function_and_its_errors(scene):
+    """``lfproc.depth_map`` is the one depth function (issue 37: no callable ``lfproc.depth`` module)."""
     import lfproc.depth as package
 
-    assert callable(package) and lfproc.depth is not None
+    assert not callable(package) and "depth" not in lfproc.__all__ and "depth_map" in lfproc.__all__
     with pytest.raises(lfproc.LfprocError, match="camera"):
-        lfproc.depth(LightField.from_views(scene["ideal"].views))
+        lfproc.depth_map(LightField.from_views(scene["ideal"].views))
     with pytest.raises(lfproc.LfprocError, match="depth range"):
-        lfproc.depth(scene["ideal"], depth_range_mm=(10.0, 20.0))
+        lfproc.depth_map(scene["ideal"], depth_range_mm=(10.0, 20.0))
     with pytest.raises(lfproc.LfprocError, match="view_step"):
-        lfproc.depth(scene["ideal"], view_step=9)
+        lfproc.depth_map(scene["ideal"], view_step=9)
 
 
 def test_import_of_the_depth_package_stays_light():
@@ -308,7 +309,7 @@ def test_tilted_plane_from_ideal_views_meets_the_accuracy_targets():
     sim = simulate.render(cam, Scene((plane,), background=0.05), (400, 560), shot_noise_photons=100000, seed=5)
     truth_mm = np.asarray(sim.depth_mm, dtype=np.float64)
     assert np.nanmax(truth_mm) - np.nanmin(truth_mm) > 0.12 * centre     # it really is tilted
-    depth_map = lfproc.depth(LightField.from_views(sim.ideal_views, cam, sim.grid))
+    depth_map = lfproc.depth_map(LightField.from_views(sim.ideal_views, cam, sim.grid))
     truth_a = geometry.refocus_parameter(cam, np.nan_to_num(truth_mm, nan=1e9))
     finite = np.isfinite(truth_mm)
     mask = ndimage.binary_erosion(finite, iterations=3, border_value=0)

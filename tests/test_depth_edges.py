@@ -52,7 +52,7 @@ def rendered(request):
     decoder = make_decoder(levels(sim.white), sim.grid, cam.m_hat, cam.cfa)
     views = decoder(levels(sim.raw), cam.cfa)
     lf = LightField.from_views(views, cam, decoder.output_grid, decoder.views_delivered)
-    return dict(camera=cam, sim=sim, depth=lfproc.depth(lf))
+    return dict(camera=cam, sim=sim, depth=lfproc.depth_map(lf))
 
 
 def scores(rendered, index, region):

@@ -41,7 +41,7 @@ def plane_views(camera, shift=1, size=28, seed=5):
 def estimate(request):
     camera = LENS_CAMERA if request.param == "camera" else MICROSCOPE
     lf = LightField.from_views(plane_views(camera), camera)
-    return camera, lfproc.depth(lf, a_range=(0.2, 1.8), min_confidence=0.0, half_apertures=False)
+    return camera, lfproc.depth_map(lf, a_range=(0.2, 1.8), min_confidence=0.0, half_apertures=False)
 
 
 def test_one_set_of_fields_in_the_cameras_space(estimate):
@@ -80,13 +80,19 @@ def test_positions_are_the_geometrys_and_the_bounds_are_ordered(estimate):
     assert abs(float(np.median(a)) - 1.0) < 0.1
 
 
-def test_the_api_result_reads_the_same_arrays(estimate):
+def test_the_result_reads_its_arrays_and_tags(estimate):
+    """One result type: the contract's names read the arrays themselves; the tags are explicit attributes."""
     camera, dm = estimate
-    from lfproc.api._depth import DepthResult
-    result = DepthResult(dm, None, {}, None, LightField.from_views(plane_views(camera), camera))
-    assert result.space == dm.space and result.unit == dm.space.unit
-    for name in CONTRACT["mm"] + CONTRACT["um"] + ("depth", "near", "far"):
-        assert getattr(result, name) is getattr(dm, name), name
+    assert dm.unit == dm.space.unit and type(dm) is lfproc.DepthMap
+    for name, array in zip(("distance_mm", "near_mm", "far_mm"), (dm.depth, dm.near, dm.far)):
+        assert getattr(dm, name) is (array if dm.space.unit == "mm" else None), name
+    for name, array in zip(("z_um", "z_near_um", "z_far_um"), (dm.depth, dm.near, dm.far)):
+        assert getattr(dm, name) is (array if dm.space.unit == "um" else None), name
+    tags = dm.tags()
+    for key in ("method", "a_step", "view_step", "views_used_up_to_offset", "min_confidence", "lens_grid"):
+        assert getattr(dm, key) == tags[key], key
+    assert tags["camera"] == dm.camera_name == camera.name and tags["source"] is dm.source is None
+    assert not hasattr(type(dm), "__getattr__")
 
 
 @pytest.mark.parametrize("camera", [LENS_CAMERA, MICROSCOPE], ids=["camera", "microscope"])

@@ -1,6 +1,6 @@
 """The depth map's fast half apertures (issue 24) give what the straightforward computation gives.
 
-The fast path refocuses each half aperture from its own views only (``refocus/_block.py``), counts the
+The fast path refocuses each half aperture from its own views only (``refocusing/_block.py``), counts the
 views' weights from the sampling plans, aggregates edge-aware by one gather and computes the defocus cue
 only at the lenses where a half can still win. The references here are the straightforward versions of
 each: one fused refocus of ``w``, ``w·Y``, ``w·Y²`` over every view per axis, the edge-aware box chosen by
@@ -91,12 +91,12 @@ def test_each_halfs_own_views_give_the_all_view_volumes(light_field, view_step, 
 
 
 def test_fast_half_apertures_give_the_straightforward_depth_map(light_field, monkeypatch):
-    fast = lfproc.depth(light_field)
+    fast = lfproc.depth_map(light_field)
     monkeypatch.setattr(_estimate, "best_of_half_apertures", straightforward_best_of_half_apertures(False))
-    reference = lfproc.depth(light_field)
+    reference = lfproc.depth_map(light_field)
     monkeypatch.setattr(_estimate, "best_of_half_apertures", straightforward_best_of_half_apertures(True))
-    all_views = lfproc.depth(light_field)
-    without = lfproc.depth(light_field, half_apertures=False)
+    all_views = lfproc.depth_map(light_field)
+    without = lfproc.depth_map(light_field, half_apertures=False)
     # the half apertures decide many lenses here (borders, the card's occlusion edges), confident ones included
     decided = fast.confidence != without.confidence
     assert decided.sum() > 100 and (decided & (without.confidence >= 0.5)).any()

@@ -45,7 +45,7 @@ def test_unlit_lenses_carry_no_depth_and_lit_ones_keep_theirs(dark_edge):
     lf, unlit, lit = dark_edge
     assert unlit.sum() >= 100 and lit.sum() >= 100
     assert not lit_lenses(lf.views, lf.view_mask)[unlit].any()
-    result = lfproc.depth(lf)
+    result = lfproc.depth_map(lf)
     assert np.all(np.isnan(result.a[unlit])) and np.all(np.isnan(result.distance_mm[unlit]))
     assert np.all(result.confidence[unlit] == 0.0)
     assert np.mean(np.isfinite(result.a[lit])) > 0.5              # the lit part keeps its depth

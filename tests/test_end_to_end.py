@@ -13,7 +13,7 @@ from lfproc import simulate
 from lfproc.io import read_metadata, write_image
 from lfproc.api import DecodeSetup
 from lfproc.io import read_capture
-from lfproc.refocus import refocus
+from lfproc.refocusing import refocus
 from lfproc.simulate import Checkerboard, Noise, Plane, Scene
 from lfproc.camera import MainLens
 

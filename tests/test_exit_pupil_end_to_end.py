@@ -17,7 +17,7 @@ from lfproc import Camera, geometry
 from lfproc import simulate
 from lfproc.io import write_image
 from lfproc.api import prepare_decoding
-from lfproc.refocus import refocus
+from lfproc.refocusing import refocus
 from lfproc.simulate import Noise, Plane, Scene
 from lfproc.camera import MainLens
 from plainref import measured_shift

@@ -111,7 +111,7 @@ def test_every_refusal_of_one_capture_states_its_one_range_low_to_high(sample_lf
     "+0 (infinity) to +7.499 (176.2 mm)". Both now state the capture's one range: the optics' real slices
     (from infinity) narrowed to those whose refocused area covers half the capture, low to high."""
     import lfproc
-    from lfproc.refocus import usable_a_bound
+    from lfproc.refocusing import usable_a_bound
     bound = usable_a_bound(sample_lf.view_mask, sample_lf.lens_shape)
     printed = math.floor(bound * 1000 + 1e-6) / 1000
     near = float(geometry.slice_distance_mm(sample_lf.camera, printed))

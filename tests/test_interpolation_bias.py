@@ -10,7 +10,7 @@ fractional part of a, and on the photographic simulator's renders of the bundled
 The light fields are exact renders of a textured plane (:func:`lfproc.simulate.plane_views`): view k sees
 the texture shifted by a0·(c − k) lenses, each sample the texture integrated over its lens, so what lies
 beyond the lens grid's Nyquist frequency aliases, as in a capture. Sharpness is
-:func:`lfproc.refocus.slice_sharpness`, the power below a quarter cycle per lens: checked to be unbiased
+:func:`lfproc.refocusing.slice_sharpness`, the power below a quarter cycle per lens: checked to be unbiased
 itself (exact Fourier shifts peak at a0), while the full-band variance is shown to be pulled by aliasing
 alone, beyond the microscope bound, with no interpolation at all.
 """
@@ -21,7 +21,7 @@ import pytest
 import lfproc
 from conftest import SAMPLES
 from lfproc.cli import build_parser
-from lfproc.refocus import slice_sharpness
+from lfproc.refocusing import slice_sharpness
 from lfproc.simulate import fourier_refocus, plane_views
 
 SWEEP_HALF, SWEEP_STEP = 0.03, 0.001

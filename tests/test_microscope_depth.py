@@ -26,7 +26,7 @@ def test_depth_of_a_textured_sheet_at_na_1_2(a_true):
     views, _ = render_microscope_views(camera, MicroscopeScene(sheets=(sheet,)), (24, 24), pixel_samples=2,
                                        aperture_samples=2)
     # every estimate (min_confidence 0): the question is where the sweep's minimum sits, not how sure it is
-    depth = lfproc.depth(LightField.from_views(views, camera), min_confidence=0.0)
+    depth = lfproc.depth_map(LightField.from_views(views, camera), min_confidence=0.0)
     inner = depth.z_um[5:-5, 5:-5]
     dof = geometry.microscope_slices(camera, a_true).dof_um
     assert abs(float(np.median(inner)) - sheet.z_um) <= 0.1 * dof, (float(np.median(inner)), sheet.z_um, dof)

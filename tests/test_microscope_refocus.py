@@ -10,7 +10,7 @@ import pytest
 from lfproc import LfprocError, LightField
 from lfproc import geometry as g
 from lfproc.camera import Camera
-from lfproc.refocus import refocus
+from lfproc.refocusing import refocus
 
 SAMPLES = Path(__file__).resolve().parents[1] / "lfproc" / "samples" / "cameras"
 LFM60 = Camera.from_toml(SAMPLES / "lfm-60x-water.toml")

@@ -342,7 +342,7 @@ def test_distance_parameters_and_aperture(sample_api):
 
 
 def test_arrays_refocus_like_the_light_field_or_are_told_why_not(sample_api):
-    from lfproc.refocus import refocus
+    from lfproc.refocusing import refocus
 
     lf = sample_api["lf"]
     masked = lfproc.LightField.from_views(lf.views, lf.camera, view_mask=lf.view_mask)
@@ -354,9 +354,14 @@ def test_arrays_refocus_like_the_light_field_or_are_told_why_not(sample_api):
 
 
 def test_reprs_are_small(sample_api):
-    for name in ("lf", "fs", "vs", "dm"):
-        text = repr(sample_api[name])
-        assert len(text) < 300 and "\n" not in text, (name, text)
+    """Every result's repr is one line (issue 37): a LensGrid does not print its coefficients, a Camera not its
+    optics' every field, a DepthMap not its arrays (a Volume's: tests/test_deconvolve.py)."""
+    shown = dict(sample_api, camera=sample_api["lf"].camera)
+    for name in ("lf", "fs", "vs", "dm", "grid", "camera"):
+        text = repr(shown[name])
+        assert len(text) < 200 and "\n" not in text, (name, text)
+    assert repr(shown["camera"]).startswith("<Camera 'lfproc-sample': MainLens, 11x11 views")
+    assert repr(sample_api["dm"]).startswith("<DepthMap ") and "depth known at" in repr(sample_api["dm"])
     assert "89 carry light" in repr(sample_api["lf"])
 
 

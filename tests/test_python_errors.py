@@ -150,3 +150,36 @@ def test_lytro_and_service_errors_name_python_arguments(tmp_path):
         with batch.lock_outdir(str(tmp_path / "no" / "folder")):
             pass
     error_of(locked, "outdir=")
+
+
+def _said(call) -> list:
+    """The LfprocWarnings of one call (every one recorded, none filtered out by Python's once-per-line rule)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        call()
+    return [w for w in caught if issubclass(w.category, lfproc.LfprocWarning)]
+
+
+def test_warnings_point_at_the_callers_line_once_per_call(cam, grids):
+    """Issue 37: a warning raised deep inside a call (the grid fit inside read_light_field, the decode setup, the
+    slice checks) is attributed to the caller's line, not to lfproc's or pytest's frames, and each text is said
+    once per call."""
+    from PIL import Image
+
+    white = np.asarray(Image.open(SAMPLE / "white.png")).astype(np.float64)
+    noisy = np.clip(white * (1 + 0.12 * np.random.default_rng(0).standard_normal(white.shape)), 0, 65535)
+    noisy = noisy.astype(np.uint16)   # a white image whose pitch implies an exit pupil the camera file denies
+    lf = lfproc.read_light_field(SAMPLE / "capture.png", cam, white=SAMPLE / "white.png")
+    calls = {
+        "calibrate_white": lambda: lfproc.calibrate_white(noisy, cam),
+        "read_light_field (its grid fit)": lambda: lfproc.read_light_field(SAMPLE / "capture.png", cam, white=noisy),
+        "read_light_field (no white image)": lambda: lfproc.read_light_field(SAMPLE / "capture.png", cam,
+                                                                              grid=grids["gone"]),
+        "focal_stack (thin border band)": lambda: lfproc.focal_stack(lf, a=[0.0, 2.0]),
+    }
+    for name, call in calls.items():
+        said = _said(call)
+        assert said, name                                                      # the case still warns
+        assert all(w.filename == __file__ for w in said), (name, [(w.filename, w.lineno) for w in said])
+        texts = [str(w.message) for w in said]
+        assert len(texts) == len(set(texts)), (name, texts)                    # once per call

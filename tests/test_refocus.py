@@ -22,9 +22,9 @@ from hypothesis import strategies as st
 import lfproc
 from lfproc import LfprocError, LightField
 
-rf = importlib.import_module("lfproc.refocus._refocus")      # the driver: _views_array, _bands, MIN_BAND_ROWS
-rf_plan = importlib.import_module("lfproc.refocus._plan")     # axis_plan, keys_cubic_weights
-rf_kernels = importlib.import_module("lfproc.refocus._kernels")
+rf = importlib.import_module("lfproc.refocusing._refocus")      # the driver: _views_array, _bands, MIN_BAND_ROWS
+rf_plan = importlib.import_module("lfproc.refocusing._plan")     # axis_plan, keys_cubic_weights
+rf_kernels = importlib.import_module("lfproc.refocusing._kernels")
 
 INTERPOLATIONS = ("nearest", "linear", "cubic", "cubic-spline")
 RTOL, ATOL = 2e-5, 2e-5
@@ -447,7 +447,7 @@ def test_non_finite_pixels_that_reach_a_slice_are_a_user_error():
 # ------------------------------------------------------------------ numba on-disk cache
 def _kernel_cache_misses_and_hits_in_a_new_process():
     code = ("import importlib, numpy as np, lfproc\n"
-            "rf_kernels = importlib.import_module('lfproc.refocus._kernels')\n"
+            "rf_kernels = importlib.import_module('lfproc.refocusing._kernels')\n"
             "v = np.ones((3, 3, 4, 5, 1), np.float32)\n"
             "lfproc.refocus(v, [0, 1]); lfproc.refocus(v, 0.5); lfproc.refocus(v, 0.5, upsample=2)\n"
             "k = (rf_kernels._gather_band, rf_kernels._interpolated_rows_band, rf_kernels._interpolated_band)\n"
@@ -524,7 +524,7 @@ def test_an_array_with_dark_views_keeps_the_contracts_mean_and_says_what_to_pass
 
     views, lit = _dark_outside_a_disc(faint)
     a_values = [0.0, 1.0, -1.7]
-    for call in (lfproc.refocus, importlib.import_module("lfproc.refocus").refocus):
+    for call in (lfproc.refocus, importlib.import_module("lfproc.refocusing").refocus):
         with pytest.warns(LfprocWarning) as said:
             out = call(views, a_values)
         assert len(said) == 1 and said[0].filename == __file__   # the caller's line, not lfproc's
@@ -556,7 +556,7 @@ def test_an_array_whose_every_view_carries_light_is_refocused_without_a_warning(
         close(out[k], reference(views, a))
     lfproc.refocus(np.zeros((3, 3, 4, 4, 1), np.float32), 1.0)
     assert not [w for w in recwarn if issubclass(w.category, lfproc.LfprocWarning)]
-    from lfproc.refocus._refocus import lit_views
+    from lfproc.refocusing._refocus import lit_views
     assert lit_views(views) is None
     views[4, 4] *= np.float32(0.009)              # under 1 % of the brightest view: dark
     lit = lit_views(views)

@@ -35,7 +35,7 @@ from lfproc import geometry as g
 from lfproc.decode import decode, make_decoder
 from lfproc.camera import MainLens
 
-rf = importlib.import_module("lfproc.refocus")   # the module (``lfproc.refocus`` may be bound to the function)
+rf = importlib.import_module("lfproc.refocusing")   # the module (``lfproc.refocus`` may be bound to the function)
 
 pytestmark = pytest.mark.filterwarnings("error::RuntimeWarning")
 

@@ -9,7 +9,7 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     lfs = [setup.decode(path) for path in captures]                      #    the decoder derived once
     fs = lfproc.focal_stack(lf, a=[0.5, 1.0])                            # -> FocalStack (images + tags)
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
-    dm = lfproc.depth_map(lf)                                            # -> DepthResult
+    dm = lfproc.depth_map(lf)                                            # -> DepthMap (arrays + tags)
     vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 
@@ -23,21 +23,18 @@ Modules: ``_defaults`` (the commands' defaults), ``_checks`` (refocus parameters
 setup, which decodes captures), ``_read`` (a capture to a light field; how inputs are taken: files or arrays),
 ``_focal`` (focal stacks), ``_views`` (view stacks), ``_depth`` (depth maps), ``_deconvolve`` (a microscope's
 volume by wave-optics deconvolution, :mod:`lfproc.wave`). Importing this package is light (numpy only).
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
 from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve
 from ._defaults import DEFAULT_INTERPOLATION
-from ._depth import DepthResult, depth_map
+from ._depth import depth_map
 from ._focal import FocalStack, focal_stack
 from ._calibrate import calibrate_white
 from ._prepare import prepare_decoding
 from ._read import read_light_field
 from ._setup import DecodeSetup
 from ._views import ViewStack, view_stack
-
-__all__ = ["read_light_field", "calibrate_white", "prepare_decoding", "DecodeSetup", "focal_stack", "FocalStack",
-           "view_stack", "ViewStack",
-           "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume", "DEFAULT_SUPERRES",
-           # the checks the commands share (worded with their flags there)
-           "check_slices", "check_view_coverage", "check_z_step"]

@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import warnings
 
-from ..errors import LfprocWarning
+from ..errors import warn
 from ..grid import Calibration, LensGrid
 
 
@@ -61,10 +60,10 @@ def calibrate_white(white, camera, dark=None, *, white_is_white: bool = False) -
         check_same_sensor(dark_facts, white_facts, "dark frame", "white image")
     dark_capture = None if dark is None else _capture(dark, camera, "dark")
     white_capture = subtract_dark(_capture(white, camera, "white"), dark_capture, "white image")
-    return fit_grid(white_capture, camera, dark_capture, white_is_white=white_is_white, stacklevel=3)
+    return fit_grid(white_capture, camera, dark_capture, white_is_white=white_is_white)
 
 
-def fit_grid(white, camera, dark=None, *, white_is_white: bool = False, stacklevel: int = 2) -> LensGrid:
+def fit_grid(white, camera, dark=None, *, white_is_white: bool = False) -> LensGrid:
     """The grid fitted to a white `lfproc.io.Capture` (dark frame subtracted already; ``dark``, the dark
     `Capture`, is recorded), with its `Calibration`; what the fit warns about is warned (`LfprocWarning`)."""
     from ..calibrate import exit_pupil_warning, find_grid, implied_exit_pupil
@@ -77,7 +76,7 @@ def fit_grid(white, camera, dark=None, *, white_is_white: bool = False, stacklev
                          texture=estimate.texture)
     pupil = implied_exit_pupil(estimate.grid.pitch_px, estimate.pitch_sigma_px, camera)
     for line in filter(None, (*estimate.warnings, exit_pupil_warning(white.source, pupil, camera))):
-        warnings.warn(line.replace(": warning: ", ": ", 1), LfprocWarning, stacklevel=stacklevel + 1)
+        warn(line.replace(": warning: ", ": ", 1))
     white_file, dark_file = _file(white.source), None if dark is None else _file(dark.source)
     calibration = Calibration(
         white_image=white_file and os.path.abspath(white_file), camera=_camera_file(camera),

@@ -3,17 +3,16 @@ argument as their flag: ``what="--a"``).
 
 Every refusal of one light field states one usable range: the optics' real slices
 (:func:`lfproc.geometry.usable_a_range`) narrowed to those whose refocused area covers half the capture
-(:func:`lfproc.refocus.usable_a_bound`), low to high, in the terms of the argument given (``a``, or positions
+(:func:`lfproc.refocusing.usable_a_bound`), low to high, in the terms of the argument given (``a``, or positions
 such as ``z_um``).
 """
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 
-from ..errors import LfprocError, LfprocWarning
+from ..errors import LfprocError, warn
 
 
 def check_slices(camera, a_values, lens_shape, view_mask, source: str, what: str = "a", asked=None) -> None:
@@ -36,7 +35,7 @@ def check_slices(camera, a_values, lens_shape, view_mask, source: str, what: str
         The values as given, where ``what`` names positions (the message then speaks in them).
     """
     from .. import geometry
-    from ..refocus import MIN_REFOCUSED_AREA, refocused_fraction, usable_a_bound
+    from ..refocusing import MIN_REFOCUSED_AREA, refocused_fraction, usable_a_bound
 
     mask = camera.m_hat if view_mask is None else view_mask
     try:
@@ -63,7 +62,7 @@ def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=Non
                         asked=None) -> None:
     """Refuse slices that image nothing or whose refocused area is under half the image (:func:`check_slices`);
     warn (:class:`lfproc.LfprocWarning`) where most pixels miss some views."""
-    from ..refocus import full_view_fraction
+    from ..refocusing import full_view_fraction
 
     check_slices(camera, a_values, lens_shape, view_mask, source, what, asked)
     m = camera.m_hat
@@ -71,9 +70,8 @@ def check_view_coverage(camera, a_values, lens_shape, source: str, view_mask=Non
     thin = [a for a, f in zip(a_values, share) if f < 0.5]
     if thin:
         worst = max(thin, key=abs)
-        warnings.warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
-                      f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused",
-                      LfprocWarning, stacklevel=3)
+        warn(f"{source}: in {len(thin)} slice(s) (up to a={worst:+.3g}) fewer than half the pixels average "
+             f"all views: a border band of up to {abs(worst) * (m - 1) / 2:.0f} lenses is less refocused")
 
 
 def check_z_step(camera, a_values) -> None:
@@ -90,4 +88,4 @@ def check_z_step(camera, a_values) -> None:
         return
     advice = geometry.step_advice(camera, float(steps[0]), float(positions[0]), float(positions[-1]))
     if advice:
-        warnings.warn(advice, LfprocWarning, stacklevel=3)
+        warn(advice)

@@ -1,94 +1,21 @@
-"""Depth maps with their tags: :func:`depth_map` (the estimate of :func:`lfproc.depth`) and ``.save``
-(what ``lfproc depth`` writes)."""
+"""Depth maps with their tags: :func:`depth_map` → :class:`lfproc.DepthMap` (``.save`` writes what
+``lfproc depth`` writes)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import LfprocError
 
 
-@dataclass(frozen=True, eq=False, repr=False)
-class DepthResult:
-    """A depth map of one light field with its tags.
-
-    Every attribute of :class:`lfproc.depth.DepthMap` is one of this too (``depth``, ``near``, ``far`` and
-    their ``space``; the contract's ``distance_mm``, ``near_mm``, ``far_mm`` or ``z_um``, ``z_near_um``,
-    ``z_far_um``; ``confidence``, ``a``, ``allfocus`` …), and so is every tag of the sidecars
-    ``lfproc depth`` writes (``method``, ``a_searched``, ``a_step``, ``view_step``, ``min_confidence``,
-    ``lens_grid``, ``aperture_f_number``; ``unit``: "mm", or "um" for a microscope).
-
-    Attributes
-    ----------
-    depth_map : lfproc.depth.DepthMap
-    source : str or None
-    provenance : dict
-    depth_range_mm : tuple or None
-    """
-
-    depth_map: object
-    source: str | None
-    provenance: dict
-    depth_range_mm: tuple | None
-    _lf: object
-
-    def __getattr__(self, name):
-        if name.startswith("_"):
-            raise AttributeError(name)
-        dm = object.__getattribute__(self, "depth_map")
-        if hasattr(dm, name):
-            return getattr(dm, name)
-        tags = self.tags()
-        if name in tags:
-            return tags[name]
-        raise AttributeError(f"'DepthResult' object has no attribute {name!r}")
-
-    @property
-    def unit(self) -> str:
-        return self.depth_map.space.unit
-
-    def tags(self) -> dict:
-        """The fields every sidecar of ``lfproc depth`` shares (source, camera, method, the searched range …,
-        provenance)."""
-        camera = self._lf.camera
-        tags = dict(source=self.source, camera=camera.name if camera is not None else None,
-                    **self.depth_map.metadata())
-        if self.depth_range_mm is not None:
-            tags["depth_range_mm"] = [float(v) for v in self.depth_range_mm]
-        tags["provenance"] = self.provenance
-        return tags
-
-    def save(self, outdir, stem: str | None = None, *, point_cloud: bool = True) -> dict:
-        """Write what ``lfproc depth`` writes: ``STEM_depth.tif``, ``STEM_depth_confidence.tif``,
-        ``STEM_allfocus.tif``, ``STEM_depth_preview.png`` and (a photographic camera, ``point_cloud``)
-        ``STEM_depth_points.ply``, each with its sidecar. Returns name → path."""
-        from ..depth import write_depth_outputs
-        from ._focal import _stem
-
-        paths = write_depth_outputs(os.fspath(outdir), _stem(stem, self.source), self._lf, self.depth_map,
-                                    source=self.source, camera=self._lf.camera,
-                                    depth_range_mm=self.depth_range_mm, point_cloud=point_cloud,
-                                    provenance=self.provenance)
-        paths.pop("depth_map", None)
-        return paths
-
-    def summary(self) -> str:
-        """One line: how much is known and the range of the known depths."""
-        from ..depth import summary_line
-        return summary_line(self.depth_map)
-
-    def __repr__(self) -> str:
-        ny, nx = self.depth_map.a.shape
-        return f"<DepthResult {ny}x{nx} lenses: {self.summary()}>"
-
-
 def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, aperture: float | None = None,
-              min_confidence: float | None = None, **options) -> DepthResult:
-    """A metric depth map of ``lf`` (:func:`lfproc.depth`), tagged as ``lfproc depth`` tags it.
+              min_confidence: float | None = None, **options):
+    """A metric depth map of ``lf``, tagged as ``lfproc depth`` tags it (a plane sweep over the refocus parameter:
+    the variance across the views checked by the sharpest slice; distances by Eqs. 13–31).
 
     Parameters
     ----------
@@ -103,11 +30,21 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
     min_confidence : float, optional
         Estimates less confident than this (0–1) are NaN (default 0.1, the commands' default).
     **options
-        Further keyword arguments of :func:`lfproc.depth`.
+        The sweep's finer controls: ``a_range=(low, high)`` (search these refocus parameters instead), ``step``
+        (in a), ``view_step`` (every n-th view), ``interpolation`` (``"cubic"`` or ``"linear"``),
+        ``outer_views`` (also the outer ring of views), ``coarse_pass``, ``half_apertures`` (docs/depth.md).
 
     Returns
     -------
-    DepthResult
+    DepthMap
+        The arrays (``depth``, ``near``, ``far``, ``confidence``, ``a``, ``allfocus``; ``(Ny, Nx)`` per lens), in the
+        optics' object space (mm from the sensor, or µm from a microscope's native object plane), with the
+        sidecars' tags as attributes (``source``, ``provenance``, ``method``, ``a_searched`` …) and ``.save``.
+
+    Raises
+    ------
+    LfprocError
+        No camera, micro images below 3 px, a bad range, step or confidence.
     """
     from .. import geometry
     from ..camera import NATIVE_PLANE_UM
@@ -140,5 +77,5 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
     lf = with_aperture(lf, aperture)
     dm = depth(lf, depth_range_mm=depth_range_mm, camera=camera, min_confidence=min_confidence, **options)
     source = None if lf.source is None else os.path.abspath(lf.source)
-    return DepthResult(dm, source, provenance(lf.inputs),
-                       None if depth_range_mm is None else tuple(float(v) for v in depth_range_mm), lf)
+    return dataclasses.replace(dm, source=source, provenance=provenance(lf.inputs), light_field=lf,
+                               depth_range_mm=None if depth_range_mm is None else tuple(float(v) for v in depth_range_mm))

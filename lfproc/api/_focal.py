@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import ObjectSpace
+from ..camera import ObjectSpace, SlicesInSpace
 from ..errors import LfprocError
 from ._defaults import DEFAULT_INTERPOLATION
 
@@ -23,7 +23,7 @@ POSITION_ARGUMENTS = ("distance_mm", "z_um")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class FocalStack:
+class FocalStack(SlicesInSpace):
     """Refocused slices of one light field and their geometry.
 
     One set of tags for any main optics, in the unit and from the origin of ``space`` (the camera's
@@ -75,46 +75,6 @@ class FocalStack:
     provenance: dict
     view_mask: np.ndarray | None
     _records: tuple
-
-    @property
-    def distance_mm(self):
-        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
-        return self.space.named("distance_mm", self.depth)
-
-    @property
-    def near_mm(self):
-        """``near`` in mm from the sensor (Eq. 31); ``None`` in another space."""
-        return self.space.named("near_mm", self.near)
-
-    @property
-    def far_mm(self):
-        """``far`` in mm from the sensor (Eq. 31); ``None`` in another space."""
-        return self.space.named("far_mm", self.far)
-
-    @property
-    def dof_mm(self):
-        """``dof`` in mm (Eq. 23); ``None`` in another space."""
-        return self.space.named("dof_mm", self.dof)
-
-    @property
-    def z_um(self):
-        """``depth`` in µm from the native object plane; ``None`` in another space."""
-        return self.space.named("z_um", self.depth)
-
-    @property
-    def z_near_um(self):
-        """``near`` (the larger z) in µm; ``None`` in another space."""
-        return self.space.named("z_near_um", self.near)
-
-    @property
-    def z_far_um(self):
-        """``far`` (the smaller z) in µm; ``None`` in another space."""
-        return self.space.named("z_far_um", self.far)
-
-    @property
-    def dof_um(self):
-        """``dof`` in µm; ``None`` in another space."""
-        return self.space.named("dof_um", self.dof)
 
     def records(self) -> list[dict]:
         """One dict per slice: the keys and values of ``lfproc refocus``'s sidecar (``inf`` for JSON's null)."""
@@ -215,7 +175,7 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     from ..lightfield import LightField
     from ..outputs import slice_metadata, stack_f_number
     from ..provenance import provenance
-    from ..refocus import refocus
+    from ..refocusing import refocus
     from ..viewpoints import with_aperture
     from ._checks import check_view_coverage, check_z_step
 

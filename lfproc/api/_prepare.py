@@ -20,9 +20,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import warnings
 
-from ..errors import LfprocError, LfprocWarning
+from ..errors import LfprocError, warn
 from ..grid import LensGrid
 from ._setup import DecodeSetup, camera_file
 
@@ -108,8 +107,8 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     _check_capture_headers(captures, camera, reference, grid, _reference_what(reference, white_facts, grid))
     white_metadata = lytro_metadata_of(white_path)
     if white_metadata is not None and white_metadata.modulation_frame is False:
-        warnings.warn(f"{white_path}: its metadata marks it as a capture, not a white image (modulationFrame "
-                      f"false); pass a white image from the camera's calibration folder", LfprocWarning, stacklevel=2)
+        warn(f"{white_path}: its metadata marks it as a capture, not a white image (modulationFrame "
+             f"false); pass a white image from the camera's calibration folder")
     if first is not None and white_metadata is not None:
         from ..io import check_white_matches
         check_white_matches(first, white_metadata)
@@ -119,13 +118,13 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     if grid is None:
         white_capture = subtract_dark(read_capture(white_path, camera) if white_capture is None else white_capture,
                                       dark_capture, "white image")
-        grid = fit_grid(white_capture, camera, dark_capture, white_is_white=white_is_white, stacklevel=3)
+        grid = fit_grid(white_capture, camera, dark_capture, white_is_white=white_is_white)
     elif white_capture is not None:
         white_capture = subtract_dark(white_capture, dark_capture, "white image")
     elif white_path is None:
         recorded_white = grid.calibration.white_image if grid.calibration is not None else None
-        warnings.warn(f"{_name(grid)}: no white image available (recorded: {recorded_white}); decoding without "
-                      f"devignetting; pass white=... to correct vignetting", LfprocWarning, stacklevel=2)
+        warn(f"{_name(grid)}: no white image available (recorded: {recorded_white}); decoding without "
+             f"devignetting; pass white=... to correct vignetting")
     measured = measured_m_hat(camera, grid.pitch_px, grid.source or "the calibration")
     setup = DecodeSetup(measured.camera, grid, white=white_capture, white_path=white_path, dark=dark_capture,
                         reference=reference, inputs=file_inputs(camera=camera_file(camera), grid=grid.source,

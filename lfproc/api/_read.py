@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 
 from ..camera import Camera
-from ..errors import LfprocError, LfprocWarning
+from ..errors import LfprocError, LfprocWarning, warn
 from ..lightfield import LightField, is_lightfield_file
 
 _PATH = (str, os.PathLike)
@@ -150,15 +150,16 @@ def _camera(camera, capture=None) -> Camera:
 
         if is_lytro_file(os.fspath(capture)):
             built = lytro_camera(read_lytro_metadata(os.fspath(capture)))
-            warnings.warn(f"{capture}: camera from its metadata, main lens focused at infinity (the metadata has no "
-                          f"focus distance); for other settings pass camera=", LfprocWarning, stacklevel=4)
+            warn(f"{capture}: camera from its metadata, main lens focused at infinity (the metadata has no "
+                 f"focus distance); for other settings pass camera=")
             return built.camera
     raise LfprocError("decoding a capture needs camera= (a Camera or a camera TOML file); only Lytro files carry "
                       "their camera in their metadata")
 
 
 class _warnings_said_once:
-    """Warnings inside, as :class:`LfprocWarning` (a library's own category) whatever they were raised as."""
+    """Warnings inside, as :class:`LfprocWarning` (a library's own category) whatever they were raised as, each
+    text once, at the caller's line."""
 
     def __enter__(self):
         self._catcher = warnings.catch_warnings(record=True)
@@ -168,7 +169,10 @@ class _warnings_said_once:
 
     def __exit__(self, *exc):
         self._catcher.__exit__(*exc)
+        said = set()
         for w in self._caught:
             category = w.category if issubclass(w.category, LfprocWarning) else LfprocWarning
-            warnings.warn(str(w.message), category, stacklevel=3)
+            if (str(w.message), category) not in said:
+                said.add((str(w.message), category))
+                warn(str(w.message), category)
         return False

@@ -20,39 +20,15 @@ One batch at a time may write to an OUTDIR: :func:`lock_outdir` holds an advisor
 ``OUTDIR/.lfproc-batch.lock`` for the duration of a run; a lock left by a killed run is taken over.
 Interrupts (SIGINT to the process group, SIGTERM) stop a batch within about a second: see
 :mod:`._local` and :mod:`._signals`; docs/reliability.md lists every guarantee and its test.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._dask import run_dask
-from ._jobs import CAPTURE_EXTENSIONS, Job, JobResult, expand_inputs, file_stamp
+from ._jobs import Job, JobResult, expand_inputs
 from ._local import run_local
-from ._manifest import (
-           JOURNAL_NAME,
-           LOCK_NAME,
-           MANIFEST_NAME,
-           MANIFEST_VERSION,
-           Manifest,
-           lock_outdir,
-           read_manifest,
-           remove_stale_partial_files,
-)
-from ._resources import (
-           BYTES_PER_SENSOR_PIXEL,
-           PROCESS_BASE_BYTES,
-           available_memory_bytes,
-           default_workers,
-)
-from ._signals import Cancelled
-from ._worker import (
-           _GRID_SEEDS,
-           decode_setup,
-           init_pool_worker,
-           run_job,
-           seed_grids,
-           setup_key,
-)
-
-__all__ = ["CAPTURE_EXTENSIONS", "Job", "JobResult", "expand_inputs", "file_stamp", "LOCK_NAME", "JOURNAL_NAME", "MANIFEST_NAME",
-           "MANIFEST_VERSION", "Manifest", "lock_outdir", "read_manifest", "remove_stale_partial_files",
-           "available_memory_bytes", "default_workers", "decode_setup", "init_pool_worker", "run_job", "seed_grids",
-           "setup_key", "_GRID_SEEDS", "run_local", "run_dask", "BYTES_PER_SENSOR_PIXEL", "PROCESS_BASE_BYTES",
-           "Cancelled"]
+from ._manifest import (JOURNAL_NAME, LOCK_NAME, MANIFEST_NAME, Manifest, lock_outdir, read_manifest,
+                        remove_stale_partial_files)
+from ._resources import BYTES_PER_SENSOR_PIXEL, PROCESS_BASE_BYTES, available_memory_bytes, default_workers
+from ._worker import _GRID_SEEDS, decode_setup

@@ -12,23 +12,16 @@ blocks used by plots and tests. Implementation modules, one step each: ``_monoch
 ``_lattice_guess`` (2), ``_flatten`` (3), ``_symmetry_centres`` (4), ``_measure`` (3–4 in windows),
 ``_lattice``, ``_assign`` and ``_smooth_fit`` (5: rigid and non-rigid fits), ``_grid_extent`` (listed
 lenses), ``_checks`` (warnings, exit pupil), ``_estimate`` (the pipeline). See docs/calibration.md.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
-from ._checks import (TEXTURE_LIMIT, ExitPupilEstimate, exit_pupil_warning, implied_exit_pupil,
-                      lattice_texture, micro_image_scale, texture_ratio, white_texture)
-from ._estimate import MIN_LENSES, PITCH_TOLERANCE, GridEstimate, estimate_grid, find_grid
-from ._flatten import Flattened, candidate_centres, flatten, smooth_large
-from ._grid_extent import grid_from_fit, lattice_indices_on_sensor
-from ._lattice import (LatticeModel, Similarity, fit_similarity, lattice_index, neighbour_lattice, robust_fit,
-                       unit_coordinates)
-from ._lattice_guess import MAX_PITCH_PX, MIN_PITCH_PX, lattice_guess_from_autocorrelation
+from ._checks import (TEXTURE_LIMIT, exit_pupil_warning, implied_exit_pupil, lattice_texture, micro_image_scale,
+                      texture_ratio, white_texture)
+from ._estimate import GridEstimate, estimate_grid, find_grid
+from ._flatten import smooth_large
+from ._grid_extent import grid_from_fit
+from ._lattice import Similarity, lattice_index, unit_coordinates
 from ._monochrome import repair_outlier_pixels, white_to_mono
-from ._symmetry_centres import refine_centres, symmetric_offsets
-
-__all__ = ["estimate_grid", "find_grid", "GridEstimate", "implied_exit_pupil", "exit_pupil_warning",
-           "ExitPupilEstimate", "texture_ratio", "white_texture", "TEXTURE_LIMIT",
-           "lattice_texture", "micro_image_scale", "white_to_mono", "repair_outlier_pixels",
-           "lattice_guess_from_autocorrelation", "flatten", "Flattened", "smooth_large", "candidate_centres",
-           "symmetric_offsets", "refine_centres", "Similarity", "LatticeModel", "fit_similarity", "robust_fit",
-           "neighbour_lattice", "lattice_index", "unit_coordinates", "grid_from_fit", "lattice_indices_on_sensor",
-           "MIN_LENSES", "PITCH_TOLERANCE", "MIN_PITCH_PX", "MAX_PITCH_PX"]
+from ._symmetry_centres import refine_centres

@@ -15,14 +15,12 @@ from ._lens import DEFAULT_LENS_WAVELENGTH_NM, LensPrescription, Surface
 from ._main_lens import MainLens
 from ._main_optics import MainOptics, UsableRange, ViewPlacement, ViewPupil
 from ._microscope import Microscope, WaveOptics
-from ._space import NATIVE_PLANE_UM, SENSOR_MM, ObjectSpace
+from ._space import NATIVE_PLANE_UM, SENSOR_MM, ObjectSpace, PositionsInSpace, SlicesInSpace
 from ._transfer import RayTransfer, main_optics_transfer, prescription_transfer
 from ._optics import image_distance_for_focus, largest_odd_at_most
 from ._toml import KNOWN_KEYS, parse_provenance
 from ._zmx import read_zmx
 from ._validation import CFA_PATTERNS, GRIDS, TOML_KEYS
 
-__all__ = ["Camera", "MainLens", "MainOptics", "ObjectSpace", "UsableRange", "ViewPlacement", "ViewPupil", "SENSOR_MM",
-           "NATIVE_PLANE_UM", "RayTransfer",
-           "main_optics_transfer", "prescription_transfer", "LensPrescription", "Surface", "DEFAULT_LENS_WAVELENGTH_NM", "Microscope", "WaveOptics", "read_zmx", "image_distance_for_focus", "largest_odd_at_most", "KNOWN_KEYS", "parse_provenance",
-           "CFA_PATTERNS", "GRIDS", "TOML_KEYS"]
+# the public API (docs/api.md); the other names above serve lfproc's own stages and commands
+__all__ = ["Camera", "MainOptics", "MainLens", "Microscope", "ObjectSpace"]

@@ -73,6 +73,12 @@ class Camera:
     def __post_init__(self):
         validate_camera(self)
 
+    def __repr__(self) -> str:
+        name = repr(self.name or self.source or "unnamed")
+        return (f"<Camera {name}: {type(self.main_optics).__name__}, {self.m_hat}x{self.m_hat} views, MLA pitch "
+                f"{self.mla_pitch_mm:g} mm f {self.mla_focal_length_mm:g} mm, pixels {self.pixel_pitch_mm:g} mm, "
+                f"{self.grid}, CFA {self.cfa}>")
+
     def with_optics(self, main_optics: MainOptics) -> "Camera":
         """A copy with other main optics (e.g. ``camera.with_optics(replace(camera.main_optics,
         image_distance_mm=…))``); m̂ stays the camera's."""

@@ -113,6 +113,14 @@ class MainOptics(Protocol):
     Methods that take ``camera`` read the micro lens array and sensor behind the optics from it (pitches,
     f_s, m̂: the :class:`~lfproc.camera.Camera` the optics sit in). ``wave_optics`` (the objective's wave
     description for deconvolution, ``None`` without an objective) belongs here too.
+
+    Attributes
+    ----------
+    object_space : ObjectSpace
+        The unit, origin and direction of its positions (mm from the sensor for a main lens, µm from the native
+        object plane for a microscope).
+    wave_optics : WaveOptics or None
+        The objective's wave description (deconvolution), ``None`` without an objective.
     """
 
     @property

@@ -108,3 +108,53 @@ SENSOR_MM = ObjectSpace("mm", "mm", "from the sensor", ("distance_mm", "near_mm"
 #: a microscope's object space: micrometres from the native object plane, positive towards the objective
 NATIVE_PLANE_UM = ObjectSpace("um", "µm", "from the native object plane, positive towards the objective",
                               ("z_um", "z_near_um", "z_far_um", "dof_um"), 1000.0, 1.0, "z", "z = ", "+.2f")
+
+
+class PositionsInSpace:
+    """The contract's names of a result's positions (a plain base class of results with ``depth``, ``near``,
+    ``far`` and ``space`` attributes): each reads the same array, or is ``None`` where the result is in the other
+    space."""
+
+    @property
+    def distance_mm(self):
+        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
+        return self.space.named("distance_mm", self.depth)
+
+    @property
+    def near_mm(self):
+        """``near`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("near_mm", self.near)
+
+    @property
+    def far_mm(self):
+        """``far`` in mm from the sensor (Eq. 31); ``None`` in another space."""
+        return self.space.named("far_mm", self.far)
+
+    @property
+    def z_um(self):
+        """``depth`` in µm from the native object plane; ``None`` in another space."""
+        return self.space.named("z_um", self.depth)
+
+    @property
+    def z_near_um(self):
+        """``near`` (the larger z, nearer the objective) in µm; ``None`` in another space."""
+        return self.space.named("z_near_um", self.near)
+
+    @property
+    def z_far_um(self):
+        """``far`` (the smaller z) in µm; ``None`` in another space."""
+        return self.space.named("z_far_um", self.far)
+
+
+class SlicesInSpace(PositionsInSpace):
+    """:class:`PositionsInSpace` of slices, which also have a depth of field ``dof``."""
+
+    @property
+    def dof_mm(self):
+        """``dof`` in mm (Eq. 23); ``None`` in another space."""
+        return self.space.named("dof_mm", self.dof)
+
+    @property
+    def dof_um(self):
+        """``dof`` in µm; ``None`` in another space."""
+        return self.space.named("dof_um", self.dof)

@@ -4,6 +4,9 @@ Subcommand modules import numba, OpenCV and OpenImageIO only inside their ``run`
 ``lfproc geometry`` starts in a fraction of a second. An `LfprocError` becomes one line on stderr and
 exit status 2, its Python argument names reworded as the commands' flags (:mod:`.words`); anything
 else is a bug and exits with status 1 and a traceback.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from __future__ import annotations

@@ -105,7 +105,7 @@ def run(args) -> int:
     step(f"depth: {depth.summary()} -> {written['depth']} (preview {written['preview']})")
     page = build_page(lf, str(out / "viewer"), source=source, stem="sample", a_values=a_values,
                       calibration=calibration_summary(grid, str((sample / "white.png").resolve())),
-                      depth_map=depth.depth_map, focal_stack=stack)
+                      depth_map=depth, focal_stack=stack)
     step(f"viewer: {Path(page).resolve()}")
     step("  open it in a browser: click to refocus and read distances, drag to move the viewpoint")
     step(f"done in {time.perf_counter() - t0:.1f} s: {len(paths)} slices, 1 mosaic, 2 animations, 1 depth map, 1 viewer "

@@ -61,16 +61,15 @@ neighbouring micro image; reading every lens from its own cell keeps it out.
 
 The white image's views depend only on the white image, the grid and the settings, so a
 :class:`Decoder` computes them once and then decodes any number of captures.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._decoder import Decoder, decode, decode_capture, make_decoder
-from ._plan import Band, ReadPlan
-from ._demosaic import DEMOSAIC_METHODS, demosaic, to_channels
+from ._plan import Band
+from ._demosaic import demosaic, to_channels
 from ._hexagonal import hex_to_rect, rect_row_count
 from ._positions import remap_maps, sample_positions
 from ._resample import INTERPOLATIONS, resample_views
-from ._view_mask import centroid_errors, view_sampling
-
-__all__ = ["DEMOSAIC_METHODS", "INTERPOLATIONS", "Band", "Decoder", "ReadPlan", "centroid_errors", "decode",
-           "decode_capture", "demosaic", "hex_to_rect", "make_decoder", "rect_row_count", "remap_maps",
-           "resample_views", "sample_positions", "to_channels", "view_sampling"]
+from ._view_mask import view_sampling

@@ -34,7 +34,7 @@ def allfocus(views: np.ndarray, a_estimate: np.ndarray, center_index: int,
     ``view_shifts``: the per-view shift table the estimates were swept with (``None``: Eq. 9); ``view_mask``:
     the views that carry light, the only ones averaged (as the light field's slices average them)."""
     from ..lightfield import LightField
-    from ..refocus import refocus
+    from ..refocusing import refocus
 
     a_slices = allfocus_slices(a_estimate, center_index)
     lf = LightField.from_views(views, view_mask=None if view_mask is None or np.all(view_mask) else view_mask)

@@ -157,7 +157,7 @@ def cost_volume(sweep: SweepLuminance, a_values, *, interpolation: str = "linear
     CostVolume
     """
     from ..lightfield import LightField
-    from ..refocus import refocus
+    from ..refocusing import refocus
 
     a = np.asarray(a_values, dtype=np.float64)
     shift = a * sweep.view_step / bin_lenses
@@ -205,7 +205,7 @@ def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str
     (:data:`HALF_APERTURE_COMPLETE`) its cost is ``inf``: a half counts only where it is whole.
 
     A half is a block of whole view columns (or rows), so it is refocused alone
-    (:func:`lfproc.refocus._block.refocus_view_block`: only its views are read, 2 channels) and the
+    (:func:`lfproc.refocusing._block.refocus_view_block`: only its views are read, 2 channels) and the
     weights' sums come from the sampling plans; ``all_views=True`` (and a per-view shift table, a
     microscope's) takes the straightforward way instead: one fused refocus of ``w``, ``w·Y`` and
     ``w·Y²`` of both halves of an axis over every view of the sweep (the views outside a half are zero
@@ -213,7 +213,7 @@ def half_aperture_volumes(sweep: SweepLuminance, a_values, *, interpolation: str
     """
     if all_views or sweep.slopes is not None:
         return _half_aperture_volumes_all_views(sweep, a_values, interpolation, bin_lenses)
-    from ..refocus import refocus_view_block, view_weight_inside
+    from ..refocusing import refocus_view_block, view_weight_inside
 
     a = np.asarray(a_values, dtype=np.float64)
     shift = a * sweep.view_step / bin_lenses
@@ -255,7 +255,7 @@ def _half_aperture_volumes_all_views(sweep, a_values, interpolation, bin_lenses)
     """:func:`half_aperture_volumes` the straightforward way: one fused refocus per axis of ``w``, ``w·Y``
     and ``w·Y²`` of both its halves over every view; the ratios are each half's mean and mean square."""
     from ..lightfield import LightField
-    from ..refocus import refocus
+    from ..refocusing import refocus
 
     a = np.asarray(a_values, dtype=np.float64)
     shift = a * sweep.view_step / bin_lenses

@@ -1,4 +1,5 @@
-"""``lfproc.depth``: metric depth, its bounds and confidence, and an all-in-focus image from one light field.
+"""The depth stage (the estimate behind ``lfproc.depth_map``): metric depth, its bounds and confidence, and an
+all-in-focus image from one light field.
 
 Steps (each in its own module):
 
@@ -17,18 +18,12 @@ Steps (each in its own module):
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import SENSOR_MM, ObjectSpace
 from ..errors import LfprocError
 from ._confidence import MIN_CONFIDENCE
-
-#: the method name written into the outputs' metadata
-METHOD = "plane sweep over the refocus parameter a: variance across the views (correspondence) " \
-         "checked by the sharpest slice (defocus); parabolic sub-slice minimum; distance by Eqs. 13-31"
-
+from ._result import DepthMap
 
 #: sweeps with more slices than this start with a coarse pass that finds the occupied range
 COARSE_PASS_MIN_SLICES = 16
@@ -36,99 +31,6 @@ COARSE_PASS_MIN_SLICES = 16
 #: confidence of the coarse pass's estimates that counts as a surface found (low: missing a surface costs
 #: more than sweeping a little more)
 COARSE_PASS_CONFIDENCE = 0.2
-
-
-@dataclass(frozen=True, eq=False)
-class DepthMap:
-    """Depth of every lens of a light field, on the refocused slices' lens grid.
-
-    One set of fields for any main optics, in the unit and from the origin of ``space`` (the optics'
-    :attr:`~lfproc.camera.MainOptics.object_space`): millimetres from the sensor for a main lens (Eq. 21),
-    micrometres from the native object plane, positive towards the objective, for a microscope.
-
-    Attributes
-    ----------
-    depth : ndarray (Ny, Nx) float32
-        Position of the surface seen at each lens (the image written to ``STEM_depth.tif``); NaN = unknown,
-        ``inf`` = at infinity (distances from the sensor only).
-    confidence : ndarray (Ny, Nx) float32
-        0 (nothing known) … 1.
-    near, far : ndarray (Ny, Nx) float32
-        Bounds of the depth nearer to and farther from the optics: the slice's DOF (Eqs. 23–31) widened by
-        the cost's basin; NaN = unknown.
-    a : ndarray (Ny, Nx) float32
-        The refocus parameter of the sharpest slice (sub-slice); NaN = unknown.
-    allfocus : ndarray (Ny, Nx, C) float32
-        Every lens from the slice in focus at its depth.
-    method : str
-    a_searched : ndarray (K,)
-        The refocus parameters of the sweep.
-    timings_s : dict
-        Seconds spent per step.
-    space : ObjectSpace
-        Unit, origin and record keys of ``depth``, ``near`` and ``far``.
-    lit : ndarray (Ny, Nx) bool or None
-        The lenses light reached (:func:`lit_lenses`); elsewhere the depth is unknown for want of light, not of
-        texture (the preview draws them black). ``None``: not recorded (all counted as lit).
-
-    The contract's names read the same arrays: ``distance_mm``, ``near_mm``, ``far_mm`` (mm from the sensor)
-    and ``z_um``, ``z_near_um``, ``z_far_um`` (µm from the native object plane); each is ``None`` where the
-    depth map is in the other space.
-    """
-
-    depth: np.ndarray
-    confidence: np.ndarray
-    near: np.ndarray
-    far: np.ndarray
-    a: np.ndarray
-    allfocus: np.ndarray
-    method: str = METHOD
-    a_searched: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    view_step: int = 1
-    view_reach: int = 0
-    timings_s: dict = field(default_factory=dict)
-    aperture_f_number: float | None = None
-    space: ObjectSpace = SENSOR_MM
-    lit: np.ndarray | None = None
-
-    @property
-    def distance_mm(self):
-        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
-        return self.space.named("distance_mm", self.depth)
-
-    @property
-    def near_mm(self):
-        """``near`` in mm from the sensor; ``None`` in another space."""
-        return self.space.named("near_mm", self.near)
-
-    @property
-    def far_mm(self):
-        """``far`` in mm from the sensor; ``None`` in another space."""
-        return self.space.named("far_mm", self.far)
-
-    @property
-    def z_um(self):
-        """``depth`` in µm from the native object plane; ``None`` in another space."""
-        return self.space.named("z_um", self.depth)
-
-    @property
-    def z_near_um(self):
-        """``near`` (the larger z) in µm; ``None`` in another space."""
-        return self.space.named("z_near_um", self.near)
-
-    @property
-    def z_far_um(self):
-        """``far`` (the smaller z) in µm; ``None`` in another space."""
-        return self.space.named("z_far_um", self.far)
-
-    def metadata(self) -> dict:
-        """Fields shared by every output of this depth map."""
-        return {"method": self.method, "a_searched": [float(self.a_searched[0]), float(self.a_searched[-1])],
-                "a_step": float(self.a_searched[1] - self.a_searched[0]) if len(self.a_searched) > 1 else 0.0,
-                "view_step": int(self.view_step), "views_used_up_to_offset": int(self.view_reach),
-                "min_confidence": MIN_CONFIDENCE,
-                "lens_grid": [int(self.a.shape[0]), int(self.a.shape[1])],
-                **({} if self.aperture_f_number is None else {"aperture_f_number": self.aperture_f_number})}
 
 
 def occupied_range(sweep, a_lo, a_hi, step, center_index) -> tuple[float, float]:

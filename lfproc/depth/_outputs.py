@@ -34,10 +34,9 @@ PREVIEW_LEGEND = {"mm": ("m", "colour-mapped depth (viridis: yellow near, dark p
                                "unknown, black no light), legend in µm")}
 
 
-def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | None = None, camera=None,
-                        depth_range_mm=None, point_cloud: bool = True, provenance: dict | None = None,
-                        **depth_options) -> dict:
-    """Compute (unless ``depth_map`` is given) and write the depth outputs of one light field.
+def write_depth_outputs(outdir, stem: str, depth_map, *, point_cloud: bool = True) -> dict:
+    """Write the depth outputs of one depth map (:meth:`DepthMap.save`), each with the map's tags
+    (:meth:`DepthMap.tags`) in its metadata and sidecar.
 
     Parameters
     ----------
@@ -45,43 +44,28 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
         Output folder (created if needed).
     stem : str
         File name prefix, e.g. the capture's name.
-    lf : LightField
-        The decoded light field (its camera gives the geometry unless ``camera`` is given).
-    depth_map : DepthMap, optional
-        An estimate already made by :func:`lfproc.depth`; computed here otherwise.
-    source : str, optional
-        The capture's path, recorded in every file's metadata.
-    depth_range_mm : (near, far), optional
-        Passed to :func:`lfproc.depth`.
+    depth_map : DepthMap
+        The estimate, with the light field it was made from (its camera gives the geometry, its grid the
+        point cloud).
     point_cloud : bool
-        Also write ``STEM_depth_points.ply``.
-    provenance : dict, optional
-        The inputs that shaped the outputs (:func:`lfproc.provenance.provenance`), in every sidecar.
-    **depth_options
-        Further keyword arguments of :func:`lfproc.depth`.
+        Also write ``STEM_depth_points.ply`` (where the optics place each lens's chief ray).
 
     Returns
     -------
     dict
-        ``{"depth", "confidence", "allfocus", "preview"[, "points"]}`` → path written, and
-        ``"depth_map"`` → the :class:`DepthMap`.
+        ``{"depth", "confidence", "allfocus", "preview"[, "points"]}`` → path written.
     """
     from ..io import write_image, write_sidecar
-    from ._estimate import depth
     from ._pointcloud import point_cloud as make_points
     from ._pointcloud import write_ply
     from ._preview import write_preview
 
-    camera = camera if camera is not None else lf.camera
-    if depth_map is None:
-        depth_map = depth(lf, depth_range_mm=depth_range_mm, camera=camera, **depth_options)
+    lf = depth_map.light_field
+    camera = getattr(lf, "camera", None)
+    source = depth_map.source
+    common = depth_map.tags()
     outdir = os.fspath(outdir)
     os.makedirs(outdir, exist_ok=True)
-    common = dict(source=source, camera=camera.name if camera is not None else None, **depth_map.metadata())
-    if depth_range_mm is not None:
-        common["depth_range_mm"] = [float(v) for v in depth_range_mm]
-    if provenance is not None:
-        common["provenance"] = provenance
     space = depth_map.space
     known = ~np.isnan(depth_map.depth)
     paths = {}
@@ -119,7 +103,6 @@ def write_depth_outputs(outdir, stem: str, lf, depth_map=None, *, source: str | 
         write_ply(path, points, rgb, comment=f"lfproc depth point cloud, mm; source {source}")
         write_sidecar(path, meta)
         paths["points"] = path
-    paths["depth_map"] = depth_map
     return paths
 
 

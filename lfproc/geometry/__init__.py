@@ -43,20 +43,7 @@ from ._triangulation import Triangulation, triangulate
 from ._views import (ViewGeometry, baseline_mm, place_views, view_geometry, view_offsets, view_positions_mm,
                      view_slopes, view_tilts_deg, views_inside_aperture)
 
-__all__ = [
-    "aperture_limits", "aperture_views", "equivalent_f_number", "summed_view_extent", "aperture_text",
-    "equivalent_numerical_aperture",
-    "DEFAULT_WAVELENGTH_MM", "DiffractionCheck", "DiffractionWarning", "airy_radius_mm", "diffraction_check",
-    "working_f_number", "exit_pupil_from_scale", "micro_image_scale", "pupil_curvature", "virtual_camera_plane_mm",
-    "main_lens_of", "chief_ray_heights", "check_usable_a", "check_usable_distances", "format_a", "front_focal_plane_mm", "slice_positions", "usable_a_range",
-    "usable_range_text", "RayModel", "MAX_SLICES", "SlicePlan", "integer_slice_gaps", "plan_depth_range",
-    "plan_slices", "uncovered_depths", "step_advice", "FINE_STEP_FACTOR",
-    "SliceGeometry", "infinity_parameter", "position_parameter", "refocus_parameter", "require_space",
-    "slice_distance_mm", "slice_geometry",
-    "Triangulation", "triangulate", "RayTransfer", "main_optics_transfer", "prescription_transfer",
-    "RealRaySlices", "RealRayViews", "real_ray_lens", "real_ray_slices", "real_ray_views", "traces_real_rays",
-    "aplanatic_gain", "microscope_slices", "na_views", "paraxial_depth_error", "refocus_slopes", "refocus_summary", "uses_aplanatic",
-    "z_per_a_um",
-    "ViewGeometry", "baseline_mm", "place_views", "view_geometry", "view_offsets", "view_positions_mm", "view_slopes",
-    "view_tilts_deg", "views_inside_aperture",
-]
+# the public API (docs/api.md); the other names above serve lfproc's own stages and commands
+__all__ = ["slice_geometry", "SliceGeometry", "refocus_parameter", "position_parameter", "view_geometry",
+           "ViewGeometry", "summed_view_extent", "triangulate", "Triangulation", "real_ray_slices",
+           "RealRaySlices", "real_ray_views", "RealRayViews"]

@@ -38,6 +38,16 @@ def summed_view_extent(view_mask) -> float:
 
     The half-width of the square set of views with the same spread along a lattice axis (module
     docstring): c for the full set (and for ``None``), 0 for one view, at least 1 otherwise.
+
+    Parameters
+    ----------
+    view_mask : ndarray (m̂, m̂) bool or None
+        The views summed (``None``: all).
+
+    Returns
+    -------
+    float
+        r, in views (c for all of them).
     """
     mask = np.asarray(view_mask, dtype=bool)
     if mask.ndim != 2 or mask.shape[0] != mask.shape[1] or mask.shape[0] % 2 == 0 or not mask.any():

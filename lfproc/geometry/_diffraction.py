@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..camera import Camera, MainLens
-from ..errors import LfprocError
+from ..errors import LfprocError, warn as warn_at_caller
 
 #: default wavelength for the Airy limit (Eq. 22), in millimetres (550 nm)
 DEFAULT_WAVELENGTH_MM = 550e-6
@@ -79,7 +78,7 @@ def diffraction_check(camera: Camera, wavelength_mm: float = DEFAULT_WAVELENGTH_
     limited = micro <= pitch and (main is None or main <= pitch)
     check = DiffractionCheck(wavelength_mm, pitch, main, micro, limited)
     if warn and not limited:
-        warnings.warn(check.message(), DiffractionWarning, stacklevel=2)
+        warn_at_caller(check.message(), DiffractionWarning)
     return check
 
 

@@ -33,7 +33,7 @@ def virtual_camera_plane_mm(camera) -> float:
 
 def chief_ray_heights(camera, lens_heights_mm, distance_mm):
     """Where the central view's chief ray through each lens (height s from the axis, mm) is at ``distance_mm``
-    from the sensor: the depth map's point cloud (``lfproc.depth``); ``None`` for optics other than a main lens.
+    from the sensor: the depth map's point cloud (``lfproc.depth_map``); ``None`` for optics other than a main lens.
 
     The ray leaves the micro lens with slope m = −s/d_A (0 telecentric), reaches H1U at U = s + m·b_U (Eq. 16),
     passes the front focal plane at F = m·f_U (Eq. 17), so at z from H1U it is at U + (F − U)/f_U·z (Eqs. 18, 19).

@@ -9,7 +9,7 @@ a → ∞ for a telecentric lens and at a = δ/(p_m·κ) with a finite exit pupi
 objective images every depth, of either sign: no limit.
 
 A capture narrows the range further (a slice shifted so far that most of it falls off the capture is no
-image: ``lfproc.refocus.usable_a_bound``). Every refusal of one capture states one usable range, the
+image: ``lfproc.refocusing.usable_a_bound``). Every refusal of one capture states one usable range, the
 narrower of the two, low to high, in the terms of the argument the user gave: ``a`` with each end's position,
 or a position (``distance_mm``, ``z_um``) with each end's ``a``.
 """

@@ -170,7 +170,17 @@ def _spread_views(r: float) -> list[float]:
 
 @dataclass(frozen=True, eq=False)
 class RealRaySlices:
-    """Real-ray distances of slices (mm from the sensor; NaN = the rays do not meet in front of the lens)."""
+    """Real-ray distances of slices (mm from the sensor; NaN = the rays do not meet in front of the lens).
+
+    Attributes
+    ----------
+    a : ndarray (K,)
+        Refocus parameters.
+    distance_mm, near_mm, far_mm : ndarray (K,)
+        Where the traced rays of each slice meet, and its DOF limits, mm from the sensor.
+    spread_mm : ndarray (K,)
+        How far apart the rays' meeting points lie (aberration), mm.
+    """
 
     a: np.ndarray
     distance_mm: np.ndarray
@@ -226,7 +236,19 @@ def real_ray_slices(camera: Camera, a, view_extent=None) -> RealRaySlices:
 
 @dataclass(frozen=True, eq=False)
 class RealRayViews:
-    """Real virtual cameras: convergence point (lateral position, distance from the sensor) and tilt."""
+    """Real virtual cameras: convergence point (lateral position, distance from the sensor) and tilt.
+
+    Attributes
+    ----------
+    i : ndarray (m̂,) int
+        View offsets from the centre.
+    position_mm : ndarray (m̂,)
+        Lateral position of each virtual camera, mm from the optical axis.
+    distance_mm : ndarray (m̂,)
+        Its distance from the sensor, mm.
+    tilt_deg : ndarray (m̂,)
+        Its tilt, degrees.
+    """
 
     i: np.ndarray
     position_mm: np.ndarray

@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import SENSOR_MM, Camera, ObjectSpace
+from ..camera import SENSOR_MM, Camera, ObjectSpace, SlicesInSpace
 from ..errors import LfprocError
 from ._exit_pupil import pupil_curvature
 
@@ -179,7 +179,7 @@ def slice_distance_mm(camera: Camera, a) -> np.ndarray | float:
 
 
 @dataclass(frozen=True, eq=False)
-class SliceGeometry:
+class SliceGeometry(SlicesInSpace):
     """Geometry of refocused slices (arrays with the shape of ``a``, or floats for a scalar ``a``).
 
     One set of fields for any main optics, in the unit and from the origin of ``space`` (the camera's
@@ -206,46 +206,6 @@ class SliceGeometry:
     far: np.ndarray
     dof: np.ndarray
     space: ObjectSpace = SENSOR_MM
-
-    @property
-    def distance_mm(self):
-        """``depth`` in mm from the sensor (Eq. 21); ``None`` in another space."""
-        return self.space.named("distance_mm", self.depth)
-
-    @property
-    def near_mm(self):
-        """``near`` in mm from the sensor (Eq. 31); ``None`` in another space."""
-        return self.space.named("near_mm", self.near)
-
-    @property
-    def far_mm(self):
-        """``far`` in mm from the sensor (Eq. 31); ``None`` in another space."""
-        return self.space.named("far_mm", self.far)
-
-    @property
-    def dof_mm(self):
-        """``dof`` in mm (Eq. 23); ``None`` in another space."""
-        return self.space.named("dof_mm", self.dof)
-
-    @property
-    def z_um(self):
-        """``depth`` in µm from the native object plane; ``None`` in another space."""
-        return self.space.named("z_um", self.depth)
-
-    @property
-    def z_near_um(self):
-        """``near`` (the larger z, nearer the objective) in µm; ``None`` in another space."""
-        return self.space.named("z_near_um", self.near)
-
-    @property
-    def z_far_um(self):
-        """``far`` (the smaller z) in µm; ``None`` in another space."""
-        return self.space.named("z_far_um", self.far)
-
-    @property
-    def dof_um(self):
-        """``dof`` in µm; ``None`` in another space."""
-        return self.space.named("dof_um", self.dof)
 
     def records(self) -> list[dict]:
         """One dict per slice with the contract's JSON keys (``space.keys``); infinity as ``math.inf``.
@@ -344,6 +304,18 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     LfprocError
         For a distance at or behind the main lens (d ≤ L), or NaN; for optics whose positions are not mm
         from the sensor (:func:`position_parameter` takes any optics' own).
+
+    Parameters
+    ----------
+    camera : Camera
+        With a main lens (positions in mm from the sensor).
+    distance_mm : float or array_like
+        Distances from the sensor, mm.
+
+    Returns
+    -------
+    float or ndarray
+        ``a`` of the same shape.
     """
     require_space(camera, SENSOR_MM, "a distance in mm (distance_mm=)")
     return camera.main_optics.refocus_parameter(camera, distance_mm)
@@ -357,5 +329,16 @@ def position_parameter(camera: Camera, position) -> np.ndarray | float:
     ------
     LfprocError
         For a position no slice of these optics can focus on, in the optics' own words.
+
+    Parameters
+    ----------
+    camera : Camera
+    position : float or array_like
+        Positions in ``camera.main_optics.object_space`` (its unit).
+
+    Returns
+    -------
+    float or ndarray
+        ``a`` of the same shape.
     """
     return camera.main_optics.refocus_parameter(camera, position)

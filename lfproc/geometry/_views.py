@@ -76,6 +76,21 @@ class ViewGeometry:
     views (an objective's): ``baseline_mm`` is ``None``, ``tilt_deg`` is each view's object-space angle (also
     ``angle_deg``), ``position_mm`` where it crosses the objective's pupil; ``inside`` marks the views inside
     the optics' stop (the central row of :func:`views_inside_aperture`).
+
+    Attributes
+    ----------
+    i : ndarray (m̂,) int
+        View offsets from the centre, −c … c.
+    position_mm : ndarray (m̂,)
+        Where each view looks from: F_i, mm from the optical axis (Eq. 17), or where it crosses the pupil.
+    tilt_deg : ndarray (m̂,)
+        Its tilt Φ_i (Eq. 33), or an orthographic view's object-space angle, degrees.
+    baseline_mm : float or None
+        The adjacent baseline (Eq. 34); ``None`` for orthographic views.
+    inside : ndarray (m̂,) bool
+        Inside the optics' stop.
+    lateral_sampling_um : float or None
+        The lenses' spacing in the object (a microscope's), µm.
     """
 
     i: np.ndarray
@@ -101,7 +116,17 @@ class ViewGeometry:
 
 
 def view_geometry(camera: Camera) -> ViewGeometry:
-    """Positions, tilts and the adjacent baseline of all views (Eqs. 17, 33, 34), or an objective's angles."""
+    """Positions, tilts and the adjacent baseline of all views (Eqs. 17, 33, 34), or an objective's angles.
+
+    Parameters
+    ----------
+    camera : Camera
+
+    Returns
+    -------
+    ViewGeometry
+        One axis's m̂ views (the lattice is square, so the other axis is the same).
+    """
     i = view_offsets(camera)
     views = place_views(camera, i)
     inside = views_inside_aperture(camera)[camera.center_index]

@@ -8,22 +8,15 @@ refused in one line naming both files); `read_dark`, `subtract_dark` (``--dark``
 `check_capture_is_not_white`, `lens_scene_contrast`, `white_evidence` (swapped white image and capture;
 ``white_is_white=True`` skips the white image's check); `measured_m_hat` (m̂ from the measured pitch).
 See docs/inputs.md.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._dark import read_dark, subtract_dark
-from ._defaults import MeasuredMHat, measured_m_hat
+from ._defaults import measured_m_hat
 from ._facts import ImageFacts, file_hash, probe_image, same_file_content
-from ._kind import (SCENE_CONTRAST_LIMIT, SCENE_CORRELATION_LIMIT, TEXTURE_LIMIT, WHITE_FLATNESS, WhiteEvidence,
-                    check_capture_is_not_white, check_white_is_white, lens_flatness, lens_scene_contrast,
-                    white_evidence)
-from ._match import (PITCH_MATCH_FLOOR, PITCH_TOLERANCE_WITHOUT_RECORD, camera_name, check_fits_grid_extent,
-                     check_grid_fits_camera, check_same_sensor, expected_pitch_px, pitch_tolerance, reference_facts)
+from ._kind import (SCENE_CONTRAST_LIMIT, SCENE_CORRELATION_LIMIT, TEXTURE_LIMIT, WHITE_FLATNESS,
+                    check_capture_is_not_white, check_white_is_white, lens_flatness, white_evidence)
+from ._match import camera_name, check_fits_grid_extent, check_grid_fits_camera, check_same_sensor, reference_facts
 from ._provenance import made_from
-
-__all__ = ["MeasuredMHat", "measured_m_hat", "ImageFacts", "PITCH_MATCH_FLOOR",
-           "PITCH_TOLERANCE_WITHOUT_RECORD", "SCENE_CONTRAST_LIMIT", "SCENE_CORRELATION_LIMIT",
-           "TEXTURE_LIMIT", "WhiteEvidence", "white_evidence",
-           "WHITE_FLATNESS", "camera_name", "check_capture_is_not_white", "check_fits_grid_extent",
-           "check_grid_fits_camera", "check_same_sensor", "check_white_is_white", "expected_pitch_px", "file_hash",
-           "lens_flatness", "lens_scene_contrast", "made_from", "pitch_tolerance", "probe_image", "read_dark",
-           "reference_facts", "same_file_content", "subtract_dark"]

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibrate import TEXTURE_LIMIT
-from ..errors import LfprocError, LfprocWarning
+from ..errors import LfprocError, warn
 
 #: fewest lenses per side of a light field judged by `lens_flatness` (a crop of a few lenses may be uniform)
 MIN_LENSES_PER_SIDE = 20
@@ -130,9 +130,8 @@ def check_white_is_white(source: str, image, cfa: str, grid, *, white_is_white: 
                           f"refused above {TEXTURE_LIMIT}); give a white image (a uniform bright surface, e.g. through "
                           f"a diffuser) as white=, or pass white_is_white=True if this is one")
     if evidence.doubts:
-        warnings.warn(f"{source}: may be a capture of a scene, not a white image: {'; and '.join(evidence.doubts)}; "
-                      f"if it is a white image, say so with white_is_white=True", LfprocWarning,
-                      stacklevel=2)
+        warn(f"{source}: may be a capture of a scene, not a white image: {'; and '.join(evidence.doubts)}; "
+             f"if it is a white image, say so with white_is_white=True")
     return evidence
 
 

@@ -36,6 +36,9 @@ Writing
 
 OpenImageIO, rawpy and Pillow are imported inside the functions that use them, so importing this
 package is cheap (numpy only).
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ._camera_file import read_camera
@@ -43,36 +46,21 @@ from ._capture import Capture
 from ._checks import existing_file
 from ._describe import describe_file
 from ._gif import write_gif
-from ._libraw import BAYER_PATTERNS, bayer_pattern_from_colors
-from ._lytro_camera import LytroCamera, lytro_camera
+from ._libraw import bayer_pattern_from_colors
+from ._lytro_camera import lytro_camera
 from ._lytro_container import has_container_extension, is_container
 from ._lytro_h264 import decode_views as decode_picture_views
-from ._lytro_lambda import LambdaMap, camera_lambda_map, focused_at, lambda_map, refocused_map
-from ._lytro_metadata import LytroMetadata
-from ._lytro_picture import LytroPicture
-from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_lambda_map, picture_metadata,
-                                  refuse_pictures)
+from ._lytro_lambda import camera_lambda_map, focused_at, lambda_map, refocused_map
+from ._lytro_picture_open import (camera_metadata, is_picture_file, open_picture, picture_lambda_map,
+                                  picture_metadata, refuse_pictures)
 from ._lytro_picture_pixels import confidence_map, depth_lambda, encode_jpeg, stack_images
 from ._lytro_read import is_lytro_file, read_lytro, read_lytro_metadata
 from ._lytro_unpack import unpack_raw
-from ._lytro_white import WhiteChoice, check_white_matches, pick_white_image
+from ._lytro_white import check_white_matches, pick_white_image
 from ._napari_metadata import is_napari_metadata, napari_camera
 from ._native import libraries_quiet
 from ._oiio import read_image
 from ._preview import label_font, label_text, write_gif_frames, write_png_preview
-from ._read import RAW_EXTENSIONS, read_capture
+from ._read import read_capture
 from ._sidecar import sidecar_path, write_sidecar
 from ._write import FORMATS, read_metadata, srgb_decode, srgb_encode, write_image
-
-__all__ = [
-    "LambdaMap", "LytroPicture", "camera_metadata", "confidence_map", "depth_lambda", "is_picture_file",
-    "lambda_map", "focused_at", "open_picture", "picture_lambda_map", "picture_metadata", "refuse_pictures",
-    "BAYER_PATTERNS", "Capture", "FORMATS", "LytroCamera", "LytroMetadata", "RAW_EXTENSIONS", "WhiteChoice",
-    "bayer_pattern_from_colors", "check_white_matches", "describe_file", "is_lytro_file", "lytro_camera",
-    "pick_white_image", "read_capture", "read_image", "read_lytro", "read_lytro_metadata", "read_metadata",
-    "sidecar_path",
-    "srgb_decode", "srgb_encode", "unpack_raw", "write_gif", "write_image", "write_sidecar",
-    "existing_file", "has_container_extension", "is_container", "decode_picture_views", "write_gif_frames",
-    "write_png_preview", "label_font", "label_text", "camera_lambda_map", "refocused_map", "encode_jpeg", "stack_images",
-    "is_napari_metadata", "napari_camera", "read_camera", "libraries_quiet",
-]

@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import os
-import warnings
 
 from ..camera import Camera
-from ..errors import LfprocError, LfprocWarning
+from ..errors import LfprocError, warn
 from ._checks import existing_file
 
 
@@ -52,8 +51,8 @@ def read_camera(path: str | os.PathLike) -> Camera:
     path = existing_file(path)
     if is_lytro_file(path):
         camera = lytro_camera(camera_metadata(path)).camera
-        warnings.warn(f"{path}: camera from its metadata, main lens focused at infinity (the metadata has no focus "
-                      f"distance); lfproc.io.focused_at(camera, MM) sets where it focused", LfprocWarning, stacklevel=2)
+        warn(f"{path}: camera from its metadata, main lens focused at infinity (the metadata has no focus "
+             f"distance); lfproc.io.focused_at(camera, MM) sets where it focused")
         return camera
     if is_napari_metadata(path):
         return napari_camera(path)[0]

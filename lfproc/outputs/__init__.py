@@ -14,28 +14,19 @@ stack as one ImageJ or OME-TIFF file with its physical spacing; a deconvolved vo
 Lytro picture's stack, depth and views). The depth colour scale lives in :mod:`lfproc.colours` and the 8-bit
 picture writers (:func:`write_png_preview`, :func:`write_gif_frames`) in :mod:`lfproc.io`; both are re-exported here. Pillow and
 OpenImageIO load only when something is written.
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
 from ..colours import DEPTH_COLOURS, UNKNOWN_COLOUR, colour_scale
 from ..io import write_gif_frames, write_png_preview
-from ._display import DEFAULT_UPSCALE, MIN_LONG_SIDE_PX, UPSCALE_METHODS, add_label, metres, slice_label, upscale, upscale_factor
+from ._display import MIN_LONG_SIDE_PX, add_label, metres, slice_label, upscale, upscale_factor
 from ._lytro_pictures import export_picture
-from ._names import FORMATS, output_stem, slice_name, slice_names, unique_stems, view_name
-from ._optics_tags import aperture_tags, stack_f_number
-from ._previews import (PREVIEW_FORMATS, display_frames, slice_labels, view_label, write_mosaic_preview,
-                        write_slice_gif, write_slice_previews, write_view_gif, write_view_previews)
-from ._products import (masked_views, mosaic_of_shown, slice_metadata, summed_views_metadata, write_slices,
-                        write_view_mosaic, write_views)
-from ._stack import STACK_KINDS, lateral_um_per_lens, stack_path, volume_paths, write_focal_stack, write_volume
+from ._names import FORMATS, output_stem, slice_names, unique_stems, view_name
+from ._optics_tags import stack_f_number
+from ._previews import slice_labels, write_mosaic_preview, write_slice_gif, write_slice_previews, write_view_gif
+from ._products import slice_metadata, summed_views_metadata, write_slices, write_view_mosaic, write_views
+from ._stack import lateral_um_per_lens, stack_path, write_focal_stack, write_volume
 from ._tone import ToneMap
-from ._view_set import ViewSet, shown_views, write_view_set
-
-__all__ = ["FORMATS", "slice_name", "slice_names", "view_name", "output_stem", "unique_stems", "slice_metadata", "summed_views_metadata",
-           "write_slices", "write_views", "write_view_mosaic", "masked_views", "ToneMap", "MIN_LONG_SIDE_PX",
-           "UPSCALE_METHODS", "DEFAULT_UPSCALE", "upscale", "upscale_factor", "add_label", "metres", "slice_label", "display_frames",
-           "write_gif_frames", "write_png_preview", "write_slice_gif", "write_view_gif", "write_mosaic_preview",
-           "DEPTH_COLOURS", "UNKNOWN_COLOUR", "colour_scale", "write_view_set", "ViewSet", "shown_views",
-           "PREVIEW_FORMATS", "slice_labels", "view_label", "write_slice_previews", "write_view_previews",
-           "mosaic_of_shown", "aperture_tags", "stack_f_number",
-           "STACK_KINDS", "lateral_um_per_lens", "stack_path", "write_focal_stack", "export_picture", "volume_paths",
-           "write_volume"]
+from ._view_set import shown_views, write_view_set

@@ -25,7 +25,7 @@ import struct
 
 import numpy as np
 
-from ..errors import LfprocError
+from ..errors import LfprocError, warn
 
 
 def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, camera=None,
@@ -119,17 +119,16 @@ def _say_what_has_no_distance(path: str, mapping, note: str, records: list) -> N
     from ..errors import LfprocWarning
 
     if mapping is None:
-        warnings.warn(f"{path}: no distances, lambda only: {note}; pass camera= a camera file of the camera that took "
-                      f"it (lfproc camera on a raw .lfr/.lfp of the same camera) and focus_distance_mm= where its lens "
-                      f"focused", LfprocWarning, stacklevel=3)
+        warn(f"{path}: no distances, lambda only: {note}; pass camera= a camera file of the camera that took "
+             f"it (lfproc camera on a raw .lfr/.lfp of the same camera) and focus_distance_mm= where its lens "
+             f"focused")
         return
     beyond = [r["lambda"] for r in records if r.get("distance_mm") is None or not math.isfinite(r["distance_mm"])]
     if beyond:
-        warnings.warn(f"{path}: {len(beyond)} of {len(records)} stack images (lambda {min(beyond):+.3g} to "
-                      f"{max(beyond):+.3g}) lie beyond infinity for the camera's focus (infinity at lambda "
-                      f"{mapping.infinity_lambda:.3g}), so their distance_mm is null: the lens focused nearer than "
-                      f"the camera says; pass focus_distance_mm= where it focused, if known", LfprocWarning,
-                      stacklevel=3)
+        warn(f"{path}: {len(beyond)} of {len(records)} stack images (lambda {min(beyond):+.3g} to "
+             f"{max(beyond):+.3g}) lie beyond infinity for the camera's focus (infinity at lambda "
+             f"{mapping.infinity_lambda:.3g}), so their distance_mm is null: the lens focused nearer than "
+             f"the camera says; pass focus_distance_mm= where it focused, if known")
 
 
 def _linear(rgb: np.ndarray) -> np.ndarray:

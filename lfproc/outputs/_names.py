@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 
 from ..errors import LfprocError
+from ..lightfield import output_stem
 from ._optics_tags import named_by_position
 
 #: output format -> file extension
@@ -68,14 +69,6 @@ def _labels(values: list[float], camera) -> list[str]:
 def view_name(stem: str, ky: int, kx: int) -> str:
     """``STEM_view_07_03`` for view (ky, kx) = (7, 3)."""
     return f"{stem}_view_{ky:02d}_{kx:02d}"
-
-
-def output_stem(path: str) -> str:
-    """The name outputs of a capture start with: its file name without extension (``.lfp.npz`` as one)."""
-    name = os.path.basename(path)
-    if name.lower().endswith(".lfp.npz"):
-        return name[:-len(".lfp.npz")]
-    return os.path.splitext(name)[0]
 
 
 def unique_stems(paths: list[str]) -> dict[str, str]:

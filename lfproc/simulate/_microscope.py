@@ -45,7 +45,15 @@ RAY_CHUNK = 1 << 20
 @dataclass(frozen=True)
 class Bead:
     """A fluorescent sphere at (x_um, y_um, z_um) in the sample (z from the native object plane,
-    positive towards the objective), radius ``radius_um``, emission ``brightness`` per µm of path."""
+    positive towards the objective), radius ``radius_um``, emission ``brightness`` per µm of path.
+
+    Attributes
+    ----------
+    x_um, y_um, z_um : float
+        Its centre in the object, µm from the optical axis and from the native object plane.
+    radius_um : float
+    brightness : float
+    """
 
     x_um: float
     y_um: float
@@ -60,7 +68,19 @@ class Bead:
 @dataclass(frozen=True)
 class Sheet:
     """A thin fluorescent sheet at depth ``z_um`` with a texture: the sum of ``waves`` cosines
-    of period ``period_um`` (random directions and phases from ``seed``), levels in [low, high]."""
+    of period ``period_um`` (random directions and phases from ``seed``), levels in [low, high].
+
+    Attributes
+    ----------
+    z_um : float
+        Its depth, µm from the native object plane.
+    period_um : float
+        The period of each cosine of the texture, µm.
+    waves, seed : int
+        Number of random waves of the texture and their seed.
+    low, high : float
+        Emission range.
+    """
 
     z_um: float
     period_um: float = 10.0
@@ -88,7 +108,13 @@ class Sheet:
 
 @dataclass(frozen=True)
 class MicroscopeScene:
-    """Beads and sheets (emission adds; a dark background)."""
+    """Beads and sheets (emission adds; a dark background).
+
+    Attributes
+    ----------
+    beads : tuple of Bead
+    sheets : tuple of Sheet
+    """
 
     beads: tuple = field(default_factory=tuple)
     sheets: tuple = field(default_factory=tuple)
@@ -176,6 +202,21 @@ def render_microscope_views(camera: Camera, scene: MicroscopeScene, lens_shape, 
 
     Views outside the NA (fraction 0) are delivered as 0, as the decoder delivers them; ``na_offset``:
     see :func:`object_rays`.
+
+    Parameters
+    ----------
+    camera : Camera
+        A microscope camera.
+    scene : MicroscopeScene
+    lens_shape : (int, int)
+        (Ny, Nx) lenses.
+    pixel_samples, aperture_samples : int
+    na_offset : (float, float)
+
+    Returns
+    -------
+    views : ndarray (m̂, m̂, Ny, Nx, 1) float32
+    fraction : ndarray (m̂, m̂) float
     """
     _scope(camera)
     m, c = camera.m_hat, camera.center_index
@@ -212,6 +253,21 @@ def render_microscope_sensor(camera: Camera, scene: MicroscopeScene | None, sens
     ((x − (W−1)/2), (y − (H−1)/2))·p/R at the lenslets' focal plane (p the camera pixel, R the relay).
     The white image is uniform emission: each pixel holds the fraction of its rays inside the NA
     (``na_offset``: an aperture off the axis, see :func:`object_rays`).
+
+    Parameters
+    ----------
+    camera : Camera
+        A microscope camera.
+    scene : MicroscopeScene or None
+    sensor_shape : (int, int)
+        (H, W) pixels.
+    pixel_samples, aperture_samples : int
+        Samples per pixel axis and per NA axis.
+    na_offset : (float, float)
+
+    Returns
+    -------
+    ndarray (H, W) float64
     """
     _scope(camera)
     height, width = (int(v) for v in sensor_shape)

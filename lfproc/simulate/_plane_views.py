@@ -33,6 +33,10 @@ def plane_views(m: int, n: int, a0: float, seed: int = 0, oversample: int = 4, b
         No frequency at or above ``band`` cycles per lens on either axis (``None``: all).
     exponent : float
         Power spectrum ∝ f^(−exponent) (2: natural images).
+
+    Returns
+    -------
+    ndarray (m, m, n, n, 1) float32
     """
     rng = np.random.default_rng(seed)
     size = n * oversample

@@ -225,6 +225,28 @@ def render_ideal_views(camera: Camera, scene: Scene, sensor_shape, *, rotation_d
     grids give views at the hexagonal lens centres (the LensGrid's rows × cols). ``channels``
     (1 = luminance, :data:`LUMA_WEIGHTS`, or 3) defaults to 3 for a CFA camera and 1 otherwise;
     anything else raises LfprocError. ``exit_pupil_distance_mm`` as in :func:`render`.
+
+    Parameters
+    ----------
+    camera : Camera
+    scene : Scene
+    sensor_shape : (int, int)
+        (H, W) pixels of the sensor the lattice lies on.
+    rotation_deg, offset_px : float, (float, float)
+        The lattice's rotation and offset on the sensor.
+    rim_radius_mm : float or "auto"
+        The micro lens aperture's radius.
+    pixel_samples, aperture_samples : int
+        Samples per pixel axis and per aperture axis.
+    channels : {1, 3} or None
+    exit_pupil_distance_mm : float or None
+
+    Returns
+    -------
+    views : ndarray (m̂, m̂, Ny, Nx, C) float32
+    weight : ndarray (m̂, m̂, Ny, Nx) float32
+        The fraction of each view's rays that passed the stop and the rim.
+    grid : LensGrid
     """
     setup = _Setup.build(camera, sensor_shape, rotation_deg, offset_px, rim_radius_mm, pixel_samples,
                          aperture_samples, exit_pupil_distance_mm)

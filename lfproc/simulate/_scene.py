@@ -133,7 +133,15 @@ class Plane:
 
 @dataclass(frozen=True)
 class Scene:
-    """Planes (in the order given; ties in distance go to the earlier plane) and a background radiance (RGB)."""
+    """Planes (in the order given; ties in distance go to the earlier plane) and a background radiance (RGB).
+
+    Attributes
+    ----------
+    planes : tuple of Plane
+        Textured planes, fronto-parallel (the nearest hides the others; ties go to the earlier plane).
+    background : tuple of float
+        The radiance (RGB) where no plane is hit.
+    """
 
     planes: tuple = ()
     background: tuple = (0.0, 0.0, 0.0)

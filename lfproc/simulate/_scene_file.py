@@ -79,7 +79,17 @@ _TOP_KEYS = {"camera", "background", "render", "plane"}
 
 
 def load_scene_file(path: str | os.PathLike) -> SceneFile:
-    """Parse a scene TOML file (``docs/scene-format.md``); every problem raises `LfprocError` naming the file."""
+    """Parse a scene TOML file (``docs/scene-format.md``); every problem raises `LfprocError` naming the file.
+
+    Parameters
+    ----------
+    path : str or path-like
+
+    Returns
+    -------
+    SceneFile
+        The scene, the camera file it names and the render options.
+    """
     path = os.fspath(path)
     data = read_toml(path, "scene file", "an existing SCENE.toml")
     return parse_scene_dict(data, source=path, base_dir=os.path.dirname(os.path.abspath(path)))

@@ -34,7 +34,13 @@ class _LowHigh:
 
 @dataclass(frozen=True)
 class Uniform:
-    """A constant radiance ``value``."""
+    """A constant radiance ``value``.
+
+    Attributes
+    ----------
+    value : float
+        The radiance everywhere.
+    """
 
     value: float = 1.0
     kind = KIND_UNIFORM
@@ -49,7 +55,15 @@ class Uniform:
 @dataclass(frozen=True)
 class Checkerboard(_LowHigh):
     """Checkerboard of period ``period_mm`` (squares of side ``period_mm / 2``): the square
-    0 ≤ x, y < period/2 (lower-right of the origin, since y grows downward) is ``low``."""
+    0 ≤ x, y < period/2 (lower-right of the origin, since y grows downward) is ``low``.
+
+    Attributes
+    ----------
+    period_mm : float
+        One black and one white square, mm.
+    low, high : float
+        Radiance of the two squares.
+    """
 
     period_mm: float
     low: float = 0.0
@@ -64,7 +78,17 @@ class Checkerboard(_LowHigh):
 @dataclass(frozen=True)
 class Sinusoid(_LowHigh):
     """Sinusoidal grating of period ``period_mm`` whose stripes run across the direction ``angle_deg``
-    (from +x towards +y); ``phase_deg`` shifts it."""
+    (from +x towards +y); ``phase_deg`` shifts it.
+
+    Attributes
+    ----------
+    period_mm : float
+        Period on the plane, mm.
+    angle_deg, phase_deg : float
+        Direction of the stripes' normal and phase, degrees.
+    low, high : float
+        Radiance range.
+    """
 
     period_mm: float
     angle_deg: float = 0.0
@@ -82,7 +106,16 @@ class Sinusoid(_LowHigh):
 
 @dataclass(frozen=True)
 class Noise(_LowHigh):
-    """Band-limited random texture: value noise with lattice spacing ``feature_mm`` (see the module docstring)."""
+    """Band-limited random texture: value noise with lattice spacing ``feature_mm`` (see the module docstring).
+
+    Attributes
+    ----------
+    feature_mm : float
+        The size of the noise's features on the plane, mm.
+    seed : int
+    low, high : float
+        Radiance range.
+    """
 
     feature_mm: float
     seed: int = 0

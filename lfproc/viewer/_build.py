@@ -62,7 +62,7 @@ def build_page(lf, outdir: str, *, source: str, stem: str, a_values=None, calibr
     index_href : str, optional
         Link back to an index of several captures.
     depth_map : lfproc.depth.DepthMap, optional
-        A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth`) otherwise.
+        A depth map of ``lf`` already computed; computed here (:func:`lfproc.depth_map`) otherwise.
     focal_stack : lfproc.FocalStack, optional
         ``lfproc.focal_stack(lf, a=a_values)`` already computed (every view with light, the page's first
         aperture); refocused here otherwise. Its ``a`` must be ``a_values``.

@@ -1,4 +1,4 @@
-"""Where is each lens's surface? The depth stage (:func:`lfproc.depth`), on the lens grid of the slices.
+"""Where is each lens's surface? The depth stage (:func:`lfproc.depth_map`), on the lens grid of the slices.
 
 ``lfproc.depth`` combines the variance across views with the sharpest-slice cue (``docs/depth.md``); the
 viewer runs it over the ``a`` range of the slices it shows (:func:`sweep_range`) unless the caller has
@@ -65,7 +65,7 @@ def sweep_range(camera, lens_shape, a_values=None) -> tuple[float, float]:
 
 def estimate_depth(lf, a_values=None, depth_map=None) -> FocusDepth:
     """Per-lens depth of ``lf`` over the ``a`` range of ``a_values`` (default: from infinity nearer), from
-    ``depth_map`` (a :class:`lfproc.depth.DepthMap` already computed) or a new :func:`lfproc.depth` run."""
+    ``depth_map`` (a :class:`lfproc.depth.DepthMap` already computed) or a new :func:`lfproc.depth_map` run."""
     if depth_map is None:
         from ..depth import depth
 

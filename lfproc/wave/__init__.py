@@ -10,17 +10,14 @@ Richardson–Lucy with the depth-adaptive anti-aliasing filter of Stefanoiu et a
 (:func:`backend`: NumPy with SciPy's FFTs, or CuPy, :mod:`._backend`).
 
 Computing only: no files are read or written here. Importing it loads NumPy only (SciPy on first use).
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
-from ._backend import BACKENDS, Backend, backend
-from ._filter import filter_widths, lanczos_kernel
-from ._operators import (WaveOperators, build_operators, check_superres, check_z, imageable_z_um, planned_radius,
-                         voxel_offsets_um, wave_optics_of)
-from ._projector import Projector, choose_tile
+from ._backend import Backend, backend
+from ._filter import filter_widths
+from ._operators import WaveOperators, build_operators, check_superres, check_z, wave_optics_of
+from ._projector import Projector
 from ._psf import blur_radius_lenses, image_defocus_um, lens_radius, oversampling, voxel_patterns
-from ._richardson_lucy import polyphase_to_volume, richardson_lucy, volume_to_polyphase
-
-__all__ = ["WaveOperators", "build_operators", "Projector", "richardson_lucy", "backend", "Backend", "BACKENDS",
-           "voxel_patterns", "oversampling", "lens_radius", "blur_radius_lenses", "image_defocus_um", "filter_widths",
-           "lanczos_kernel", "check_superres", "check_z", "imageable_z_um", "planned_radius", "voxel_offsets_um",
-           "wave_optics_of", "choose_tile", "polyphase_to_volume", "volume_to_polyphase"]
+from ._richardson_lucy import richardson_lucy

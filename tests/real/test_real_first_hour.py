@@ -82,9 +82,9 @@ def test_the_depth_preview_tells_no_light_from_unknown_depth(urchin, tmp_path):
     lf = lfproc.read_light_field(folder / "light_field.tif", out / "lfm.toml", grid=out / "grid.json",
                                  dark=folder / "dark_frame.tif")
     dm = lfproc.depth_map(lf)
-    lit, known = dm.depth_map.lit, np.isfinite(dm.depth_map.depth)
+    lit, known = dm.lit, np.isfinite(dm.depth)
     assert 0.25 < lit.mean() < 0.5 and not known[~lit].any()
-    assert "that light reached" in summary_line(dm.depth_map)
+    assert "that light reached" in summary_line(dm)
 
 
 def test_the_sample_camera_on_the_8_bit_sea_urchin_names_the_camera_file(real_dir, tmp_path):

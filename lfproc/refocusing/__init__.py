@@ -64,30 +64,12 @@ each slice in one loop nest over all the rows the band reads (the per-row bookke
 and slice): on a light-field microscope's short rows (27 × 27 views of 73 × 73 lenses, 101 slices) that
 takes a half (cubic) to a sixth (linear) of the CPU time of the per-row ring of ``_interpolated_band``,
 which still serves upsampled slices (bit-identical results).
+
+Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
+tests, and may change without notice.
 """
 
-import sys
-import types
-
 from ._block import refocus_view_block, view_weight_inside
-from ._coverage import (MIN_OVERLAPPING_VIEWS, MIN_REFOCUSED_AREA, full_view_fraction,
-                        max_usable_a, overlapping_view_fraction, refocused_fraction, usable_a_bound)
+from ._coverage import MIN_REFOCUSED_AREA, full_view_fraction, refocused_fraction, usable_a_bound
 from ._refocus import INTERPOLATIONS, MAX_OUTPUT_BYTES, refocus
-from ._sharpness import SHARPNESS_BAND, slice_sharpness
-
-__all__ = ["refocus", "INTERPOLATIONS", "MAX_OUTPUT_BYTES", "full_view_fraction", "max_usable_a",
-           "overlapping_view_fraction", "MIN_OVERLAPPING_VIEWS", "MIN_REFOCUSED_AREA", "refocused_fraction",
-           "usable_a_bound", "slice_sharpness", "SHARPNESS_BAND", "refocus_view_block",
-           "view_weight_inside"]
-
-
-class _CallableModule(types.ModuleType):
-    """``import lfproc.refocus`` binds the package attribute ``lfproc.refocus`` to this package (Python
-    sets it after the import), shadowing the lazily exported function; calling the package calls
-    :func:`refocus`, so ``lfproc.refocus(lf, a)`` works whatever was imported first."""
-
-    def __call__(self, *args, **kwargs):
-        return refocus(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule
+from ._sharpness import slice_sharpness

@@ -33,7 +33,7 @@ def _block_plan(plan: AxisPlan, index: slice, n: int) -> AxisPlan:
 
 def view_block_plans(a, m: int, shape: tuple[int, int], rows: slice, cols: slice, interpolation: str = "linear"):
     """The sampling plans (y, x) of the views ``rows`` × ``cols`` of an ``m × m`` light field of ``shape``
-    lenses for the slices ``a`` (:func:`lfproc.refocus._plan.axis_plan`, restricted to those views)."""
+    lenses for the slices ``a`` (:func:`lfproc.refocusing._plan.axis_plan`, restricted to those views)."""
     slopes, _ = _slopes(np.atleast_1d(np.asarray(a, dtype=np.float64)))
     interpolation = _interpolation(interpolation)
     plan_y = axis_plan(slopes, m, shape[0], 1, interpolation)

@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import math
 import numbers
-import os
-import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numba
 import numpy as np
 
-from ..errors import LfprocError
+from ..errors import LfprocError, warn
 from ._kernels import _gather_band, _interpolated_band, _interpolated_rows_band
 from ._per_view import refocus_per_view
 from ._plan import AxisPlan, axis_plan
@@ -194,28 +192,14 @@ def _view_mask(lf, views: np.ndarray):
         return None if mask is None else np.asarray(mask, dtype=bool).reshape(m, m)
     lit = lit_views(views)
     if lit is not None:
-        import warnings
-
-        from ..errors import LfprocWarning
-
         n_lit, n = int(np.count_nonzero(lit)), int(lit.size)
-        warnings.warn(f"refocus: {n - n_lit} of {n} views of this array are dark (0 everywhere, or at most "
-                      f"{DARK_VIEW_FRACTION:.0%} of the brightest view's mean level) and an array's mean runs over "
-                      f"every view, so its slices are about {n_lit / n:.2f}x as bright as those of a light field whose "
-                      f"view_mask leaves the dark views out; pass the LightField (lf, not lf.views), or "
-                      f"lfproc.LightField.from_views(views, camera, view_mask=...) with the {n_lit} views that "
-                      f"carry light", LfprocWarning, stacklevel=_caller_level())
+        warn(f"refocus: {n - n_lit} of {n} views of this array are dark (0 everywhere, or at most "
+             f"{DARK_VIEW_FRACTION:.0%} of the brightest view's mean level) and an array's mean runs over "
+             f"every view, so its slices are about {n_lit / n:.2f}x as bright as those of a light field whose "
+             f"view_mask leaves the dark views out; pass the LightField (lf, not lf.views), or "
+             f"lfproc.LightField.from_views(views, camera, view_mask=...) with the {n_lit} views that "
+             f"carry light")
     return None
-
-
-def _caller_level() -> int:
-    """The ``stacklevel`` of the first frame outside this package, for a warning raised here: the caller of
-    :func:`refocus`, whether it called the function or the callable package (``lfproc.refocus``)."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    frame, level = sys._getframe(1), 1
-    while frame is not None and os.path.dirname(os.path.abspath(frame.f_code.co_filename)) == here:
-        frame, level = frame.f_back, level + 1
-    return level
 
 
 #: a view whose mean magnitude is at most this fraction of the brightest view's is dark (:func:`lit_views`)
