@@ -7,7 +7,7 @@ accuracy against an exact reference, reusing the stages of the other benchmark s
 * **decode** (``bench_decode``): interpolation nearest / linear / cubic / lanczos and demosaic fast /
   careful on the Lytro-Illum-sized capture of ``benchsim``; floor: one copy of the sensor. Accuracy: PSNR
   against the simulator's ideal views (``bench_decode.psnr_row``).
-* **refocus** (``bench_refocus``'s cases, ``bench_interpolation.sweep_errors``): integer a (gather), real a
+* **refocus** (the cases of ``bench_refocus.stage_refocus``, ``bench_interpolation.sweep_errors``): integer a (gather), real a
   with nearest / linear / cubic / cubic-spline, upsample 2, many slices in one call, on the decoded views;
   floor: one read of the views. Accuracy: PSNR on an exact light field of a textured plane
   (``benchlib.plane_light_field``) and the bias of the sharpest slice of a sweep from the true a on exact
@@ -15,16 +15,17 @@ accuracy against an exact reference, reusing the stages of the other benchmark s
 * **depth** (``bench_depth``): the default search and its faster / slower settings, timed on the
   Illum-sized light field; accuracy on the rendered, decoded cards scene with known depths.
 * **deconvolution** (microscopes): iterations 4 / 8 / 16 at super-resolution 3 and 5, and without the
-  anti-aliasing filter, on four wave-rendered beads (``tests/test_deconvolve.py``); accuracy: where the brightest voxel near each bead lies.
+  anti-aliasing filter, on four wave-rendered beads (``tests/test_deconvolve.py``); accuracy: where the
+  brightest voxel near each bead lies.
 * **geometry models**: paraxial (the paper's, exit pupil at infinity), the exit-pupil model, real rays
   through the Double Gauss prescription, against optiland's independent exact trace of the same rays
   (``tests/test_real_lens.py``); the paraxial model also against the paper's Zemax numbers (Table 2).
   Time per 1e6 slices; floor: one numpy pass over 1e6 values.
 
 Usage: ``python scripts/bench_tradeoffs.py [--quick] [--out DIR]``. The full run writes to ``docs/``; it took
-10 minutes of wall time and 6.8 minutes of CPU time on 2 cores at a load of 5–9 (2.4 GB peak); ``--quick`` (about 1 minute, small captures) writes to a temporary
-folder unless ``--out`` is given. ``python scripts/bench_tradeoffs.py --page-only`` rewrites the page from
-the JSON.
+10 minutes of wall time and 6.8 minutes of CPU time on 2 cores at a load of 5–9 (2.4 GB peak). ``--quick``
+(about a minute, small captures, one repeat) writes to a temporary folder unless ``--out`` is given.
+``python scripts/bench_tradeoffs.py --page-only`` rewrites the page from the JSON.
 """
 
 from __future__ import annotations
@@ -402,6 +403,10 @@ def markdown(r: dict) -> str:
            f"repeats after a warm-up, in seconds. Peak memory of the run {r['peak_rss_gb']:.2f} GB. "
            f"`python scripts/bench_tradeoffs.py --page-only` rewrites this page from "
            f"[speed-accuracy.json](speed-accuracy.json); `tests/test_speed_accuracy.py` checks that they agree.", ""]
+    if max(m["load_average_start"][0], m["load_average_end"][0]) > m["cpus_usable"]:
+        out += ["**Measured on a busy machine** (load above its CPU count): other work shared the CPUs, so the "
+                "wall times here are longer than on an idle machine; the accuracies and the choices below do not "
+                "depend on the load unless two settings' times are close.", ""]
     if r["quick"]:
         out += ["**Quick run** (`--quick`): small captures, one repeat; not the numbers to quote.", ""]
     out += recommendations(r)
