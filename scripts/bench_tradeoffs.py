@@ -405,8 +405,9 @@ def markdown(r: dict) -> str:
            f"[speed-accuracy.json](speed-accuracy.json); `tests/test_speed_accuracy.py` checks that they agree.", ""]
     if max(m["load_average_start"][0], m["load_average_end"][0]) > m["cpus_usable"]:
         out += ["**Measured on a busy machine** (load above its CPU count): other work shared the CPUs, so the "
-                "wall times here are longer than on an idle machine; the accuracies and the choices below do not "
-                "depend on the load unless two settings' times are close.", ""]
+                "wall times here are longer than on an idle machine. The accuracies do not depend on the load; the "
+                "choices below that weigh times (the preview's decode and depth, the quickest deconvolution) "
+                "may change on an idle one.", ""]
     if r["quick"]:
         out += ["**Quick run** (`--quick`): small captures, one repeat; not the numbers to quote.", ""]
     out += recommendations(r)
