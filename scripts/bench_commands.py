@@ -52,6 +52,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from lfproc.camera import MainLens
 
 ROOT = Path(__file__).resolve().parent.parent
 SENSOR = (5368, 7728)

@@ -361,45 +361,44 @@ def render_psnr_capture(camera, s: suite.Settings):
                            aperture_samples=s.psnr_aperture_samples, seed=1)
 
 
-def stage_decode_accuracy(s: suite.Settings) -> dict:
-    """PSNR of decoded views against the simulator's ideal views (9 µm pixels, 250 µm lenses, m̂ = 25)."""
+def psnr_row(label: str, sim, interp: str, method: str, rings: int = 1) -> dict:
+    """PSNR of one capture decoded with ``interp``/``method`` against the simulator's ideal views (see
+    :func:`stage_decode_accuracy`), and of the outer views it leaves out."""
     from lfproc.decode import decode, hex_to_rect
 
-    rows = []
+    cam = sim.camera
+    views = decode(suite.normalised(sim.raw, cam), suite.normalised(sim.white, cam), sim.grid, cam.m_hat, cam.cfa,
+                   interpolation=interp, demosaic_method=method)
+    ideal, weight = sim.ideal_views, sim.ideal_weight
+    if sim.grid.kind == "hexagonal":
+        ideal, _ = hex_to_rect(ideal, sim.grid)
+        weight = hex_to_rect(weight[..., None], sim.grid)[0][..., 0]
+    kind = sim.grid.kind
+    mask = bl.decode_psnr_mask(weight, kind, rings_excluded=rings)
+    value = bl.psnr_db(views[mask], ideal[mask])
+    outer = bl.decode_psnr_mask(weight, kind, rings_excluded=-1) & ~mask
+    outer_db = bl.psnr_db(views[outer], ideal[outer]) if outer.any() else None
+    suite.log(f"  PSNR {label} {interp}/{method}: {value:.1f} dB")
+    return {"capture": label, "interpolation": interp, "demosaic": method, "psnr_db": value,
+            "outer_ring_psnr_db": outer_db, "rings_excluded": rings,
+            "meets_target": value >= suite.PSNR_TARGET_DB if interp != "nearest" else None}
 
-    def add(label, sim, interp, method, rings=1):
-        cam = sim.camera
-        views = decode(suite.normalised(sim.raw, cam), suite.normalised(sim.white, cam), sim.grid, cam.m_hat, cam.cfa,
-                       interpolation=interp, demosaic_method=method)
-        ideal, weight = sim.ideal_views, sim.ideal_weight
-        if sim.grid.kind == "hexagonal":
-            ideal, _ = hex_to_rect(ideal, sim.grid)
-            weight = hex_to_rect(weight[..., None], sim.grid)[0][..., 0]
-        kind = sim.grid.kind
-        mask = bl.decode_psnr_mask(weight, kind, rings_excluded=rings)
-        value = bl.psnr_db(views[mask], ideal[mask])
-        outer = bl.decode_psnr_mask(weight, kind, rings_excluded=-1) & ~mask
-        outer_db = bl.psnr_db(views[outer], ideal[outer]) if outer.any() else None
-        rows.append({"capture": label, "interpolation": interp, "demosaic": method, "psnr_db": value,
-                     "outer_ring_psnr_db": outer_db, "rings_excluded": rings,
-                     "meets_target": value >= suite.PSNR_TARGET_DB if interp != "nearest" else None})
-        suite.log(f"  PSNR {label} {interp}/{method}: {value:.1f} dB")
 
+def stage_decode_accuracy(s: suite.Settings) -> dict:
+    """PSNR of decoded views against the simulator's ideal views (9 µm pixels, 250 µm lenses, m̂ = 25)."""
     start = time.perf_counter()
     mono = render_psnr_capture(suite.paper_9um_camera(), s)
-    for interp in suite.INTERPOLATIONS:
-        add("mono, rectangular", mono, interp, "fast")
+    rows = [psnr_row("mono, rectangular", mono, interp, "fast") for interp in suite.INTERPOLATIONS]
     bayer = render_psnr_capture(suite.paper_9um_camera("RGGB"), s)
-    for method in ("fast", "careful"):
-        add("RGGB, rectangular", bayer, "linear", method)
-    add("RGGB, rectangular", bayer, "cubic", "careful")
+    rows += [psnr_row("RGGB, rectangular", bayer, "linear", method) for method in ("fast", "careful")]
+    rows.append(psnr_row("RGGB, rectangular", bayer, "cubic", "careful"))
     hexa = render_psnr_capture(suite.paper_9um_camera(grid="hexagonal"), s)
-    add("mono, hexagonal", hexa, "linear", "fast")
+    rows.append(psnr_row("mono, hexagonal", hexa, "linear", "fast"))
     # convergence: one more sample per axis must not change the PSNR (the reference is not the limit)
     finer = dataclasses.replace(s, psnr_pixel_samples=s.psnr_pixel_samples + 1,
                                 psnr_aperture_samples=s.psnr_aperture_samples + 1)
-    add(f"mono, rectangular, {finer.psnr_pixel_samples}²×{finer.psnr_aperture_samples}² samples",
-        render_psnr_capture(suite.paper_9um_camera(), finer), "linear", "fast")
+    rows.append(psnr_row(f"mono, rectangular, {finer.psnr_pixel_samples}²×{finer.psnr_aperture_samples}² samples",
+                         render_psnr_capture(suite.paper_9um_camera(), finer), "linear", "fast"))
     return {"sensor_shape": list(s.psnr_shape), "pixel_samples": s.psnr_pixel_samples,
             "aperture_samples": s.psnr_aperture_samples, "rows": rows,
             "seconds_incl_render": time.perf_counter() - start}

@@ -100,22 +100,30 @@ def naive_estimate(lf, a_low, a_high):
     return a_values[np.argmax(energy, axis=0)]
 
 
+def render_and_decode(camera, scene, ideal_views: bool = True):
+    """A 400 × 560 px render of ``scene`` (shot noise at 100 000 photons) and its light field, decoded from
+    16-bit PNG files as the commands read them."""
+    from lfproc import simulate
+    from lfproc.api import DecodeSetup
+    from lfproc.io import read_capture, write_image
+
+    sim = simulate.render(camera, scene, (400, 560), rotation_deg=0.2, offset_px=(0.3, -0.2),
+                          shot_noise_photons=100000, seed=3, ideal_views=ideal_views)
+    with tempfile.TemporaryDirectory() as tmp:
+        write_image(os.path.join(tmp, "c.png"), sim.raw)
+        write_image(os.path.join(tmp, "w.png"), sim.white)
+        setup = DecodeSetup(camera, sim.grid, read_capture(os.path.join(tmp, "w.png"), camera))
+        return sim, setup.decode(os.path.join(tmp, "c.png"))
+
+
 def accuracy_rows(quick: bool):
     import lfproc
-    from lfproc import LightField, geometry, simulate
-    from lfproc.io import read_capture, write_image
-    from lfproc.api import DecodeSetup
+    from lfproc import LightField, geometry
 
     camera = test_camera()
     rows, textureless_rows = [], []
     for name, scene, roles in scenes(camera)[: 2 if quick else None]:
-        sim = simulate.render(camera, scene, (400, 560), rotation_deg=0.2, offset_px=(0.3, -0.2),
-                              shot_noise_photons=100000, seed=3, ideal_views=True)
-        with tempfile.TemporaryDirectory() as tmp:
-            write_image(os.path.join(tmp, "c.png"), sim.raw)
-            write_image(os.path.join(tmp, "w.png"), sim.white)
-            setup = DecodeSetup(camera, sim.grid, read_capture(os.path.join(tmp, "w.png"), camera))
-            decoded = setup.decode(os.path.join(tmp, "c.png"))
+        sim, decoded = render_and_decode(camera, scene)
         truth = truth_distance(sim)
         truth_a = np.where(np.isfinite(truth), geometry.refocus_parameter(camera, np.nan_to_num(truth, nan=1e9)), np.nan)
         finite_a = truth_a[np.isfinite(truth_a)]

@@ -30,6 +30,9 @@ class Timing:
         Median and minimum of the timed runs (the warm-up is not among them).
     runs_s : list of float
         Every timed run, in order.
+    cpu_median_s : float or None
+        Median CPU time (user + system, every thread of the process) of the timed runs: steadier than the
+        wall time on a shared machine, and above it where the work runs on several cores.
     peak_mb : float or None
         tracemalloc peak of the warm-up call, above the memory traced before it, in MB (1e6 bytes):
         numpy allocations (OpenCV's outputs are numpy arrays too), not numba's internal buffers.
@@ -39,6 +42,7 @@ class Timing:
     min_s: float
     runs_s: list = field(default_factory=list)
     peak_mb: float | None = None
+    cpu_median_s: float | None = None
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -73,14 +77,15 @@ def measure_keeping(fn, repeats: int, *, memory: bool = True) -> tuple[Timing, o
         _, peak = traced_peak_mb(fn)
     else:
         fn()
-    runs, result = [], None
+    runs, cpu, result = [], [], None
     for _ in range(max(1, repeats)):
         result = None          # the previous result's memory is free before the next run
         gc.collect()
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         result = fn()
         runs.append(time.perf_counter() - start)
-    return Timing(statistics.median(runs), min(runs), runs, peak), result
+        cpu.append(time.process_time() - start_cpu)
+    return Timing(statistics.median(runs), min(runs), runs, peak, statistics.median(cpu)), result
 
 
 def time_once(fn) -> tuple[object, float]:
