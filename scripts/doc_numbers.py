@@ -44,10 +44,6 @@ def load(name: str) -> dict:
     return json.loads((DOCS / name).read_text(encoding="utf-8"))
 
 
-def _bench(*path):
-    return lambda: _get(load("benchmarks.json"), path)
-
-
 def _commands(*path):
     return lambda: _get(load("benchmarks-commands.json"), path)
 
@@ -76,23 +72,6 @@ def _phase(name):
 
 #: marker name -> (what the number is, its value from the JSON)
 NUMBERS = {
-    # decoding (scripts/bench.py: the Illum-like capture, 7728 x 5368 px -> 15 x 15 x 372 x 537 x 3)
-    "decode.nearest_s": ("decoding, nearest, median", _bench("decode", "rows", 0, "timing", "median_s")),
-    "decode.linear_min_s": ("decoding, linear, fastest of 3 (bench.py)", _bench("decode", "rows", 1, "timing", "min_s")),
-    "decode.linear_median_s": ("decoding, linear, median of 3 (bench.py)",
-                               _bench("decode", "rows", 1, "timing", "median_s")),
-    "decode.cubic_s": ("decoding, cubic, median", _bench("decode", "rows", 2, "timing", "median_s")),
-    "decode.lanczos_s": ("decoding, lanczos, median", _bench("decode", "rows", 3, "timing", "median_s")),
-    "decode.demosaic_fast_s": ("demosaicing (fast) of the capture", _bench("decode", "components", "demosaic_fast_s")),
-    "decode.demosaic_careful_s": ("demosaicing (careful) of the capture",
-                                  _bench("decode", "components", "demosaic_careful_s")),
-    "decode.nearest_db": ("decoding accuracy, nearest, mono", _bench("decode_accuracy", "rows", 0, "psnr_db")),
-    "decode.linear_db": ("decoding accuracy, linear, mono", _bench("decode_accuracy", "rows", 1, "psnr_db")),
-    "decode.cubic_db": ("decoding accuracy, cubic, mono", _bench("decode_accuracy", "rows", 2, "psnr_db")),
-    "decode.lanczos_db": ("decoding accuracy, lanczos, mono", _bench("decode_accuracy", "rows", 3, "psnr_db")),
-    "decode.bayer_fast_db": ("decoding accuracy, RGGB, fast demosaic", _bench("decode_accuracy", "rows", 4, "psnr_db")),
-    "decode.bayer_careful_db": ("decoding accuracy, RGGB, careful demosaic",
-                                _bench("decode_accuracy", "rows", 5, "psnr_db")),
     # refocusing (scripts/bench_refocus.py: 15 x 15 x 434 x 625 x 3 float32, 0.73 GB)
     "refocus.floor_s": ("one read of the views: views.sum(axis=(0, 1))",
                         _refocus("numpy floor: views.sum(axis=(0,1))")),
@@ -113,15 +92,8 @@ NUMBERS = {
     "refocus.baseline_per_floor": ("np.pad baseline / one read",
                                    lambda: load("benchmarks-refocus.json")["median_s"]["np.pad baseline, integer a"]
                                    / load("benchmarks-refocus.json")["median_s"]["numpy floor: views.sum(axis=(0,1))"]),
-    # refocusing accuracy (scripts/bench.py: a plane in focus, against the exact render)
-    "refocus.nearest_db": ("refocus accuracy, nearest, real a", _bench("refocus", "rows", 2, "plane_psnr_db")),
-    "refocus.linear_db": ("refocus accuracy, linear, real a", _bench("refocus", "rows", 3, "plane_psnr_db")),
-    "refocus.cubic_db": ("refocus accuracy, cubic, real a", _bench("refocus", "rows", 4, "plane_psnr_db")),
-    # geometry (scripts/bench.py)
-    "geometry.1e6_s": ("slice geometry of 1e6 slices", _bench("geometry", "timing", "median_s")),
     # depth maps (scripts/bench_depth.py: 15 x 15 x 434 x 625 x 3 float32, 0.73 GB)
     "depth.default_s": ("depth map, default search (coarse pass), median of 3", _depth(0, "median_s")),
-    "depth.default_min_s": ("depth map, default search, fastest of 3", _depth(0, "min_s")),
     "depth.default_per_slice": ("depth map, default search / one refocused slice", _depth(0, "ratio_to_one_slice")),
     "depth.no_coarse_s": ("depth map, no coarse pass, median of 3", _depth(1, "median_s")),
     "depth.no_coarse_per_slice": ("depth map, no coarse pass / one refocused slice", _depth(1, "ratio_to_one_slice")),

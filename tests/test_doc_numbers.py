@@ -42,13 +42,11 @@ def test_the_benchmark_tables_quote_no_measured_number_without_its_source(number
     assert not problems, "\n".join(problems)
 
 
-def test_the_depth_map_time_and_the_integer_slice_are_one_number_everywhere(numbers):
-    """The two quantities that used to drift (2.9–3.5 s / 1.7 s / 4.58 s; 0.027 s / 0.032 s) are quoted only
-    through their markers, so every quote is the same JSON value."""
+def test_the_depth_map_time_is_one_number_everywhere(numbers):
+    """The quantity that used to drift (2.9–3.5 s / 1.7 s / 4.58 s) is quoted only through its marker, so every
+    quote is the same JSON value."""
     depth = [written for _, _, written, kind, name in numbers.quotes() if name == "depth.default_s"]
-    integer = [written for _, _, written, kind, name in numbers.quotes() if name == "refocus.integer_s"]
-    assert len(depth) >= 3 and len(set(depth)) == 1, depth             # README twice, docs/benchmarks.md
-    assert len(integer) >= 2 and len(set(integer)) == 1, integer      # both README tables
+    assert len(depth) >= 3 and len(set(depth)) == 1, depth      # docs/benchmarks.md, commands.md, depth.md
 
 
 def _copy_docs(tmp_path):
@@ -63,14 +61,14 @@ def test_a_drifted_quote_and_an_unmarked_time_are_caught(numbers, tmp_path, monk
     monkeypatch.setattr(numbers, "ROOT", root)
     monkeypatch.setattr(numbers, "DOCS", root / "docs")
     numbers.load.cache_clear()
-    readme = root / "README.md"
-    text = readme.read_text(encoding="utf-8")
-    readme.write_text(text.replace("0.032<!--n:refocus.integer_s--> s (1.06", "0.027<!--n:refocus.integer_s--> s (1.06", 1)
-                      .replace("| 4.58<!--n:depth.default_s--> s median", "| 2.9–3.5 s median", 1), encoding="utf-8")
+    page = root / "docs" / "benchmarks-refocus.md"
+    text = page.read_text(encoding="utf-8")
+    page.write_text(text.replace("0.032<!--n:refocus.integer_s--> s (23", "0.027<!--n:refocus.integer_s--> s (23", 1)
+                    .replace("| 0.145<!--n:refocus.five_separate_s--> s |", "| 2.9–3.5 s |", 1), encoding="utf-8")
     drift = numbers.check()
     assert any("refocus.integer_s is quoted as 0.027" in p for p in drift), drift
     missing = numbers.unmarked()
-    assert any("2.9 in column 3" in p for p in missing) and any("3.5 in column 3" in p for p in missing), missing
+    assert any("2.9 in column 2" in p for p in missing) and any("3.5 in column 2" in p for p in missing), missing
     numbers.load.cache_clear()
 
 
