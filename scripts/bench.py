@@ -114,7 +114,8 @@ STAGE_PAGES = [
     "[depth maps](benchmarks-depth.md) (`scripts/bench_depth.py`), [the viewer](benchmarks-viewer.md) "
     "(`scripts/bench_viewer.py`), [whole commands: time, peak memory, view writing against the disk]"
     "(benchmarks-commands.md) (`scripts/bench_commands.py`), [refocusing](benchmarks-refocus.md) "
-    "(`scripts/bench_refocus.py`). The tables below (`scripts/bench.py`) predate this wave's calibration "
+    "(`scripts/bench_refocus.py`), [speed versus accuracy, which setting for what](speed-accuracy.md) "
+    "(`scripts/bench_tradeoffs.py`). The tables below (`scripts/bench.py`) predate this wave's calibration "
     "and decoding changes where those pages give newer numbers. Their headline numbers (Illum-sized "
     "inputs, 2 cores, 2026-11-23; each page has the method, the load and the floor of its run):",
     "",
