@@ -92,6 +92,7 @@ def test_the_result_reads_its_arrays_and_tags(estimate):
     for key in ("method", "a_step", "view_step", "views_used_up_to_offset", "min_confidence", "lens_grid"):
         assert getattr(dm, key) == tags[key], key
     assert tags["camera"] == dm.camera_name == camera.name and tags["source"] is dm.source is None
+    assert tags["min_confidence"] == 0.0          # the threshold the map was made with (it said 0.1 whatever it was)
     assert not hasattr(type(dm), "__getattr__")
 
 

@@ -297,6 +297,6 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     positional = not geometry.place_views(camera, [0]).orthographic
     return DepthMap(depth=f32(metric.depth), confidence=f32(conf), near=f32(metric.near), far=f32(metric.far),
                     a=f32(a_known), allfocus=sharp, a_searched=a_values, view_step=view_step, view_reach=reach,
-                    timings_s=timings, space=metric.space, lit=lit,
+                    timings_s=timings, space=metric.space, lit=lit, min_confidence=float(min_confidence),
                     aperture_f_number=geometry.equivalent_f_number(camera, geometry.summed_view_extent(mask))
                     if mask is not None and positional else None)

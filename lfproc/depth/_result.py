@@ -65,7 +65,9 @@ class DepthMap(PositionsInSpace):
         The contract's names of ``depth``, ``near``, ``far`` in mm from the sensor; ``None`` for a microscope.
     z_um, z_near_um, z_far_um : ndarray (Ny, Nx) or None
         The same in µm from the native object plane (a microscope's); ``None`` for a photographic camera.
-    unit, a_step, lens_grid, views_used_up_to_offset, min_confidence, camera_name
+    min_confidence : float
+        Lenses less confident than this are unknown (NaN).
+    unit, a_step, lens_grid, views_used_up_to_offset, camera_name
         The sidecars' tags of the same names (:meth:`tags`).
     """
 
@@ -87,6 +89,7 @@ class DepthMap(PositionsInSpace):
     provenance: dict = field(default_factory=dict)
     depth_range_mm: tuple | None = None
     light_field: object = None
+    min_confidence: float = MIN_CONFIDENCE
 
     @property
     def unit(self) -> str:
@@ -107,11 +110,6 @@ class DepthMap(PositionsInSpace):
     def views_used_up_to_offset(self) -> int:
         """``view_reach``, as the sidecars name it."""
         return int(self.view_reach)
-
-    @property
-    def min_confidence(self) -> float:
-        """The confidence the sidecars record (the commands' default, :data:`MIN_CONFIDENCE`)."""
-        return MIN_CONFIDENCE
 
     @property
     def camera_name(self) -> str | None:
