@@ -156,3 +156,18 @@ def test_every_relative_link_of_the_readme_and_docs_reaches_its_file_and_heading
                 if anchor not in {_anchor(h) for h in headings}:
                     broken.append(f"{page.name}: {target} (no such heading)")
     assert not broken, "\n".join(broken)
+
+
+def test_the_readmes_other_numbers_are_the_codes():
+    """The sample's planes, the Python it needs and the deconvolution's default iterations, as the README says."""
+    import inspect
+
+    import lfproc
+
+    truth = json.loads((ROOT / "samples" / "sample" / "ground_truth.json").read_text())
+    planes = sorted(round(p["distance_mm"]) for p in truth["planes"])
+    assert f"three textured planes at {planes[0]}, {planes[1]} and {planes[2]} mm" in README
+    python = re.search(r'^requires-python = ">=(3\.\d+)"$', (ROOT / "pyproject.toml").read_text(), re.M).group(1)
+    assert f"Only Python ≥ {python} is needed" in README
+    iterations = inspect.signature(lfproc.deconvolve).parameters["iterations"].default
+    assert f"# Richardson–Lucy, {iterations} iterations" in README
