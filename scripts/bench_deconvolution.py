@@ -85,7 +85,8 @@ def olaf_widths(ops) -> np.ndarray:
 
     from lfproc import wave
 
-    return wave.filter_widths(dataclasses.replace(ops, immersion_index=1.0))
+    voxels = np.floor(wave.filter_widths(dataclasses.replace(ops, immersion_index=1.0))).astype(int)
+    return voxels + 1 - voxels % 2                       # oLaF rounds W down to an odd whole number
 
 
 def child_steps(folder: str, variant: str) -> dict:

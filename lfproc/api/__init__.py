@@ -11,6 +11,8 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthResult
     vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
+    ops = lfproc.api.prepare_deconvolution(lf, z_um=[-20, 0, 20])       # -> WaveOperators: a time-lapse,
+    vols = [lfproc.deconvolve(f, operators=ops) for f in frames]         #    the operators built once
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 
 Results are frozen; their tags are the numbers the commands write in their sidecars (the same functions
@@ -26,7 +28,7 @@ volume by wave-optics deconvolution, :mod:`lfproc.wave`). Importing this package
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
-from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve
+from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve, prepare_deconvolution
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import DepthResult, depth_map
 from ._focal import FocalStack, focal_stack
@@ -39,5 +41,6 @@ from ._views import ViewStack, view_stack
 __all__ = ["read_light_field", "calibrate_white", "prepare_decoding", "DecodeSetup", "focal_stack", "FocalStack",
            "view_stack", "ViewStack",
            "depth_map", "DepthResult", "DEFAULT_INTERPOLATION", "deconvolve", "Volume", "DEFAULT_SUPERRES",
+           "prepare_deconvolution",
            # the checks the commands share (worded with their flags there)
            "check_slices", "check_view_coverage", "check_z_step"]
