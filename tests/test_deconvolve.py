@@ -40,12 +40,18 @@ def _doc_block(language: str, heading: str = "## Try it on rendered beads") -> s
 
 @pytest.fixture(scope="module")
 def bead_sample(tmp_path_factory):
-    """The doc's bead sample, rendered in a folder of its own."""
+    """The doc's scene file (the bundled sample, the same text) rendered by the doc's ``lfproc simulate`` line, in a
+    folder of its own: ``beads.toml`` and ``beads/`` (capture.png, white.png, camera.toml, ground_truth.json)."""
     folder = tmp_path_factory.mktemp("beads")
+    scene = _doc_block("toml")
+    assert scene in lfproc.sample_path("microscope/beads.toml").read_text()
+    (folder / "beads.toml").write_text(scene)
+    simulate = _doc_block("sh").strip().splitlines()[0].split()
+    assert simulate[:2] == ["lfproc", "simulate"]
     cwd = os.getcwd()
     os.chdir(folder)
     try:
-        exec(compile(_doc_block("python"), "docs/deconvolution.md", "exec"), {})
+        assert main(simulate[1:]) == 0
     finally:
         os.chdir(cwd)
     return folder
@@ -63,32 +69,24 @@ def _found(volume, z_um, voxel_um, camera, lenses, superres, bead):
 
 
 @pytest.mark.parametrize("no_filter", [False, True])
-def test_the_docs_bead_sample_comes_back(bead_sample, tmp_path, no_filter, capsys):
-    """The doc's command as written (the defaults: 8 iterations, S = 3, the anti-aliasing filter), and with
-    --no-filter: every bead on its own plane, within a voxel laterally."""
-    command = _doc_block("sh").replace("\\\n", " ").split()
-    assert command[:2] == ["lfproc", "deconvolve"]
-    assert not {"--iterations", "--superres", "--no-filter", "--background"} & set(command)    # the defaults
-    args = command[1:] + (["--no-filter"] if no_filter else [])
-    out = tmp_path / "out"
-    args[args.index("-o") + 1] = str(out)
-    cwd = os.getcwd()
-    os.chdir(bead_sample)
-    try:
-        env = os.environ.get("LFPROC_CACHE_DIR")
-        os.environ["LFPROC_CACHE_DIR"] = str(tmp_path / "cache")
-        assert main(args) == 0
-    finally:
-        os.chdir(cwd)
-        if env is None:
-            os.environ.pop("LFPROC_CACHE_DIR", None)
-        else:
-            os.environ["LFPROC_CACHE_DIR"] = env
+def test_the_docs_bead_sample_comes_back(bead_sample, tmp_path, no_filter, monkeypatch):
+    """The doc's lfproc deconvolve line as written (its defaults: 8 iterations, S = 3, the anti-aliasing filter)
+    on the doc's rendered beads, and with --no-filter: every bead on its own plane, within a voxel laterally."""
+    deconvolve = _doc_block("sh").strip().splitlines()[1].split()
+    assert deconvolve[:2] == ["lfproc", "deconvolve"]
+    assert not {"--iterations", "--superres", "--no-filter", "--background"} & set(deconvolve)    # the defaults
+    args = deconvolve[1:] + (["--no-filter"] if no_filter else [])
+    args[args.index("-o") + 1] = str(tmp_path / "out")
+    monkeypatch.chdir(bead_sample)
+    monkeypatch.setenv("LFPROC_CACHE_DIR", str(tmp_path / "cache"))
+    assert main(args) == 0
     import tifffile
 
-    volume = tifffile.imread(out / "beads_volume.ome.tif")
-    record = json.loads((out / "beads_volume.json").read_text())
-    camera = lfproc.Camera.from_toml(str(bead_sample / "lfm-beads.toml"))
+    volume = tifffile.imread(tmp_path / "out" / "capture_volume.ome.tif")
+    record = json.loads((tmp_path / "out" / "capture_volume.json").read_text())
+    truth = json.loads((bead_sample / "beads" / "ground_truth.json").read_text())
+    assert sorted((b["x_um"], b["y_um"], b["z_um"]) for b in truth["beads"]) == sorted(BEADS)
+    camera = lfproc.Camera.from_toml(str(bead_sample / "beads" / "camera.toml"))
     s = record["superres"]
     lenses = (volume.shape[1] // s, volume.shape[2] // s)
     for bead in BEADS:
@@ -96,6 +94,23 @@ def test_the_docs_bead_sample_comes_back(bead_sample, tmp_path, no_filter, capsy
         assert lateral <= 1.0 and z == bead[2], (bead, z, lateral)
     assert record["antialiasing_filter"] is not no_filter and record["iterations"] == 8 and s == 3
     assert np.isfinite(volume).all() and volume.min() >= 0
+
+
+def test_bead_scene_files_are_checked_in_one_line():
+    """[[bead]] needs a microscope camera and excludes [[plane]]s; its keys are named."""
+    from lfproc.simulate import parse_scene_dict
+    from lfproc.tomlfile import read_toml
+
+    scene = read_toml(str(lfproc.sample_path("microscope/beads.toml")), "scene file", "")
+    assert len(parse_scene_dict(scene).beads) == 3
+    photo = dict(scene, camera=str(ROOT / "lfproc" / "samples" / "cameras" / "paper-f100.toml"))
+    for data, words in ((photo, "needs a microscope camera"),
+                        (dict(scene, bead=[{"x_um": 1.0, "y_um": 2.0}]), "missing z_um"),
+                        (dict(scene, bead=[{"x_um": 1.0, "y_um": 2.0, "z_um": 3.0, "size": 1}]), "unknown key(s)"),
+                        (dict(scene, bead=[{"x_um": 1.0, "y_um": 2.0, "z_um": float("nan")}]), "z_um must be a finite number"),
+                        (dict(scene, plane=[{"distance_mm": 100.0, "texture": "uniform"}]), "not both")):
+        with pytest.raises(LfprocError, match=re.escape(words)):
+            parse_scene_dict(data)
 
 
 def _wave_rendered(camera, lenses, points, oversample=5, seed=3):
@@ -238,13 +253,14 @@ def test_refusals_name_the_argument(small):
 
 def test_the_command_refuses_in_one_line_before_any_work(bead_sample, tmp_path, capsys):
     photo = str(ROOT / "lfproc" / "samples" / "cameras" / "paper-f100.toml")
-    common = [str(bead_sample / "beads.tif"), "--white", str(bead_sample / "white.tif"), "-o", str(tmp_path / "o")]
+    beads = bead_sample / "beads"
+    common = [str(beads / "capture.png"), "--white", str(beads / "white.png"), "-o", str(tmp_path / "o")]
     cases = [(["--camera", photo, "--z-range", "-10:10:10"], "microscope optics"),
-             (["--camera", str(bead_sample / "lfm-beads.toml"), "--z-range", "-10:10:10", "--superres", "12"],
+             (["--camera", str(beads / "camera.toml"), "--z-range", "-10:10:10", "--superres", "12"],
               "--superres 12 is finer than the 9 samples"),
-             (["--camera", str(bead_sample / "lfm-beads.toml"), "--z-range", "-3000:3000:1000"],
+             (["--camera", str(beads / "camera.toml"), "--z-range", "-3000:3000:1000"],
               "these optics image z from"),
-             (["--camera", str(bead_sample / "lfm-beads.toml"), "--z-range", "-10:10"], "Z0:Z1:STEP")]
+             (["--camera", str(beads / "camera.toml"), "--z-range", "-10:10"], "Z0:Z1:STEP")]
     for extra, words in cases:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
