@@ -20,6 +20,8 @@ SAMPLES = {
     "sample/camera.toml": "its camera file (--camera)",
     "sample/scene.toml": "the scene it was rendered from (lfproc simulate)",
     "sample/ground_truth.json": "its lens grid and plane distances, as rendered",
+    "microscope/beads.toml": "three fluorescent beads under a light-field microscope (lfproc simulate, then "
+                             "lfproc deconvolve: docs/deconvolution.md)",
     "cameras/": "the paper's set-ups (Table 2-4), an Illum-like camera and a real Double Gauss (its surfaces)",
     "lenses/double-gauss-f100.zmx": "a Double Gauss of f = 100 mm as a Zemax lens file (docs/real-lens.md)",
     "lytro/IMG_0001.lfr": "a simulated Lytro Illum-like capture (container with packed 10-bit raw)",

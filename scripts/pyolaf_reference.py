@@ -8,13 +8,13 @@ pyolaf's package) is written here after its example, with the guard on the back-
 needs (a plane diverged to 7.5e11 without it).
 
     python pyolaf_reference.py layout OPTICS.json OUT.npz         # where its lenses and voxels sit
-    python pyolaf_reference.py filter-shift OPTICS.json OUT.npz    # where its example's filter step moves a voxel
+    python pyolaf_reference.py filter-shift OPTICS.json OUT.npz    # where each loop's filter step moves a voxel
     python pyolaf_reference.py patterns OPTICS.json OUT.npz       # forward patterns H for the depths
     python pyolaf_reference.py project OPTICS.json VOLUMES.npz OUT.npz      # H·volume (pyolaf's layout)
-    python pyolaf_reference.py deconvolve OPTICS.json IMAGE.npy OUT.npz     # operators + RL on a rectified image
+    python pyolaf_reference.py deconvolve OPTICS.json IMAGE.npy OUTDIR      # operators + RL on a rectified image
 
 OPTICS.json: {"M", "NA", "n", "wavelength_um", "ftl_um", "pitch_um", "fs_um", "spacing_px", "superres",
-"depths_um": [...], "image_px": [H, W]} (plus "iterations", "lanczos_window", "filter" for deconvolve).
+"depths_um": [...], "image_px": [H, W]} (plus "iterations", "lanczos_window", "filter", "loops" for deconvolve).
 pyolaf's lenslet phase uses k = 2π·n/λ (the immersion index) where the lenslets sit in air: its ``fm`` is
 given as n·f_s so that its lenslets have the physical focal length f_s. Timings (wall and CPU seconds) and
 the peak memory of this process are returned with the results.
@@ -100,17 +100,23 @@ def layout(optics: dict, out: str) -> None:
     np.savez(out, tex_px=tex, **_layout(centres, resolution, image_px, tex))
 
 
+#: the filter step of each loop of :func:`deconvolve`: the example's fftshift, or ifftshift (centred)
+LOOP_SHIFTS = {"example": np.fft.fftshift, "centred": np.fft.ifftshift}
+
+
 def filter_shift(optics: dict, out: str) -> None:
-    """Where pyolaf's example's filter step (``abs(fftshift(ifft2(K·fft2(v))))`` with K from its own
-    ``lanczosfft``) moves a single voxel of an odd-sized plane, with the identity kernel (width 1)."""
+    """Where one filter step of each loop (``abs(SHIFT(ifft2(K·fft2(v))))`` with K from pyolaf's own
+    ``lanczosfft``; SHIFT the example's fftshift or the centred loop's ifftshift) moves a single voxel of an
+    odd-sized plane, with the identity kernel (width 1): ``shift_example``, ``shift_centred`` (y, x)."""
     from pyolaf.aliasing import lanczosfft
 
     size = 9
     kernel = lanczosfft(np.array([size, size, 1]), np.array([[1, 1]]), 4)[:, :, 0]
     plane = np.zeros((size, size))
     plane[size // 2, size // 2] = 1.0
-    moved = np.abs(np.fft.fftshift(np.fft.ifft2(kernel * np.fft.fft2(plane))))
-    np.savez(out, shift=np.argwhere(moved > 0.5)[0] - size // 2)
+    moved = {f"shift_{loop}": np.argwhere(np.abs(shift(np.fft.ifft2(kernel * np.fft.fft2(plane)))) > 0.5)[0]
+             - size // 2 for loop, shift in LOOP_SHIFTS.items()}
+    np.savez(out, **moved)
 
 
 def patterns(optics: dict, out: str) -> None:
@@ -147,7 +153,18 @@ def project(optics: dict, volumes: str, out: str) -> None:
 
 def deconvolve(optics: dict, image: str, out: str) -> None:
     """pyolaf's operators, then Richardson–Lucy as its example runs it, on a rectified image (``spacing_px``
-    pixels per lens, a lens centre at pyolaf's centre pixel)."""
+    pixels per lens, a lens centre at pyolaf's centre pixel), once per loop of ``optics["loops"]``:
+
+    "example"
+        the example's filter step as written, ``abs(fftshift(ifft2(K·fft2(v))))`` (oLaF's deconvEMS.m too):
+        K is the FFT of a kernel centred at index ⌊n/2⌋ of the odd-sized plane, and fftshift moves by ⌊n/2⌋
+        again, so each step moves the volume by n − 1 ≡ −1 voxel in y and x;
+    "centred"
+        the same step with ``ifftshift`` (a move by −⌊n/2⌋), which puts the kernel's centre back at the origin:
+        the filter is then a convolution centred on each voxel, nothing else changes.
+
+    Writes ``OUT/pyolaf_LOOP.npz`` per loop: the volume, the timings of the operators (shared) and of that
+    loop, CPU of the operators + that loop, the peak memory of this process."""
     from pyolaf.aliasing import LFM_computeDepthAdaptiveWidth, lanczosfft
     from pyolaf.lf import LFM_computeLFMatrixOperators
     from pyolaf.project import LFM_backwardProject, LFM_forwardProject
@@ -168,29 +185,35 @@ def deconvolve(optics: dict, image: str, out: str) -> None:
     ones_forward = LFM_forwardProject(h, ones, centres, resolution, shape, crange, step=8)
     ones_back = LFM_backwardProject(ht, ones_forward, centres, resolution, tex, crange, step=8)
     t_operators, c_operators = time.time() - t0, _cpu() - c0
-    volume = ones.copy()
-    per_iteration = []
-    for i in range(int(optics.get("iterations", 8))):
-        t1 = time.time()
-        guess = ones_forward if i == 0 else LFM_forwardProject(h, volume, centres, resolution, shape, crange, step=10)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            error = lf_image / guess * ones_forward
-        error[~np.isfinite(error)] = 0
-        back = LFM_backwardProject(ht, error, centres, resolution, tex, crange, step=10)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            back = back / ones_back
-        back[~np.isfinite(back)] = 0
-        back[ones_back < 1e-3 * np.median(ones_back)] = 0      # the guard the ant leg needed
-        volume = volume * back
-        if optics.get("filter", True):
-            for j in range(volume.shape[2]):
-                volume[:, :, j] = np.abs(np.fft.fftshift(np.fft.ifft2(kernel[:, :, j] * np.fft.fft2(volume[:, :, j]))))
-        volume[~np.isfinite(volume)] = 0
-        per_iteration.append(time.time() - t1)
-    np.savez(out, volume=volume, depths=resolution["depths"], geometry_s=t_geometry, operators_s=t_operators,
-             operators_cpu_s=c_operators, iteration_s=np.array(per_iteration), wall_s=time.time() - t0,
-             cpu_s=_cpu() - c0, peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
-             **_layout(centres, resolution, lf_image.shape, tex))
+    for loop in optics.get("loops", ["example"]):
+        shift = LOOP_SHIFTS[loop]
+        t_loop, c_loop = time.time(), _cpu()
+        volume = ones.copy()
+        per_iteration = []
+        for i in range(int(optics.get("iterations", 8))):
+            t1 = time.time()
+            guess = ones_forward if i == 0 else LFM_forwardProject(h, volume, centres, resolution, shape, crange,
+                                                                   step=10)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                error = lf_image / guess * ones_forward
+            error[~np.isfinite(error)] = 0
+            back = LFM_backwardProject(ht, error, centres, resolution, tex, crange, step=10)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                back = back / ones_back
+            back[~np.isfinite(back)] = 0
+            back[ones_back < 1e-3 * np.median(ones_back)] = 0      # the guard the ant leg needed
+            volume = volume * back
+            if optics.get("filter", True):
+                for j in range(volume.shape[2]):
+                    volume[:, :, j] = np.abs(shift(np.fft.ifft2(kernel[:, :, j] * np.fft.fft2(volume[:, :, j]))))
+            volume[~np.isfinite(volume)] = 0
+            per_iteration.append(time.time() - t1)
+        np.savez(os.path.join(out, f"pyolaf_{loop}.npz"), volume=volume, depths=resolution["depths"], loop=loop,
+                 geometry_s=t_geometry, operators_s=t_operators, operators_cpu_s=c_operators,
+                 iteration_s=np.array(per_iteration), wall_s=t_operators + time.time() - t_loop,
+                 cpu_s=c_operators + _cpu() - c_loop,
+                 peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                 **_layout(centres, resolution, lf_image.shape, tex))
 
 
 if __name__ == "__main__":

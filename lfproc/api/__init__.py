@@ -11,6 +11,8 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthMap (arrays + tags)
     vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
+    ops = lfproc.api.prepare_deconvolution(lf, z_um=[-20, 0, 20])       # -> WaveOperators: a time-lapse,
+    vols = [lfproc.deconvolve(f, operators=ops) for f in frames]         #    the operators built once
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 
 Results are frozen; their tags are the numbers the commands write in their sidecars (the same functions
@@ -29,7 +31,7 @@ tests, and may change without notice.
 """
 
 from ._checks import check_slices, check_view_coverage, check_z_step
-from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve
+from ._deconvolve import DEFAULT_SUPERRES, Volume, deconvolve, prepare_deconvolution
 from ._defaults import DEFAULT_INTERPOLATION
 from ._depth import depth_map
 from ._focal import FocalStack, focal_stack

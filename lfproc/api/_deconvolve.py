@@ -168,17 +168,9 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
         they can), ``superres`` beyond m̂, operators made for other optics, bad arguments.
     """
     from .. import wave
-    from ..lightfield import LightField
     from ..provenance import provenance as provenance_of
-    from ._read import read_light_field
 
-    if not isinstance(lf, LightField):
-        lf = read_light_field(lf, camera, white, grid, dark, cache=cache)
-    if lf.camera is None:
-        raise LfprocError("deconvolve needs a LightField with its camera (lfproc.read_light_field, or "
-                          "LightField.from_views(views, camera))")
-    camera = lf.camera
-    optics = wave.wave_optics_of(camera, camera.source or "camera")
+    lf = _light_field(lf, camera, white, grid, dark, cache)
     if isinstance(iterations, bool) or not float(iterations).is_integer() or iterations < 1:
         raise LfprocError(f"iterations= must be a whole number of at least 1, got {iterations!r}")
     if tolerance is not None and not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
@@ -186,18 +178,16 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
     background_level = _background_argument(background)
     if superres is None:
         superres = DEFAULT_SUPERRES if operators is None else operators.superres
-    superres = wave.check_superres(superres, camera.m_hat)
     if z_um is None:
         if operators is None:
             raise LfprocError("deconvolve needs z_um= (the planes' depths in um), e.g. z_um=[-20, 0, 20]")
         z_um = operators.z_um
-    lenses = float(min(lf.lens_shape))
-    z = wave.check_z(z_um, optics, camera.mla_pitch_mm * 1000.0, lenses)
-    shift = lf.view_centre or (0.0, 0.0)
+    z, superres, shift, lenses = _sampling(lf, z_um, superres)
+    optics = wave.wave_optics_of(lf.camera)
     if operators is None:
-        operators = _operators(camera, z, superres, shift, lenses, cache, progress, oversample)
+        operators = _operators(lf.camera, z, superres, shift, lenses, cache, progress, oversample)
     else:
-        _check_operators(operators, camera, z, superres, shift)
+        _check_operators(operators, lf.camera, z, superres, shift)
     views, weights, data, level = _measurement(lf, operators, background_level)
     projector = wave.Projector(operators, lf.lens_shape, views, backend=backend, memory=int(memory_mb * 2 ** 20))
     white_model = operators.white[views]
@@ -209,6 +199,66 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
     return Volume(volume, np.asarray(operators.z_um, dtype=np.float64), operators.voxel_um,
                   _optics_record(operators, optics), len(misfits), np.array(misfits), superres, float(level),
                   bool(antialias), source, provenance_of(lf.inputs))
+
+
+def prepare_deconvolution(lf, z_um, superres: int = DEFAULT_SUPERRES, *, cache: bool = False,
+                          oversample: int | None = None, progress=None):
+    """The operators :func:`deconvolve` builds for a light field, built once for many frames of one rig.
+
+    A time-lapse (``lfproc batch``) builds them here, once, and gives them to every frame's
+    ``deconvolve(frame, operators=...)``; they pickle (a Dask worker or a local process receives them whole).
+
+    Parameters
+    ----------
+    lf : LightField
+        A frame of the rig (its camera, its view centre and its extent in lenses shape the operators).
+    z_um : sequence of float
+        The planes' depths, µm from the native object plane, positive towards the objective.
+    superres : int
+        S, voxels per lens pitch each way (1 … m̂; default 3).
+    cache, oversample, progress
+        As :func:`deconvolve`'s.
+
+    Returns
+    -------
+    lfproc.wave.WaveOperators
+
+    Raises
+    ------
+    LfprocError
+        As :func:`deconvolve`: no microscope optics, a z range the optics cannot image here, ``superres`` beyond m̂.
+    """
+    lf = _light_field(lf)
+    z, superres, shift, lenses = _sampling(lf, z_um, superres)
+    return _operators(lf.camera, z, superres, shift, lenses, cache, progress, oversample)
+
+
+def _light_field(lf, camera=None, white=None, grid=None, dark=None, cache=False):
+    """A LightField with its camera (decoded with :func:`read_light_field` unless it is one); refuses a camera
+    without microscope optics."""
+    from .. import wave
+    from ..lightfield import LightField
+    from ._read import read_light_field
+
+    if not isinstance(lf, LightField):
+        lf = read_light_field(lf, camera, white, grid, dark, cache=cache)
+    if lf.camera is None:
+        raise LfprocError("deconvolve needs a LightField with its camera (lfproc.read_light_field, or "
+                          "LightField.from_views(views, camera))")
+    wave.wave_optics_of(lf.camera, lf.camera.source or "camera")
+    return lf
+
+
+def _sampling(lf, z_um, superres) -> tuple:
+    """(depths checked against the optics and the light field's extent, S checked against m̂, the view centre,
+    the smaller extent in lenses) of a light field."""
+    from .. import wave
+
+    camera = lf.camera
+    superres = wave.check_superres(superres, camera.m_hat)
+    lenses = float(min(lf.lens_shape))
+    z = wave.check_z(z_um, wave.wave_optics_of(camera), camera.mla_pitch_mm * 1000.0, lenses)
+    return z, superres, lf.view_centre or (0.0, 0.0), lenses
 
 
 def _background_argument(background):

@@ -4,7 +4,10 @@ A batch is a list of :class:`Job` — plain, picklable data: one capture and wha
 same :func:`run_job` runs in this process, in a local process pool (:func:`run_local`) or on
 dask.distributed workers (:func:`run_dask`); each worker reads its capture and writes its outputs
 itself, atomically (:mod:`lfproc.atomic`), so no capture's pixels cross a process boundary (only the
-calibrated white image, once per local worker process) and no reader ever sees a half-written file.
+calibrated white image, once per local worker process) and no reader ever sees a half-written file. A
+deconvolution batch (``Job.deconvolve``) builds its operators once, in the process that starts it
+(:func:`shared_operators`), and gives them to every worker (``operators=``: with each local process's start,
+scattered once on Dask); workers never build them.
 
 The manifest ``OUTDIR/lfproc-manifest.json`` (:class:`Manifest`) records, per capture, a fingerprint
 (the capture file's size and modification time, those of the white image and grid file, the camera
@@ -31,4 +34,4 @@ from ._local import run_local
 from ._manifest import (JOURNAL_NAME, LOCK_NAME, MANIFEST_NAME, Manifest, lock_outdir, read_manifest,
                         remove_stale_partial_files)
 from ._resources import BYTES_PER_SENSOR_PIXEL, PROCESS_BASE_BYTES, available_memory_bytes, default_workers
-from ._worker import _GRID_SEEDS, decode_setup
+from ._worker import _GRID_SEEDS, decode_setup, run_job, shared_operators

@@ -11,13 +11,16 @@ from ._signals import Cancelled, StopSignals
 from ._worker import _SETUP_CACHE, run_job, seed_grids, setup_key
 
 
-def run_dask(jobs: list[Job], scheduler, on_result) -> None:
+def run_dask(jobs: list[Job], scheduler, on_result, operators=None) -> None:
     """Run one task per capture on a dask.distributed cluster; ``on_result`` is called as tasks finish.
 
     ``scheduler`` is an address (``tcp://host:8786``) or a ``distributed.Client``. Tasks carry only
     the small :class:`Job` records; workers read captures and write outputs themselves, on a file
     system shared with this machine. A task lost with its worker is rerun elsewhere by the scheduler
     (up to its ``distributed.scheduler.allowed-failures`` times, then reported as failed here).
+    ``operators`` (the batch's deconvolution operators, :func:`shared_operators`, built once here) are
+    scattered to the workers once (``broadcast``): every task of a worker uses its one copy, and a worker
+    that joins later receives it from a peer.
 
     On SIGINT or SIGTERM: the tasks still running are told to abandon their capture at their next
     output file (a ``distributed.Event``: a running task cannot be interrupted), those that finish
@@ -44,10 +47,11 @@ def run_dask(jobs: list[Job], scheduler, on_result) -> None:
             grids = {key: setup.grid for key, setup in _SETUP_CACHE.items() if key in keys}
             if grids:  # the workers there now skip the calibration; any that join later calibrate themselves
                 client.run(seed_grids, grids)
+            shipped = None if operators is None else client.scatter(operators, broadcast=True, hash=False)
             by_key = {}
             for job in jobs:
                 # a unique key: two batches of one capture into different OUTDIRs must not share a task
-                future = client.submit(run_job_on_worker, job, stop_name, key=f"lfproc-{uuid.uuid4().hex}")
+                future = client.submit(run_job_on_worker, job, stop_name, shipped, key=f"lfproc-{uuid.uuid4().hex}")
                 by_key[future.key] = job
                 futures.append(future)
 
@@ -96,7 +100,7 @@ def _stop_tasks(client, stop_name: str, pending: list, report) -> None:
     client.cancel(pending, force=True)
 
 
-def run_job_on_worker(job: Job, stop_name: str) -> JobResult:
+def run_job_on_worker(job: Job, stop_name: str, operators=None) -> JobResult:
     """:func:`run_job` on a Dask worker (which cannot interrupt a running task): a capture whose batch was
     stopped is abandoned at its next output file (checked at most every 0.2 s) or before its commit."""
     import time
@@ -114,4 +118,4 @@ def run_job_on_worker(job: Job, stop_name: str) -> JobResult:
             last[0] = time.monotonic()
             before_commit()
 
-    return run_job(job, before_commit=before_commit, checkpoint=checkpoint)
+    return run_job(job, before_commit=before_commit, checkpoint=checkpoint, operators=operators)

@@ -47,11 +47,13 @@ class Job:
     stack: str | None = None    # with slices: also one z-stack file, "imagej" or "ome" (lfproc refocus --stack)
     camera_path: str | None = None  # the camera file (--camera), recorded in the outputs' provenance
     white_is_white: bool = False  # --white-is-white: the white image is not checked for a scene
+    deconvolve: dict | None = None  # lfproc.deconvolve's keyword arguments (z_um, iterations, superres, ...) or None
 
     def parameters(self) -> dict:
         """The parameters that shape this capture's outputs, as recorded in the manifest."""
         return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
-                for f in fields(self) if f.name not in _NOT_PARAMETERS}
+                for f in fields(self) if f.name not in _NOT_PARAMETERS
+                and not (f.name == "deconvolve" and self.deconvolve is None)}   # earlier manifests stay valid
 
     def fingerprint(self) -> str:
         """Changes whenever the capture, the camera, the white image, the grid file, the dark frame, lfproc's version or

@@ -32,11 +32,12 @@ COMMIT_GRACE_S = 10.0
 COMMITTING = "committing"
 
 
-def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -> None:
+def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3, operators=None) -> None:
     """Run jobs in ``workers`` processes (in this process if 1), calling ``on_result(job, result)`` as each ends.
 
     Each worker process starts with this process's decode setups for the jobs (see :func:`decode_setup`),
-    so the white image is calibrated once, not once per process. At most ``workers`` captures are in
+    so the white image is calibrated once, not once per process, and with ``operators`` (the deconvolution
+    operators of the batch, :func:`shared_operators`: built once, here) pickled into it. At most ``workers`` captures are in
     flight, which bounds memory. A capture whose worker process dies is retried alone (nothing else runs
     beside it, in case memory was short) in a fresh process, up to ``max_attempts`` in all, then
     reported as failed; the other captures are not charged.
@@ -46,16 +47,16 @@ def run_local(jobs: list[Job], workers: int, on_result, max_attempts: int = 3) -
     """
     with StopSignals() as stop:
         if workers <= 1:
-            _run_here(jobs, on_result, stop)
+            _run_here(jobs, on_result, stop, operators)
         else:
-            _run_pool(jobs, workers, on_result, max_attempts, stop)
+            _run_pool(jobs, workers, on_result, max_attempts, stop, operators)
 
 
-def _run_here(jobs, on_result, stop: StopSignals) -> None:
+def _run_here(jobs, on_result, stop: StopSignals, operators=None) -> None:
     for job in jobs:
         try:
             with stop.interruptible():
-                result = run_job(job, before_commit=stop.commit_point)
+                result = run_job(job, before_commit=stop.commit_point, operators=operators)
         except Cancelled:
             result = JobResult(job.source, "cancelled")
         if result.status == "cancelled":
@@ -68,9 +69,9 @@ def _run_here(jobs, on_result, stop: StopSignals) -> None:
 class _Worker:
     """One worker process, its end of the pipe and the job it runs (None when idle)."""
 
-    def __init__(self, context, setups: dict, threads: int = 1):
+    def __init__(self, context, setups: dict, threads: int = 1, operators=None):
         self.conn, child = context.Pipe()
-        self.process = context.Process(target=_worker_main, args=(child, setups, threads), daemon=True,
+        self.process = context.Process(target=_worker_main, args=(child, setups, threads, operators), daemon=True,
                                        name="lfproc-batch-worker")
         with signals_blocked():  # a Ctrl-C to the process group cannot hit its start-up
             self.process.start()
@@ -107,7 +108,7 @@ class _Worker:
         self.conn.close()
 
 
-def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignals) -> None:
+def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignals, operators=None) -> None:
     import multiprocessing
     from multiprocessing.connection import wait
 
@@ -128,7 +129,7 @@ def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignal
                 return
             worker = next((w for w in pool if w.job is None), None)
             if worker is None:
-                worker = _Worker(context, setups, worker_threads(workers))
+                worker = _Worker(context, setups, worker_threads(workers), operators)
                 pool.append(worker)
             job = queue.popleft()
             if not worker.send(job):
@@ -199,7 +200,7 @@ def _stop_workers(pool, busy, collect, wait) -> None:
         worker.job = None
 
 
-def _worker_main(conn, setups: dict, threads: int = 1) -> None:
+def _worker_main(conn, setups: dict, threads: int = 1, operators=None) -> None:
     """A worker process: run the jobs the parent sends until it sends None, the pipe closes or SIGTERM."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for the parent, which stops the workers
     _die_with_parent()
@@ -219,7 +220,7 @@ def _worker_main(conn, setups: dict, threads: int = 1) -> None:
 
                 try:
                     with stop.interruptible():
-                        result = run_job(job, before_commit=before_commit)
+                        result = run_job(job, before_commit=before_commit, operators=operators)
                 except Cancelled:
                     result = JobResult(job.source, "cancelled")
                 conn.send(result)

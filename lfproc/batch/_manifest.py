@@ -68,9 +68,11 @@ def _journal_entries(path: str):
 
 def has_sidecar(path: str) -> bool:
     """Whether an output comes with a ``NAME.json`` sidecar: every data product does; animations, display
-    previews (``NAME_preview.png``/``.jpg``) and the focal stack (its slices' records are inside it) do not."""
+    previews (``NAME_preview.png``/``.jpg``), the focal stack (its slices' records are inside it) and a volume
+    (``STEM_volume.ome.tif``, whose record ``STEM_volume.json`` is an output of its own) do not."""
     name = os.path.basename(path).lower()
-    return not (name.endswith(".gif") or "_preview." in name or name.endswith(("_stack.tif", "_stack.ome.tif")))
+    return not (name.endswith((".gif", ".json")) or "_preview." in name
+                or name.endswith(("_stack.tif", "_stack.ome.tif", "_volume.ome.tif")))
 
 
 class Manifest:

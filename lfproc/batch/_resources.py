@@ -21,13 +21,14 @@ def available_memory_bytes() -> float:
         return 8e9
 
 
-def default_workers(sample_path: str | None, memory_fraction: float = 0.5) -> int:
+def default_workers(sample_path: str | None, memory_fraction: float = 0.5, extra_bytes: float = 0.0) -> int:
     """Processes that fit: at most the cores, and at most ``memory_fraction`` of the available memory.
 
     A worker process peaks at about :data:`PROCESS_BASE_BYTES` plus :data:`BYTES_PER_SENSOR_PIXEL` bytes
     per sensor pixel (the white image read, demosaiced and calibrated in float32, its decoded views,
     then each capture's sensor image, views and refocused stack). The pixel count comes from the first
-    capture's header when OpenImageIO can read it, else a 40-megapixel sensor is assumed.
+    capture's header when OpenImageIO can read it, else a 40-megapixel sensor is assumed. ``extra_bytes``:
+    what else each process holds (a deconvolution's operators and projection matrices).
     """
     cores = os.cpu_count() or 1
     pixels = 40e6
@@ -45,7 +46,7 @@ def default_workers(sample_path: str | None, memory_fraction: float = 0.5) -> in
                 inp.close()
             else:   # retrieve the error: OpenImageIO prints a pending one when the process exits
                 oiio.geterror()
-    per_process = PROCESS_BASE_BYTES + pixels * BYTES_PER_SENSOR_PIXEL
+    per_process = PROCESS_BASE_BYTES + pixels * BYTES_PER_SENSOR_PIXEL + extra_bytes
     return max(1, min(cores, int(memory_fraction * available_memory_bytes() // per_process)))
 
 

@@ -61,7 +61,21 @@ def _portable_setups(jobs: list[Job]) -> dict:
     return {key: dataclasses.replace(setup, _decoders={}) for key, setup in _SETUP_CACHE.items() if key in keys}
 
 
-def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
+def shared_operators(job: Job, progress=None):
+    """The deconvolution operators of a batch, built ONCE, in the process that starts it, from its first
+    capture (:func:`lfproc.api.prepare_deconvolution`, through lfproc's cache as ``lfproc deconvolve`` does), to be
+    given to every worker (:func:`run_local`, :func:`run_dask`): no worker builds them."""
+    from ..api import prepare_deconvolution
+    from ..lightfield import LightField, is_lightfield_file
+
+    lf = LightField.load(job.source) if is_lightfield_file(job.source) else decode_setup(job).decode(job.source)
+    if lf.camera is None:
+        raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
+    return prepare_deconvolution(lf, job.deconvolve["z_um"], job.deconvolve["superres"], cache=True,
+                                 progress=progress)
+
+
+def run_job(job: Job, before_commit=None, checkpoint=None, operators=None) -> JobResult:
     """Process one capture; any error becomes a ``failed`` result (with its message), never an exception, and
     every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once).
 
@@ -70,8 +84,10 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     raise :class:`Cancelled` to abandon them (the batch was interrupted); that gives a ``cancelled``
     result. ``checkpoint()`` runs before each output file is begun and may raise it too. Errors other than :class:`LfprocError` are bugs, reported as such in the message; catching
     them here keeps one bad capture from stopping a batch of thousands. ``KeyboardInterrupt`` propagates.
+    ``operators``: the batch's deconvolution operators (:func:`shared_operators`), which a job with
+    ``deconvolve`` needs (it never builds them itself).
     """
-    from ..api import focal_stack, view_stack
+    from ..api import deconvolve, focal_stack, view_stack
     from ..atomic import all_or_nothing
     from ..lightfield import LightField, is_lightfield_file
 
@@ -83,6 +99,12 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
             if lf.camera is None:
                 raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
             outputs = []
+            if job.deconvolve:
+                if operators is None:
+                    raise LfprocError(f"{job.source}: a deconvolution job needs the batch's operators=, built once "
+                                      f"(lfproc.batch.shared_operators)")
+                volume = deconvolve(lf, **job.deconvolve, operators=operators)
+                outputs += volume.save(job.outdir, job.stem)
             if job.refocus_a:
                 stack = focal_stack(lf, a=list(job.refocus_a), aperture=job.aperture,
                                     interpolation=job.interpolation, upsample=job.upsample)

@@ -13,6 +13,7 @@ import time
 from ..errors import LfprocError
 from .capture_loop import add_decode_options, add_output_folder_option, require_output_folder
 from .common import add_aperture_option, add_slice_options, check_slice_options, describe_slices
+from .deconvolve import add_deconvolution_options, deconvolution_settings
 from .refocus import add_render_options, check_render_options
 from .views import add_view_options, check_view_options
 from .words import command_words
@@ -20,9 +21,11 @@ from .words import command_words
 
 def register(sub) -> None:
     p = sub.add_parser("batch", help="process folders of captures in parallel (local or Dask), resumable",
-                       description="Refocus and/or extract the views of many captures: inputs are files, folders or "
-                                   "glob patterns. Outputs and sidecars are those of lfproc refocus and lfproc views, "
-                                   "and every per-capture option of those commands means the same here. "
+                       description="Refocus, extract the views of and/or deconvolve many captures: inputs are files, "
+                                   "folders or glob patterns. Outputs and sidecars are those of lfproc refocus, lfproc "
+                                   "views and lfproc deconvolve, and every per-capture option of those commands means "
+                                   "the same here (a time-lapse's deconvolution operators are built once, here, and "
+                                   "shared by every worker). "
                                    "A manifest (OUTDIR/lfproc-manifest.json) records each capture; a rerun skips "
                                    "completed captures whose inputs and parameters are unchanged. A capture that "
                                    "fails is recorded with its error and the rest complete; the exit status is 2 "
@@ -37,6 +40,10 @@ def register(sub) -> None:
     add_render_options(p)
     p.add_argument("--views", action="store_true", help="also write every viewpoint image (as lfproc views)")
     add_view_options(p)
+    p.add_argument("--deconvolve", action="store_true",
+                   help="also deconvolve each capture into a volume (as lfproc deconvolve; microscopes): --z-range "
+                        "Z0:Z1:STEP gives its planes, and the options below shape it")
+    add_deconvolution_options(p)
     p.add_argument("--workers", type=int, metavar="N",
                    help="local worker processes (default: from the cores and the memory a capture needs; "
                         "1 = in this process, with multi-threaded refocusing)")
@@ -51,10 +58,13 @@ examples:
   lfproc batch shots/ --camera cam.toml --white white.png --a 0:3:0.5 -o out/        all cores of this machine
   lfproc batch 'shots/*/raw_*.dng' --camera cam.toml --calib grid.json --views -o out/
   lfproc batch shots/ ... --scheduler tcp://host:8786 -o /shared/out/                  a Dask cluster
+  lfproc batch frames/ --camera lfm.toml --white white.tif --deconvolve --z-range -100:100:20 -o vols/
+                                                  a time-lapse into volumes, the operators built once
 inputs: files, folders (not recursive) and quoted glob patterns; .lfp.npz light fields need no camera,
   grid or white image; Lytro captures need no --camera and take --white-dir.
-outputs: exactly those of lfproc refocus / lfproc views, per capture STEM_a+1.500.tif, STEM_view_KY_KX.tif,
-  each with its NAME.json sidecar; OUTDIR/lfproc-manifest.json records every capture.
+outputs: exactly those of lfproc refocus / views / deconvolve, per capture STEM_a+1.500.tif,
+  STEM_view_KY_KX.tif, STEM_volume.ome.tif, each with its NAME.json sidecar;
+  OUTDIR/lfproc-manifest.json records every capture.
 resuming: a rerun skips captures whose outputs are complete and whose inputs and options are unchanged;
   it redoes the rest. Ctrl-C stops cleanly (exit 130); rerun the same command to finish.
 exit status: 0 all done or skipped, 2 a capture failed or bad input (one line each), 130 interrupted.
@@ -84,9 +94,15 @@ def run(args) -> int:
                        (args.dark, "--dark")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
+    if args.deconvolve and args.z_range is None:
+        raise LfprocError("--deconvolve needs --z-range Z0:Z1:STEP (the volume's planes, micrometres from the native "
+                          "object plane)")
+    if args.deconvolve and args.aperture is not None:
+        raise LfprocError("--aperture shapes refocused slices; with --deconvolve --z-range gives the volume's planes: "
+                          "drop --aperture (refocus in another batch)")
     if args.a is None and args.depth_range is None and args.at is None and args.z_range is None and not args.views:
         raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM, --z-range Z0:Z1 "
-                          "and/or --views")
+                          "and/or --views (or --deconvolve --z-range Z0:Z1:STEP)")
     if args.aperture is not None and args.a is None and args.depth_range is None and args.at is None \
             and args.z_range is None:
         raise LfprocError("--aperture shapes the refocused slices: add --a, --depth-range, --at or --z-range")
@@ -114,7 +130,9 @@ def run(args) -> int:
         check_grid_fits_camera(camera, LensGrid.load(args.calib))
     if args.views:
         check_view_options(args, camera)
-    if args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None:
+    settings = deconvolution_settings(args, camera) if args.deconvolve else None
+    if not args.deconvolve and (args.a is not None or args.depth_range is not None or args.at is not None
+                                or args.z_range is not None):
         a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
                                           max_slices=args.max_slices, z_range=args.z_range,
                                           view_extent=aperture_extent(camera, args.aperture)))
@@ -134,7 +152,7 @@ def run(args) -> int:
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
                       args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
                       _abs(args.dark), args.stack if a_values else None, _abs(args.camera),
-                      white_is_white=args.white_is_white)
+                      white_is_white=args.white_is_white, deconvolve=settings)
             for src in sources]
     first_to_decode = next((job for job in jobs if not is_lightfield_file(job.source)), None)
     if not os.path.isdir(outdir) and first_to_decode is not None:
@@ -168,7 +186,8 @@ def run(args) -> int:
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
             "decode_interpolation": args.decode_interpolation, "demosaic": args.demosaic,
-            "stack": args.stack, "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {})})
+            "stack": args.stack, "scheduler": args.scheduler, **({"dark": _abs(args.dark)} if args.dark else {}),
+            **({"deconvolve": settings} if settings else {})})
         return _process(args, jobs, manifest, camera, summed)
 
 
@@ -212,6 +231,8 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
         note = batch.decode_setup(first_to_decode).m_hat_note
         if note:
             print(f"lfproc batch: {note}", file=sys.stderr)
+    manifest.data.pop("operators", None)      # a record of this run's operators only (none when none are needed)
+    operators = _shared_operators(todo[0], manifest) if todo and todo[0].deconvolve else None
     if jobs[0].refocus_a:
         describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
                         integer=args.integer, max_slices=args.max_slices, view_mask=summed)
@@ -237,10 +258,12 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
             if not todo:
                 pass
             elif args.scheduler:
-                batch.run_dask(todo, args.scheduler, on_result)
+                batch.run_dask(todo, args.scheduler, on_result, operators)
             else:
-                workers = args.workers or batch.default_workers(todo[0].source)
-                batch.run_local(todo, min(workers, len(todo)), on_result)
+                # a deconvolving worker also holds the operators and the projections' matrices (512 MB budget)
+                extra = 0.0 if operators is None else 2.0 * operators.kernels.nbytes + 512 * 2 ** 20
+                workers = args.workers or batch.default_workers(todo[0].source, extra_bytes=extra)
+                batch.run_local(todo, min(workers, len(todo)), on_result, operators=operators)
         # every task has ended: what a killed worker was writing is garbage now
         batch.remove_stale_partial_files(manifest.outdir)
     except KeyboardInterrupt:
@@ -262,6 +285,26 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
               f"the captures not done left no output); rerun the same command to resume", file=sys.stderr)
         return 130
     return 2 if failures else 0
+
+
+def _shared_operators(job, manifest):
+    """The batch's deconvolution operators, built here once (or read from lfproc's cache, as lfproc deconvolve
+    does) before any worker starts; the manifest records whether they were built and what they cost."""
+    from tqdm import tqdm
+
+    from .. import batch
+
+    start, built = time.perf_counter(), [0]
+    with tqdm(total=len(job.deconvolve["z_um"]), unit="plane", disable=None, file=sys.stderr,
+              desc="lfproc batch: operators", leave=False) as bar:
+        def progress(stage, done, total):
+            built[0] = 1
+            bar.update(1)
+
+        operators = batch.shared_operators(job, progress)
+    manifest.data["operators"] = {"built": built[0], "seconds": round(time.perf_counter() - start, 3),
+                                  "megabytes": round(operators.kernels.nbytes / 1e6, 1)}
+    return operators
 
 
 @contextlib.contextmanager

@@ -24,6 +24,14 @@ def register(sub) -> None:
     p.add_argument("--z-range", required=True, metavar="Z0:Z1:STEP",
                    help="the planes, micrometres from the native object plane (positive towards the objective), "
                         "from Z0 to Z1 in steps of STEP, e.g. -100:100:20")
+    add_deconvolution_options(p)
+    p.add_argument("--stem", metavar="STEM", help="output file names' start (default: the capture's name)")
+    add_output_folder_option(p)
+    p.set_defaults(func=run)
+
+
+def add_deconvolution_options(p) -> None:
+    """The options of the deconvolution itself, the same in ``lfproc deconvolve`` and ``lfproc batch --deconvolve``."""
     p.add_argument("--iterations", type=int, default=8, metavar="N", help="Richardson-Lucy iterations (default 8)")
     p.add_argument("--superres", type=int, default=DEFAULT_SUPERRES, metavar="S",
                    help="voxels per lenslet pitch along x and y (1 to the samples per lens; default 3)")
@@ -32,9 +40,23 @@ def register(sub) -> None:
     p.add_argument("--tolerance", type=float, default=None, metavar="T",
                    help="stop early once an iteration lowers the misfit by less than this fraction")
     p.add_argument("--no-filter", action="store_true", help="skip the depth-adaptive anti-aliasing filter")
-    p.add_argument("--stem", metavar="STEM", help="output file names' start (default: the capture's name)")
-    add_output_folder_option(p)
-    p.set_defaults(func=run)
+
+
+def deconvolution_settings(args, camera) -> dict:
+    """The keyword arguments of :func:`lfproc.deconvolve` the options ask for (``z_um`` from ``--z-range``), checked
+    against the camera before any work: a camera without microscope optics, S beyond m̂, planes out of reach."""
+    from ..errors import LfprocError
+    from ..wave import check_superres, check_z, wave_optics_of
+
+    z = z_planes(args.z_range)
+    if args.iterations < 1:
+        raise LfprocError(f"--iterations must be 1 or more, got {args.iterations}")
+    optics = wave_optics_of(camera, camera.source or args.camera or "camera")
+    check_superres(args.superres, camera.m_hat)
+    check_z(z, optics, camera.mla_pitch_mm * 1000.0)       # the light field's own extent is checked once decoded
+    background = args.background if args.background == "auto" else _number(args.background)
+    return {"z_um": z, "iterations": args.iterations, "superres": args.superres, "background": background,
+            "tolerance": args.tolerance, "antialias": not args.no_filter}
 
 
 def z_planes(text: str) -> list[float]:
@@ -60,30 +82,21 @@ def run(args) -> int:
 
     from ..api import deconvolve
     from ..atomic import all_or_nothing
-    from ..errors import LfprocError
     from ..outputs import output_stem
-    from ..wave import check_superres, check_z, wave_optics_of
 
     require_output_folder(args.outdir)
-    z = z_planes(args.z_range)
-    if args.iterations < 1:
-        raise LfprocError(f"--iterations must be 1 or more, got {args.iterations}")
     camera = input_camera(args, [args.raw])
-    optics = wave_optics_of(camera, camera.source or args.camera or args.raw)   # refused before any work
-    check_superres(args.superres, camera.m_hat)
-    check_z(z, optics, camera.mla_pitch_mm * 1000.0)       # the light field's own extent is checked once decoded
-    background = args.background if args.background == "auto" else _number(args.background)
+    settings = deconvolution_settings(args, camera)          # refused before any work
     stem = args.stem or output_stem(args.raw)
     inputs = prepare_inputs(args, [args.raw], camera)          # calibration last: every cheap check fails first
     lf = inputs.load(args.raw)
-    with tqdm(total=len(z) + args.iterations, unit="step", disable=None, file=sys.stderr, desc="lfproc deconvolve",
-              leave=False) as bar:
+    with tqdm(total=len(settings["z_um"]) + args.iterations, unit="step", disable=None, file=sys.stderr,
+              desc="lfproc deconvolve", leave=False) as bar:
         def progress(stage, done, total):
             bar.set_postfix_str(stage)
             bar.update(1)
 
-        volume = deconvolve(lf, z_um=z, iterations=args.iterations, superres=args.superres, background=background,
-                            tolerance=args.tolerance, antialias=not args.no_filter, cache=True, progress=progress)
+        volume = deconvolve(lf, **settings, cache=True, progress=progress)
     with all_or_nothing():                                   # both files or neither, even when interrupted
         stack, sidecar = volume.save(args.outdir, stem)
     print(f"{args.raw}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "

@@ -1,4 +1,5 @@
-"""``lfproc info`` on a focal z-stack that ``lfproc refocus --stack`` wrote (ImageJ hyperstack or OME-TIFF).
+"""``lfproc info`` on a focal z-stack that ``lfproc refocus --stack`` wrote (ImageJ hyperstack or OME-TIFF), or a
+volume that ``lfproc deconvolve`` wrote (OME-TIFF: its planes, their depths and the voxel size in µm).
 
 The stack is recognised by its slices' records, which lfproc stores as JSON (``{"slices": [...], "pixel_um",
 "z_spacing_um", "evenly_spaced"}``) in the ImageJ ``Info`` or the OME image ``Description``. The x/y/z
@@ -49,9 +50,23 @@ def describe_stack(path: str) -> dict | None:
     if not isinstance(tags, dict) or not isinstance(tags.get("slices"), list):
         return None
     size = dict(zip(axes, shape))
+    if _is_volume(tags):      # lfproc deconvolve's: planes of voxels, their size in µm in the sample
+        return {"path": path, "format": "lfproc-output", "product": "deconvolved volume", "stack_format": kind,
+                "raw_light_field": False, "width": size.get("X"), "height": size.get("Y"),
+                "planes": size.get("Z", 1), "axes": axes, "voxel_um": [spacing["z"], spacing["y"], spacing["x"]],
+                "z_um": [record.get("z_um") for record in tags["slices"]],
+                "tags": {k: v for k, v in tags.items() if k not in ("product", "slices")}}
     return {"path": path, "format": "lfproc-output", "product": "focal stack (z-stack)", "stack_format": kind,
             "raw_light_field": False, "width": size.get("X"), "height": size.get("Y"), "slices": size.get("Z", 1),
             "channels": size.get("C", size.get("S", 1)), "axes": axes, "spacing": spacing, "tags": tags}
+
+
+def _is_volume(tags: dict) -> bool:
+    """A volume of ``lfproc deconvolve``: so named in its records, or (files of lfproc's first deconvolution, which
+    did not name it) planes recorded by their depth and index only."""
+    planes = tags["slices"]
+    return tags.get("product") == "deconvolved volume" or (
+        bool(planes) and all(isinstance(r, dict) and set(r) == {"z_um", "plane"} for r in planes))
 
 
 def _json(text) -> dict | None:

@@ -68,7 +68,7 @@ def z_spacing_um(z_um: np.ndarray) -> float:
 
 
 def write_focal_stack(path: str, images: np.ndarray, records: list[dict], space, *, kind: str = "imagej",
-                      lens_um: float | None = None, upsample: int = 1) -> str:
+                      lens_um: float | None = None, upsample: int = 1, product: str | None = None) -> str:
     """Write the slices ``images`` (``(K, H, W, C)`` float32) as one z-stack file; returns ``path``.
 
     Parameters
@@ -87,6 +87,9 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], space,
         in µm; ``None``: pixel units.
     upsample : int
         The slices' upsampling: the pixel is ``lens_um / upsample``.
+    product : str, optional
+        What the stack is, when it is not a focal stack (``"deconvolved volume"``): recorded with the slices'
+        records, where ``lfproc info`` reads it.
     """
     import tifffile
 
@@ -105,7 +108,8 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], space,
     dz = z_spacing_um(position * (1000.0 / space.per_mm)) if metric else 1.0
     ordered = [records[i] for i in order]
     labels = [_label(r, space) for r in ordered for _ in range(channels)]
-    info = json.dumps(json_safe({"slices": ordered, "pixel_um": pixel if metric else None,
+    info = json.dumps(json_safe({**({"product": product} if product else {}), "slices": ordered,
+                                 "pixel_um": pixel if metric else None,
                                  "z_spacing_um": dz if metric else None,
                                  "evenly_spaced": _even(position) if metric else None}), allow_nan=False)
     with atomic_path(path, suffix=".tif") as tmp:
@@ -121,10 +125,21 @@ def write_focal_stack(path: str, images: np.ndarray, records: list[dict], space,
             if metric:
                 meta.update(PhysicalSizeX=pixel, PhysicalSizeXUnit="µm", PhysicalSizeY=pixel,
                             PhysicalSizeYUnit="µm", PhysicalSizeZ=dz, PhysicalSizeZUnit="µm")
+            meta["UUID"] = _content_uuid(data, info)     # the same stack, the same bytes (not the clock's UUID)
             tifffile.imwrite(tmp, data, ome=True, metadata=meta)
         else:
             raise LfprocError(f"unknown stack kind {kind!r}; use one of {', '.join(STACK_KINDS)}")
     return path
+
+
+def _content_uuid(data: np.ndarray, info: str) -> str:
+    """A name-based UUID (RFC 4122 version 5) of an OME-TIFF's pixels and records: unique per content, and the
+    same on every run, so that writing a stack again (a batch, a rerun) gives the same file byte for byte."""
+    import hashlib
+    import uuid
+
+    digest = hashlib.sha256(np.ascontiguousarray(data).tobytes() + info.encode()).hexdigest()
+    return f"urn:uuid:{uuid.uuid5(uuid.NAMESPACE_URL, 'lfproc:ome-tiff:' + digest)}"
 
 
 def _even(z: np.ndarray) -> bool:
@@ -148,6 +163,10 @@ def volume_paths(outdir: str, stem: str) -> tuple[str, str]:
     return base + ".ome.tif", base + ".json"
 
 
+#: what ``lfproc info`` calls a volume from ``lfproc deconvolve`` (recorded in the stack's description)
+VOLUME_PRODUCT = "deconvolved volume"
+
+
 def write_volume(outdir: str, stem: str, data: np.ndarray, voxel_um, record: dict, space) -> list[str]:
     """A deconvolved volume ``data`` (Z, Y, X) as an OME-TIFF z-stack with its voxel size in µm (planes ordered by
     ``record["z_um"]``, their records in its Description; ``space``: the object space of those depths) and
@@ -161,7 +180,7 @@ def write_volume(outdir: str, stem: str, data: np.ndarray, voxel_um, record: dic
     stack, sidecar = volume_paths(outdir, stem)
     planes = [{"z_um": float(z), "plane": i} for i, z in enumerate(record["z_um"])]
     write_focal_stack(stack, np.asarray(data, dtype=np.float32)[..., None], planes, space, kind="ome",
-                      lens_um=float(voxel_um[2]), upsample=1)
+                      lens_um=float(voxel_um[2]), upsample=1, product=VOLUME_PRODUCT)
     try:
         write_json_atomic(sidecar, record)
     except BaseException:

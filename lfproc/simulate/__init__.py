@@ -14,7 +14,8 @@ through an aplanatic objective, numpy), ``_plane_views`` (exact light fields of 
 fractional a: the interpolation-bias ground truth).
 """
 
-from ._microscope import (Bead, MicroscopeScene, Sheet, lens_of_point, render_microscope_sensor,
+from ._microscope import (Bead, MicroscopeScene, Sheet, lens_of_point, render_microscope_capture,
+                          render_microscope_sensor,
                           render_microscope_views)
 from ._plane_views import fourier_refocus, plane_views
 from ._render import SimulatedCapture, render, render_ideal_views, render_radiance, render_white

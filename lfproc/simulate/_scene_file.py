@@ -1,4 +1,5 @@
-"""Scene files (TOML, ``docs/scene-format.md``): a camera, a scene and the render options.
+"""Scene files (TOML, ``docs/scene-format.md``): a camera, a scene and the render options; for a microscope camera,
+fluorescent beads (``[[bead]]``) instead of planes.
 
 :func:`load_scene_file` parses one into a :class:`SceneFile`; every problem raises
 :class:`lfproc.LfprocError` naming the file, the table and the key.
@@ -14,6 +15,7 @@ from ..camera import Camera
 from ..errors import LfprocError
 from ..tomlfile import read_toml
 from ._checks import _integer, _number, _number_list
+from ._microscope import Bead
 from ._scene import Plane, Scene
 from ._textures import Checkerboard, ImageTexture, Noise, Sinusoid, Uniform, read_texture_image
 
@@ -64,6 +66,7 @@ class SceneFile:
     scene: Scene
     options: RenderOptions
     source: str = field(default="", compare=False)
+    beads: tuple = ()       # a microscope's fluorescent beads (Bead), rendered instead of the planes
 
 
 _PLANE_COMMON = {"name", "distance_mm", "texture", "region_mm", "tint", "center_mm", "tilt_deg"}
@@ -75,7 +78,8 @@ _TEXTURE_KEYS = {
     "noise": {"feature_mm", "seed", "low", "high"},
     "image": {"path", "width_mm", "encoding", "low", "high"},
 }
-_TOP_KEYS = {"camera", "background", "render", "plane"}
+_TOP_KEYS = {"camera", "background", "render", "plane", "bead"}
+_BEAD_KEYS = {"x_um", "y_um", "z_um", "radius_um", "brightness"}
 
 
 def load_scene_file(path: str | os.PathLike) -> SceneFile:
@@ -111,11 +115,41 @@ def parse_scene_dict(data: dict, source: str = "scene", base_dir: str = ".") -> 
     if not isinstance(plane_tables, list):
         raise LfprocError(f"{source}: 'plane' must be an array of tables [[plane]]")
     planes = tuple(_parse_plane(t, k, source, base_dir) for k, t in enumerate(plane_tables))
+    beads = _parse_beads(data.get("bead", []), planes, camera, source)
     try:
         scene = Scene(planes=planes, background=tuple(background))
     except LfprocError as exc:
         raise LfprocError(f"{source}: {exc}") from None
-    return SceneFile(camera=camera, scene=scene, options=options, source=source)
+    return SceneFile(camera=camera, scene=scene, options=options, source=source, beads=beads)
+
+
+def _parse_beads(tables, planes, camera: Camera, source: str) -> tuple:
+    """The ``[[bead]]`` tables: fluorescent beads at (x_um, y_um, z_um) in a microscope's sample."""
+    from ..camera import Microscope
+
+    if not isinstance(tables, list):
+        raise LfprocError(f"{source}: 'bead' must be an array of tables [[bead]]")
+    if tables and not isinstance(camera.main_optics, Microscope):
+        raise LfprocError(f"{source}: [[bead]] needs a microscope camera (a [microscope] table); this camera has "
+                          f"a main lens: give [[plane]]s instead")
+    if tables and planes:
+        raise LfprocError(f"{source}: a scene has [[plane]]s (a camera) or [[bead]]s (a microscope), not both")
+    beads = []
+    for index, table in enumerate(tables):
+        where = f"{source} [[bead]] #{index + 1}"
+        if not isinstance(table, dict):
+            raise LfprocError(f"{where}: must be a table")
+        unknown, missing = set(table) - _BEAD_KEYS, {"x_um", "y_um", "z_um"} - set(table)
+        if unknown or missing:
+            raise LfprocError(f"{where}: {'unknown key(s) ' + str(sorted(unknown)) if unknown else ''}"
+                              f"{'; ' if unknown and missing else ''}"
+                              f"{'missing ' + ', '.join(sorted(missing)) if missing else ''}; keys: x_um, y_um, "
+                              f"z_um (µm in the sample, z from the native object plane), radius_um, brightness")
+        try:
+            beads.append(Bead(**table))
+        except (LfprocError, TypeError) as exc:
+            raise LfprocError(f"{where}: {exc}") from None
+    return tuple(beads)
 
 
 def _parse_camera(value, source: str, base_dir: str) -> Camera:

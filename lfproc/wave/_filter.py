@@ -9,9 +9,18 @@ at: a Lanczos-windowed sinc of width
 
     w(z) = min(p/2, p·λ(z))      at the lenslets (p the lens pitch),
 
-in voxels W = 2·w·S/p rounded down to an odd whole number (1: no filtering), kernel
+in voxels W = 2·w·S/p (at most S: one lens; W ≤ 1, a plane sampled at the voxel rate, is not filtered), kernel
 sinc(x/W)·sinc(x/(4W)) over |x| ≤ 3W, normalised to sum 1 — separable here (oLaF's is cut radially), applied
 to each plane after every Richardson–Lucy update (with mirrored borders, not oLaF's periodic ones).
+
+W is kept as it is, not rounded as oLaF rounds it (down to an odd whole number). The paper defines the filter
+by its cut-off frequency, which follows λ(z) continuously; oLaF's rounding makes it jump between neighbouring
+planes. At S = 3 it leaves only W = 1 (nothing) or 3 (a lens): for 20x/0.5 water lenslets of 125 µm and
+f_s 2433 µm, W = 2.43 at z = ±20 µm becomes 3 (filtered as hard as the native plane) and W = 1.62 at ±30 µm
+becomes 1 (not filtered). Richardson–Lucy then draws a point at ±20 µm as a lens-wide blob on its own plane
+plus a sharp point on the unfiltered ±30 µm plane, whose peak is the brighter: the beads of
+docs/deconvolution.md were found one plane off. With W as it is (2.43 and 1.62) every bead is on its own
+plane, its light and its peak (tests/test_deconvolve.py).
 oLaF subtracts a lenslet blur term b = (p/2)·|1/z₃ − 1/f_s| that is below 0.05 µm (its two terms have
 different units; its source comments out the form with units); it is left out here, so the widths are
 oLaF's widths, with the immersion index in Δ (oLaF's width formula takes z in air).
@@ -29,18 +38,17 @@ CUT = 3
 
 
 def filter_widths(operators) -> np.ndarray:
-    """W per plane (odd ints ≥ 1), in voxels."""
+    """W per plane (floats ≥ 1), in voxels."""
     delta = np.abs(np.asarray(operators.z_um, dtype=np.float64)) * operators.objective_magnification ** 2 \
         / operators.immersion_index
     p = operators.pitch_um
     with np.errstate(divide="ignore"):
         width = np.minimum(p / 2.0, p * operators.lenslet_focal_um / delta)
-    voxels = np.floor(2.0 * width * operators.superres / p).astype(int)
-    return np.maximum(voxels + 1 - voxels % 2, 1)
+    return np.maximum(2.0 * width * operators.superres / p, 1.0)
 
 
-def lanczos_kernel(width: int) -> np.ndarray:
-    """The 1-D kernel of width W (odd; W = 1: the identity)."""
+def lanczos_kernel(width: float) -> np.ndarray:
+    """The 1-D kernel of width W (W ≤ 1: the identity), over the whole voxels |x| ≤ 3W."""
     if width <= 1:
         return np.ones(1)
     half = int(math.floor(CUT * width))
@@ -55,7 +63,7 @@ def apply_filter(volume, widths, backend):
     xp = backend.xp
     out = volume
     for i, width in enumerate(widths):
-        kernel = lanczos_kernel(int(width))
+        kernel = lanczos_kernel(float(width))
         if kernel.size == 1:
             continue
         half = kernel.size // 2

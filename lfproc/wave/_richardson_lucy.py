@@ -63,7 +63,7 @@ def richardson_lucy(projector, data, weights, background, iterations: int, *, su
         The most updates to run.
     superres : int
         S (the volume's layout).
-    widths : sequence of int, optional
+    widths : sequence of float, optional
         The anti-aliasing filter's width per plane (:func:`._filter.filter_widths`); None: no filter.
     tolerance : float, optional
         Stop once an update lowers the misfit by less than this fraction of it.
@@ -100,7 +100,7 @@ def richardson_lucy(projector, data, weights, background, iterations: int, *, su
     for done in range(1, int(iterations) + 1):
         ratio = wy / xp.maximum(prediction, floor)
         x = xp.where(live, x * projector.backward(ratio) / norm, 0).astype(xp.float32)
-        if widths is not None and any(int(v) > 1 for v in widths):
+        if widths is not None and any(float(v) > 1 for v in widths):
             volume = apply_filter(polyphase_to_volume(x, z_count, superres, be), widths, be)
             x = volume_to_polyphase(volume, superres, be)
         prediction = projector.forward(x) + b
