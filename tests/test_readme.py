@@ -124,7 +124,10 @@ def write_rendered_scope(folder):
 def test_a_microscope_as_the_readme_says(tmp_path):
     section = own_data_section("A light-field microscope")
     scope = write_rendered_scope(tmp_path / "scope")
+    (tmp_path / "samples").symlink_to(ROOT / "samples")
     run_commands(section, tmp_path)
+    volume_file = tmp_path / "beads" / "volume" / "capture_volume.ome.tif"
+    assert volume_file.is_file()                                          # the bead render, deconvolved
     namespace = run_python(section, tmp_path)
     stack, volume = namespace["z_stack"], namespace["volume"]
     assert list(stack.z_um) == [-40.0, -30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0]

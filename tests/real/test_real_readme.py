@@ -8,6 +8,7 @@ import json
 
 import numpy as np
 
+from conftest import ROOT
 from readme_walk import own_data_section, run_commands, run_python
 
 
@@ -18,6 +19,7 @@ def test_the_readme_microscope_block_on_the_real_sea_urchin(real_dir, tmp_path):
     for ours, theirs in (("metadata.txt", "metadata.txt"), ("white.tif", "radiometry_frame.tif"),
                          ("dark.tif", "dark_frame.tif"), ("capture.tif", "light_field.tif")):
         (scope / ours).symlink_to(urchin / theirs)
+    (tmp_path / "samples").symlink_to(ROOT / "samples")
     section = own_data_section("A light-field microscope")
     procs = run_commands(section, tmp_path, extra={"deconvolve": ["--iterations", "2"]})
     assert not any("scene" in proc.stderr for proc in procs)              # no false alarm on its white image
