@@ -18,8 +18,7 @@ def register(sub) -> None:
                                    "exit pupil also the lens grid).")
     p.add_argument("scene", metavar="SCENE.toml",
                    help="scene file: commented examples ship with lfproc as sample/scene.toml and, for a "
-                        "microscope's beads, microscope/beads.toml (lfproc info --samples prints their folder); a "
-                        "source checkout has more in docs/scene-format.md")
+                        "microscope's beads, microscope/beads.toml (lfproc info --samples prints their folder)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder (created if missing)")
     p.add_argument("--seed", type=int, default=None, help="override [render] seed")
     p.set_defaults(func=run)
