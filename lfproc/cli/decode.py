@@ -8,7 +8,7 @@ from .capture_loop import add_decode_options, require_output_file, setup_from_ar
 def register(sub) -> None:
     p = sub.add_parser("decode", help="decode a raw capture into a light field file",
                        description="Resample a capture along the fitted lens grid into m x m views and save them "
-                                   "with the camera and grid (numpy .npz; see docs/how-it-works.md).")
+                                   "with the camera and grid (an uncompressed numpy .npz: numpy.load(path)['views'] reads it).")
     p.add_argument("raw", metavar="RAW", help="raw capture (camera raw, TIFF, PNG, EXR, Lytro)")
     add_decode_options(p)
     p.add_argument("-o", "--output", required=True, metavar="LF_FILE", help="output light field file (.lfp.npz)")
