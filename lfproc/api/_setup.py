@@ -169,7 +169,7 @@ class DecodeSetup:
             raise LfprocError(f"{where}: {exc}") from None
         if not np.asarray(decoder.views_delivered).any():
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
-                              f"image where the grid puts one); pass the white image of this camera as white=")
+                              f"image where the grid puts one); pass the white image of this camera as `white=`")
         return decoder
 
     def _read_white(self):
@@ -222,8 +222,8 @@ def camera_file(camera) -> str | None:
 
 def _missing_capture(path: str) -> str:
     if os.path.isdir(path):
-        return (f"{path}: is a folder, not a capture file; pass one capture, or for many make one setup with "
-                f"lfproc.prepare_decoding(camera, white=...) and call its .decode(path) for each file")
+        return (f"{path}: is a folder, not a capture file; pass one capture, or `for many make one setup "
+                f"with lfproc.prepare_decoding(camera, white=...) and call its .decode(path) for each file`")
     return f"{path}: no such file; check the path"
 
 

@@ -63,7 +63,8 @@ def _portable_setups(jobs: list[Job]) -> dict:
 
 def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     """Process one capture; any error becomes a ``failed`` result (with its message), never an exception, and
-    every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once).
+    every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once); both
+    with their arguments marked (``error.marked``, :mod:`lfproc.errors`), for the command to word.
 
     The capture's outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`):
     ``before_commit()`` runs when all are written, before the first is renamed into place, and may
@@ -81,7 +82,7 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
         with all_or_nothing(before_commit, checkpoint), _warnings_into(said):
             lf = LightField.load(job.source) if is_lightfield_file(job.source) else decode_setup(job).decode(job.source)
             if lf.camera is None:
-                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
+                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with `camera=`")
             outputs = []
             if job.refocus_a:
                 stack = focal_stack(lf, a=list(job.refocus_a), aperture=job.aperture,
@@ -94,7 +95,7 @@ def run_job(job: Job, before_commit=None, checkpoint=None) -> JobResult:
     except Cancelled:
         return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start, tuple(said))
     except LfprocError as exc:
-        return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start, tuple(said))
+        return JobResult(job.source, "failed", (), exc.marked, time.perf_counter() - start, tuple(said))
     except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
         return JobResult(job.source, "failed", (), f"{job.source}: unexpected {type(exc).__name__}: {exc} "
                                                    f"(a bug in lfproc; please report it)",
@@ -115,8 +116,8 @@ def _warnings_into(said: list):
             others = []
             for item in caught:
                 if issubclass(item.category, LfprocWarning):
-                    if str(item.message) not in said:
-                        said.append(str(item.message))
+                    if item.message.marked not in said:
+                        said.append(item.message.marked)
                 else:
                     others.append(item)
     for item in others:

@@ -19,9 +19,9 @@ def register(sub) -> None:
                                    "OUTDIR/STEM_volume.json (z_um per plane, voxel_um, iterations, superres, the "
                                    "optics, provenance). The operators are kept in lfproc's cache (lfproc info "
                                    "--cache): later captures of the same rig and z range reuse them.")
-    p.add_argument("raw", metavar="CAPTURE", help="the capture (or a light field from lfproc decode, .lfp.npz)")
+    p.add_argument("capture", metavar="CAPTURE", help="the capture (or a light field from lfproc decode, .lfp.npz)")
     add_decode_options(p)
-    p.add_argument("--z-range", required=True, metavar="Z0:Z1:STEP",
+    p.add_argument("--z-range", dest="z_um", required=True, metavar="Z0:Z1:STEP",
                    help="the planes, micrometres from the native object plane (positive towards the objective), "
                         "from Z0 to Z1 in steps of STEP, e.g. -100:100:20")
     p.add_argument("--iterations", type=int, default=8, metavar="N", help="Richardson-Lucy iterations (default 8)")
@@ -65,17 +65,17 @@ def run(args) -> int:
     from ..wave import check_superres, check_z, wave_optics_of
 
     require_output_folder(args.outdir)
-    z = z_planes(args.z_range)
+    z = z_planes(args.z_um)
     if args.iterations < 1:
         raise LfprocError(f"--iterations must be 1 or more, got {args.iterations}")
-    camera = input_camera(args, [args.raw])
-    optics = wave_optics_of(camera, camera.source or args.camera or args.raw)   # refused before any work
+    camera = input_camera(args, [args.capture])
+    optics = wave_optics_of(camera, camera.source or args.camera or args.capture)   # refused before any work
     check_superres(args.superres, camera.m_hat)
     check_z(z, optics, camera.mla_pitch_mm * 1000.0)       # the light field's own extent is checked once decoded
     background = args.background if args.background == "auto" else _number(args.background)
-    stem = args.stem or output_stem(args.raw)
-    inputs = prepare_inputs(args, [args.raw], camera)          # calibration last: every cheap check fails first
-    lf = inputs.load(args.raw)
+    stem = args.stem or output_stem(args.capture)
+    inputs = prepare_inputs(args, [args.capture], camera)          # calibration last: every cheap check fails first
+    lf = inputs.load(args.capture)
     with tqdm(total=len(z) + args.iterations, unit="step", disable=None, file=sys.stderr, desc="lfproc deconvolve",
               leave=False) as bar:
         def progress(stage, done, total):
@@ -86,7 +86,7 @@ def run(args) -> int:
                             tolerance=args.tolerance, antialias=not args.no_filter, cache=True, progress=progress)
     with all_or_nothing():                                   # both files or neither, even when interrupted
         stack, sidecar = volume.save(args.outdir, stem)
-    print(f"{args.raw}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "
+    print(f"{args.capture}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "
           f"{os.path.basename(sidecar)}")
     return 0
 
