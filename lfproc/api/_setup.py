@@ -102,7 +102,7 @@ class DecodeSetup:
         try:
             views = decoder(capture.data, capture.cfa)
         except LfprocError as exc:
-            raise LfprocError(f"{name}: {exc}") from None
+            raise LfprocError(f"{name}: {exc.marked}") from None
         check_capture_is_not_white(name, views, decoder.views_delivered)
         inputs = dict(self.inputs) if path is None else {"capture": path, **self.inputs}
         return LightField.from_views(views, self.camera, decoder.output_grid, decoder.views_delivered,
@@ -166,7 +166,7 @@ class DecodeSetup:
         except LfprocError as exc:
             if not self.has_white or str(exc).startswith(where):
                 raise
-            raise LfprocError(f"{where}: {exc}") from None
+            raise LfprocError(f"{where}: {exc.marked}") from None
         if not np.asarray(decoder.views_delivered).any():
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
                               f"image where the grid puts one); pass the white image of this camera as `white=`")
