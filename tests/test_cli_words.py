@@ -112,6 +112,22 @@ def test_every_argument_the_library_marks_is_an_option_of_a_command():
             assert action.option_strings or action.metavar, (command, name)   # a flag, or a positional's name
 
 
+#: the arguments of lfproc.prepare_decoding / read_light_field, which every decoding command reports
+DECODE_ARGUMENTS = {"camera", "grid", "white", "white_dir", "dark", "white_is_white", "decode_interpolation",
+                    "demosaic", "capture"}
+
+
+def test_every_decoding_command_has_an_option_for_each_decode_argument():
+    """The decode setup's messages (white=, grid=, dark=, ...) reach every command that decodes: each has an
+    option of each name (batch and the viewer name their inputs otherwise: INPUT, folders or pictures too)."""
+    decoding = {command for command, _ in _options()["white_dir"]}
+    assert decoding == {"decode", "refocus", "views", "depth", "deconvolve", "viewer", "batch"}
+    for command in decoding:
+        dests = {dest for dest, owners in _options().items() if any(name == command for name, _ in owners)}
+        missing = DECODE_ARGUMENTS - dests
+        assert missing <= ({"capture"} if command == "batch" else set()), (command, missing)
+
+
 def test_the_commands_that_report_an_argument_name_it_by_their_flag():
     """Each command that has an option of the marked name reports the mark as that option (never Python words),
     whichever command it is."""
