@@ -1,8 +1,8 @@
 """The one exception type a user of lfproc needs to catch, and its warning.
 
-A message marks each argument it names between backticks, as in a call: ```white=``` (the argument),
-```white=...``` (a value of it), ```aperture=2.8``` (this value) or ```white_is_white=True``` (a switch); and
-a how-to in Python between backticks too (```lfproc.calibrate_white(white, camera).save(path)```). A Python
+A message marks each argument it names between backticks, as in a call: ``"`white=`"`` (the argument),
+``"`white=...`"`` (a value of it), ``"`aperture=2.8`"`` (this value) or ``"`white_is_white=True`"`` (a switch);
+and a how-to in Python between backticks too (``"`lfproc.calibrate_white(white, camera).save(path)`"``). A Python
 caller reads the message without the backticks (``str(error)``, ``str(warning)``); the commands read
 ``error.marked`` and word each mark themselves (:mod:`lfproc.cli.words`: an argument becomes the flag of
 their option of that name). The library never names a command or a flag.
@@ -41,8 +41,11 @@ class LfprocError(Exception):
     Parameters
     ----------
     message : str
-        The message with its arguments and how-tos marked (module docstring); ``str(error)`` is it in Python
-        words, ``error.marked`` as given (one line), ``error.arguments`` the names of the arguments it concerns.
+        One line; each argument it names between backticks as in a call (``"give `white=...` or
+        `white_dir=...`"``, ``"`aperture=2.8` is ..."``), each how-to in Python too. ``str(error)`` is the
+        message without the backticks (what a Python caller reads), ``error.marked`` as given (what a command
+        words with its flags), ``error.arguments`` the names of the arguments it concerns (``["white",
+        "white_dir"]``).
     """
 
     def __init__(self, message: str):
@@ -80,7 +83,7 @@ def warn(message: str, category: type = LfprocWarning) -> None:
     Parameters
     ----------
     message : str
-        One line naming the input and what to do, its arguments marked (```white=```; never flags).
+        One line naming the input and what to do, its arguments marked (``"`white=`"``; never flags).
     category : type, optional
         A ``Warning`` subclass (default :class:`LfprocWarning`).
 
