@@ -84,7 +84,8 @@ def run(args) -> int:
                        (args.dark, "--dark")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
-    if args.a is None and args.depth_range_mm is None and args.distance_mm is None and args.z_range_um is None and not args.views:
+    if (args.a is None and args.depth_range_mm is None and args.distance_mm is None and args.z_range_um is None
+            and not args.views):
         raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM, --z-range Z0:Z1 "
                           "and/or --views")
     if args.aperture is not None and args.a is None and args.depth_range_mm is None and args.distance_mm is None \
@@ -114,9 +115,10 @@ def run(args) -> int:
         check_grid_fits_camera(camera, LensGrid.load(args.grid))
     if args.views:
         check_view_options(args, camera)
-    if args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None or args.z_range_um is not None:
-        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, z_range=args.z_range_um,
+    if (args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None
+            or args.z_range_um is not None):
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                          args.integer, max_slices=args.max_slices, z_range=args.z_range_um,
                                           view_extent=aperture_extent(camera, args.aperture)))
     else:
         a_values = ()
@@ -142,10 +144,11 @@ def run(args) -> int:
         batch.decode_setup(first_to_decode)
     summed = _summed_views(camera, args.aperture, first_to_decode) if a_values else None
     from ..geometry import summed_view_extent
-    if summed is not None and (args.depth_range_mm is not None or args.distance_mm is not None or args.z_range_um is not None):
+    if summed is not None and (args.depth_range_mm is not None or args.distance_mm is not None
+                               or args.z_range_um is not None):
         # planned again for the DOF of the views the slices will really sum (those that carry light), as refocus does
-        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, z_range=args.z_range_um,
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                          args.integer, max_slices=args.max_slices, z_range=args.z_range_um,
                                           view_extent=summed_view_extent(summed)))
         jobs = [dataclasses.replace(job, refocus_a=a_values) for job in jobs]
     if a_values:   # the workers keep their warnings to themselves: the z-step advice is said here, once

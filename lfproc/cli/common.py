@@ -81,7 +81,8 @@ def add_slice_options(p) -> None:
                        help="refocus parameters: numbers and ranges START:STOP[:STEP], e.g. --a -0.4:0.7:0.1")
     which.add_argument("--depth-range", dest="depth_range_mm", metavar="NEAR_MM:FAR_MM",
                        help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
-    which.add_argument("--at", dest="distance_mm", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance (mm)")
+    which.add_argument("--at", dest="distance_mm", metavar="DISTANCE_MM", type=float,
+                       help="the slice focused at this distance (mm)")
     which.add_argument("--z-range", dest="z_range_um", metavar="Z0:Z1[:STEP]",
                        help="microscope cameras: the fewest slices whose depths of field cover Z0..Z1 micrometres "
                             "from the native object plane (positive towards the objective); with STEP an evenly "

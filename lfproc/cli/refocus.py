@@ -66,8 +66,9 @@ def run(args) -> int:
         extent = summed_extent(camera, args.aperture, view_mask)
         key = (camera.to_toml(), extent)
         if key not in plans:
-            plans[key] = slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, view_extent=extent, z_range=args.z_range_um)
+            plans[key] = slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                          args.integer, max_slices=args.max_slices, view_extent=extent,
+                                          z_range=args.z_range_um)
         return key, plans[key]
 
     def describe_once(key, camera, values, view_mask):

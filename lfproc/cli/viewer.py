@@ -54,7 +54,8 @@ def run(args) -> int:
         make_server(".", args.port).server_close()  # the port is free: checked before any work
     stems = unique_stems(args.capture)
     camera = input_camera(args, args.capture)
-    chosen = args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None or args.z_range_um is not None
+    chosen = (args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None
+              or args.z_range_um is not None)
     extent = aperture_extent(camera, args.aperture)   # an impossible --aperture fails before any work
     if chosen:  # every list is checked before any capture is read
         slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
@@ -68,8 +69,8 @@ def run(args) -> int:
         lf = with_aperture(inputs.load(path), args.aperture)
         a_values = None
         if chosen:
-            a_values = slice_parameters(lf.camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
-                                        max_slices=args.max_slices, z_range=args.z_range_um,
+            a_values = slice_parameters(lf.camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                        args.integer, max_slices=args.max_slices, z_range=args.z_range_um,
                                         view_extent=summed_extent(lf.camera, args.aperture, lf.view_mask))
             check_view_coverage(lf.camera, a_values, lf.lens_shape, path, lf.view_mask)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir

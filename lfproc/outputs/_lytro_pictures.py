@@ -120,8 +120,8 @@ def _say_what_has_no_distance(path: str, mapping, note: str, records: list) -> N
 
     if mapping is None:
         warn(f"{path}: no distances, lambda only: {note}; pass `camera=` the camera that took it (e.g. "
-             f"from `lfproc.read_camera(path) of a Lytro file of the same camera`) and `focus_distance_mm=` where its lens "
-             f"focused")
+             f"from `lfproc.read_camera(path) of a Lytro file of the same camera`) and `focus_distance_mm=` where "
+             f"its lens focused")
         return
     beyond = [r["lambda"] for r in records if r.get("distance_mm") is None or not math.isfinite(r["distance_mm"])]
     if beyond:

@@ -141,8 +141,8 @@ def check_z(z_um, optics, pitch_um: float, lenses: float | None = None) -> np.nd
         spread = float(blur_radius_lenses(optics, pitch_um, far))
         where = (f"half of the light field's {lenses:.0f} lenses" if lenses is not None
                  and lenses / 2.0 < MAX_BLUR_LENSES else f"the {MAX_BLUR_LENSES} lenses the operators model")
-        raise LfprocError(f"`z_um=` reaches {far:g} um, where a point's light spreads over {spread:.1f} lenses in radius, "
-                          f"more than {where}: these optics image z from {-reach:.4g} to {reach:.4g} um here")
+        raise LfprocError(f"`z_um=` reaches {far:g} um, where a point's light spreads over {spread:.1f} lenses in "
+                          f"radius, more than {where}: these optics image z from {-reach:.4g} to {reach:.4g} um here")
     return np.sort(z)
 
 
