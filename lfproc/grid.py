@@ -217,7 +217,7 @@ class LensGrid:
         except (KeyError, TypeError, ValueError, OverflowError, AttributeError) as exc:
             raise LfprocError(f"{source}: not a lens grid ({exc!r}); fit the grid again with {MAKE_GRID}") from None
         except LfprocError as exc:
-            raise LfprocError(f"{source}: {exc}; fit the grid again with {MAKE_GRID}") from None
+            raise LfprocError(f"{source}: {exc.marked}; fit the grid again with {MAKE_GRID}") from None
 
     def save(self, path) -> None:
         """Write the grid file ``path`` (GRID.json, atomically): the lattice, its centres and the calibration,

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from .errors import LfprocError
 
 #: how a message tells a Python caller to make a grid file (the commands word it as their command)
-MAKE_GRID = "lfproc.calibrate_white(white, camera).save(path)"
+MAKE_GRID = "`lfproc.calibrate_white(white, camera).save(path)`"
 #: the centres as `write_grid_file` writes them: one line, a list of [x, y] pairs
 _CENTRES = '"centers_xy_px": [['
 

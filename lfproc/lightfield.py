@@ -29,7 +29,7 @@ from .errors import LfprocError
 from .grid import LensGrid
 
 #: how a message tells a Python caller to write a light field file (the commands word it as `lfproc decode`)
-SAVE_AGAIN = "lfproc.read_light_field(...).save(path)"
+SAVE_AGAIN = "`lfproc.read_light_field(...).save(path)`"
 
 FILE_FORMAT = "lfproc-lightfield-1"
 

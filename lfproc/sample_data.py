@@ -1,7 +1,7 @@
 """Where the bundled samples are: inside the installed package, wherever pip put it.
 
-``lfproc info --samples`` prints the same list. In a source checkout ``samples/`` at the top links to
-the same folder (``lfproc/samples``).
+``lfproc info --samples`` prints the same list (the commands' words for :func:`sample_path`'s error). In a
+source checkout ``samples/`` at the top links to the same folder (``lfproc/samples``).
 """
 
 from __future__ import annotations
@@ -48,5 +48,6 @@ def sample_path(name: str = "") -> Path:
     """
     path = SAMPLES_DIR / name
     if not path.exists():
-        raise LfprocError(f"no bundled sample {name!r}; there are: {', '.join(SAMPLES)} (lfproc info --samples)")
+        raise LfprocError(f"no bundled sample {name!r}; there are: {', '.join(SAMPLES)} "
+                          f"(`lfproc.sample_path() is their folder`)")
     return path

@@ -44,7 +44,7 @@ def viewpoints(lf: LightField, *, inside_aperture: bool = False) -> np.ndarray:
 def aperture_mask(lf: LightField) -> np.ndarray:
     """``(m̂, m̂)`` booleans: views inside the main lens aperture (all true without an f-number)."""
     if lf.camera is None:
-        raise LfprocError("the aperture of the views needs the light field's camera; decode with camera=")
+        raise LfprocError("the aperture of the views needs the light field's camera; decode with `camera=`")
     return geometry.views_inside_aperture(lf.camera)
 
 
@@ -77,13 +77,13 @@ def with_aperture(lf: LightField, f_number: float | None) -> LightField:
     if f_number is None:
         return lf
     if lf.camera is None:
-        raise LfprocError("a synthetic aperture needs the light field's camera; decode with camera=")
+        raise LfprocError("a synthetic aperture needs the light field's camera; decode with `camera=`")
     keep = geometry.aperture_views(lf.camera, f_number)
     if lf.view_mask is not None:
         keep = keep & lf.view_mask
     if not keep.any():
         raise LfprocError(f"no view that carries light lies inside f/{float(f_number):g}; give a wider "
-                          f"aperture=")
+                          f"`aperture=`")
     return LightField.from_views(lf.views, lf.camera, lf.grid, keep, lf.view_centre, lf.inputs)
 
 

@@ -480,7 +480,7 @@ def test_bad_setups_fail_at_once_with_one_line(data, tmp_path):
 
 def test_one_batch_at_a_time_per_output_folder(data, tmp_path):
     with batch.lock_outdir(str(tmp_path)):  # as if another lfproc batch were running on this folder
-        assert_clean_error(run_cli(*batch_argv(data, tmp_path, "--workers", "1")), "another lfproc batch")
+        assert_clean_error(run_cli(*batch_argv(data, tmp_path, "--workers", "1")), "another batch (process")
     assert not os.path.exists(tmp_path / batch.MANIFEST_NAME)
 
 

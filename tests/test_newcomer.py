@@ -100,7 +100,7 @@ def test_samples_are_found_from_any_install():
     for path in listed["samples"].values():
         assert __import__("os").path.exists(path), path
     assert lfproc.sample_path("sample/capture.png").is_file()
-    with pytest.raises(lfproc.LfprocError, match="info --samples"):
+    with pytest.raises(lfproc.LfprocError, match=r"lfproc\.sample_path\(\) is their folder"):
         lfproc.sample_path("nope.png")
     text = run_cli("info", "--samples").stdout
     assert str(lfproc.sample_path("sample/white.png")) in text

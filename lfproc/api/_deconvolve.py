@@ -172,15 +172,15 @@ def deconvolve(lf, camera=None, white=None, grid=None, dark=None, *, z_um=None, 
 
     lf = _light_field(lf, camera, white, grid, dark, cache)
     if isinstance(iterations, bool) or not float(iterations).is_integer() or iterations < 1:
-        raise LfprocError(f"iterations= must be a whole number of at least 1, got {iterations!r}")
+        raise LfprocError(f"`iterations=` must be a whole number of at least 1, got {iterations!r}")
     if tolerance is not None and not (isinstance(tolerance, (int, float)) and 0 < tolerance < 1):
-        raise LfprocError(f"tolerance= must be a fraction between 0 and 1, got {tolerance!r}")
+        raise LfprocError(f"`tolerance=` must be a fraction between 0 and 1, got {tolerance!r}")
     background_level = _background_argument(background)
     if superres is None:
         superres = DEFAULT_SUPERRES if operators is None else operators.superres
     if z_um is None:
         if operators is None:
-            raise LfprocError("deconvolve needs z_um= (the planes' depths in um), e.g. z_um=[-20, 0, 20]")
+            raise LfprocError("deconvolve needs `z_um=` (the planes' depths in um), e.g. `z_um=[-20, 0, 20]`")
         z_um = operators.z_um
     z, superres, shift, lenses = _sampling(lf, z_um, superres)
     optics = wave.wave_optics_of(lf.camera)
@@ -264,7 +264,7 @@ def _sampling(lf, z_um, superres) -> tuple:
 def _background_argument(background):
     if isinstance(background, str):
         if background != "auto":
-            raise LfprocError(f"background= must be 'auto' or a number (the white image's level is 1), got "
+            raise LfprocError(f"`background=` must be 'auto' or a number (the white image's level is 1), got "
                               f"{background!r}")
         return None
     try:
@@ -272,7 +272,7 @@ def _background_argument(background):
     except (TypeError, ValueError):
         value = float("nan")
     if not (np.isfinite(value) and value >= 0):
-        raise LfprocError(f"background= must be 'auto' or a finite number >= 0, got {background!r}")
+        raise LfprocError(f"`background=` must be 'auto' or a finite number >= 0, got {background!r}")
     return value
 
 
@@ -304,9 +304,9 @@ def _check_operators(operators, camera, z, superres, shift) -> None:
               optics.objective_magnification, optics.wavelength_nm, tuple(float(v) for v in shift))
     if made != wanted:
         raise LfprocError(f"operators= were built for other optics or sampling ({operators!r}); build them with "
-                          f"lfproc.wave.build_operators for this camera and superres={superres}")
+                          f"lfproc.wave.build_operators for this camera and `superres={superres}`")
     if len(operators.z_um) != len(z) or not np.allclose(np.sort(operators.z_um), z):
-        raise LfprocError("operators= were built for other depths than z_um=; give their depths (or none)")
+        raise LfprocError("operators= were built for other depths than `z_um=`; give their depths (or none)")
 
 
 def _measurement(lf, operators, background_level):

@@ -61,14 +61,14 @@ def depth_map(lf, *, depth_range_mm=None, z_range_um=None, z_step_um=None, apert
                           f"(decode.micro_image_px >= 3)")
     min_confidence = MIN_CONFIDENCE if min_confidence is None else float(min_confidence)
     if not 0.0 <= min_confidence <= 1.0:
-        raise LfprocError(f"min_confidence= must be in [0, 1], got {min_confidence}")
+        raise LfprocError(f"`min_confidence=` must be in [0, 1], got {min_confidence}")
     if z_range_um is not None:
         if depth_range_mm is not None:
-            raise LfprocError("give depth_range_mm= (cameras) or z_range_um= (microscopes), not both")
-        geometry.require_space(camera, NATIVE_PLANE_UM, "z_range_um= (micrometres)")
+            raise LfprocError("give `depth_range_mm=` (cameras) or `z_range_um=` (microscopes), not both")
+        geometry.require_space(camera, NATIVE_PLANE_UM, "`z_range_um=` (micrometres)")
         z0, z1 = (float(v) for v in z_range_um)
         if not (math.isfinite(z0) and math.isfinite(z1)) or z0 == z1:
-            raise LfprocError(f"z_range_um= must be two different finite depths in um, got {z_range_um!r}")
+            raise LfprocError(f"`z_range_um=` must be two different finite depths in um, got {z_range_um!r}")
         a0, a1 = (float(a) for a in geometry.position_parameter(camera, np.array([z0, z1])))
         options["a_range"] = (min(a0, a1), max(a0, a1))
         if z_step_um is not None:   # a step in z as a step in a (z is linear in a through the native object plane)

@@ -210,7 +210,7 @@ def _parameters(camera, a, distance_mm, z_um):
 
     given = [name for name, value in zip(("a",) + POSITION_ARGUMENTS, (a, distance_mm, z_um)) if value is not None]
     if len(given) != 1:
-        raise LfprocError(f"give exactly one of a=, distance_mm= or z_um=, got {', '.join(given) or 'none'}")
+        raise LfprocError(f"give exactly one of a=, `distance_mm=` or `z_um=`, got {', '.join(given) or 'none'}")
     name = given[0]
     space = camera.main_optics.object_space
     values = np.atleast_1d(np.asarray({"a": a, "distance_mm": distance_mm, "z_um": z_um}[name], dtype=np.float64))

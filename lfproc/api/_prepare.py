@@ -27,7 +27,7 @@ from ._setup import DecodeSetup, camera_file
 
 _PATH = (str, os.PathLike)
 #: where a grid comes from, for a Python caller (the commands word it as their command)
-GRID_FROM_API = "(a LensGrid from lfproc.calibrate_white, or its saved file)"
+GRID_FROM_API = "(`a LensGrid from lfproc.calibrate_white, or its saved file`)"
 
 
 def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir=None, captures=(),
@@ -80,10 +80,10 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     captures = [os.fspath(path) for path in captures]
     camera = _camera(camera, captures[0] if captures else None)
     if white is not None and white_dir is not None:
-        raise LfprocError("give white=... or white_dir=..., not both")
+        raise LfprocError("give `white=...` or `white_dir=...`, not both")
     if white is None and grid is None and white_dir is None:
-        raise LfprocError(f"decoding a capture needs white=... (a white image), grid=... {GRID_FROM_API} or "
-                          f"white_dir=... (a Lytro calibration folder)")
+        raise LfprocError(f"decoding a capture needs `white=...` (a white image), `grid=...` {GRID_FROM_API} or "
+                          f"`white_dir=...` (a Lytro calibration folder)")
     first = lytro_metadata_of(captures[0]) if captures else None
     white_note = None
     if white_dir is not None:
@@ -124,7 +124,7 @@ def prepare_decoding(camera=None, white=None, grid=None, dark=None, *, white_dir
     elif white_path is None:
         recorded_white = grid.calibration.white_image if grid.calibration is not None else None
         warn(f"{_name(grid)}: no white image available (recorded: {recorded_white}); decoding without "
-             f"devignetting; pass white=... to correct vignetting")
+             f"devignetting; pass `white=...` to correct vignetting")
     measured = measured_m_hat(camera, grid.pitch_px, grid.source or "the calibration")
     setup = DecodeSetup(measured.camera, grid, white=white_capture, white_path=white_path, dark=dark_capture,
                         reference=reference, inputs=file_inputs(camera=camera_file(camera), grid=grid.source,
@@ -142,7 +142,7 @@ def _grid(grid) -> LensGrid:
     if isinstance(grid, _PATH):
         return LensGrid.load(grid)
     if not isinstance(grid, LensGrid):
-        raise LfprocError(f"grid= must be a LensGrid (from lfproc.calibrate_white) or the path of its saved file, "
+        raise LfprocError(f"`grid=` must be a LensGrid (from lfproc.calibrate_white) or the path of its saved file, "
                           f"got {type(grid).__name__}")
     return grid
 
@@ -167,7 +167,7 @@ def _recorded_white(grid) -> str | None:
         return None
     if not same_file_content(path, (grid.calibration.white_facts or {}).get("hash")):
         raise LfprocError(f"{path}: this white image, recorded in {_name(grid)}, has changed since the grid was "
-                          f"fitted to it (its content hash differs); fit the grid again, or pass white=... to "
+                          f"fitted to it (its content hash differs); fit the grid again, or pass `white=...` to "
                           f"devignette with it anyway")
     return path
 
@@ -184,16 +184,16 @@ def _dark_for(dark, grid) -> str | None:
         dark = os.fspath(dark)
         if recorded and recorded.get("hash") and os.path.isfile(dark) and file_hash(dark) != recorded["hash"]:
             raise LfprocError(f"{dark}: this dark frame differs from the one {_name(grid)} was fitted with "
-                              f"({recorded.get('path')}); pass that one, or fit the grid again with dark={dark}")
+                              f"({recorded.get('path')}); pass that one, or fit the grid again with `dark={dark}`")
         return dark
     if not recorded:
         return None
     path = recorded.get("path")
     if not path:
-        raise LfprocError(f"{_name(grid)}: was fitted with a dark frame given as an array; pass it again as dark=")
+        raise LfprocError(f"{_name(grid)}: was fitted with a dark frame given as an array; pass it again as `dark=`")
     if not same_file_content(path, recorded.get("hash")):
         raise LfprocError(f"{_name(grid)}: was fitted with the dark frame {path}, which is missing or has changed "
-                          f"since; pass the same dark frame with dark=..., or fit the grid again")
+                          f"since; pass the same dark frame with `dark=...`, or fit the grid again")
     return path
 
 
@@ -233,7 +233,7 @@ def white_from_folder(folder: str, capture_metadata, capture_path) -> tuple[str,
     from ..io import pick_white_image
 
     if capture_metadata is None:
-        raise LfprocError(f"white_dir={folder}: picks a white image by the metadata of Lytro captures, but "
-                          f"{capture_path or 'no capture'} is not a Lytro file; pass white=... instead")
+        raise LfprocError(f"`white_dir={folder}`: picks a white image by the metadata of Lytro captures, but "
+                          f"{capture_path or 'no capture'} is not a Lytro file; pass `white=...` instead")
     choice = pick_white_image(capture_metadata, folder)
     return choice.path, choice.reason

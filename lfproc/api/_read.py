@@ -93,10 +93,10 @@ def _saved(path, camera) -> LightField:
     lf = LightField.load(path)
     if lf.camera is None:
         if camera is None:
-            raise LfprocError(f"{path}: this light field carries no camera; pass camera=")
+            raise LfprocError(f"{path}: this light field carries no camera; pass `camera=`")
         camera = _camera(camera)
         if camera.m_hat != lf.m_hat:
-            raise LfprocError(f"{path}: has {lf.m_hat}x{lf.m_hat} views but camera= has micro_image_px "
+            raise LfprocError(f"{path}: has {lf.m_hat}x{lf.m_hat} views but `camera=` has micro_image_px "
                               f"{camera.m_hat}; pass the camera it was decoded with")
         inputs = dict(lf.inputs or {})
         if isinstance(camera.source, str) and camera.source.lower().endswith(".toml"):
@@ -143,7 +143,7 @@ def _camera(camera, capture=None) -> Camera:
 
         return read_camera(camera)
     if camera is not None:
-        raise LfprocError(f"camera= must be a Camera or the path of a camera file (TOML, napari-LF's metadata.txt "
+        raise LfprocError(f"`camera=` must be a Camera or the path of a camera file (TOML, napari-LF's metadata.txt "
                           f"or a Lytro file), got {type(camera).__name__}")
     if isinstance(capture, _PATH):
         from ..io import is_lytro_file, lytro_camera, read_lytro_metadata
@@ -151,9 +151,9 @@ def _camera(camera, capture=None) -> Camera:
         if is_lytro_file(os.fspath(capture)):
             built = lytro_camera(read_lytro_metadata(os.fspath(capture)))
             warn(f"{capture}: camera from its metadata, main lens focused at infinity (the metadata has no "
-                 f"focus distance); for other settings pass camera=")
+                 f"focus distance); for other settings pass `camera=`")
             return built.camera
-    raise LfprocError("decoding a capture needs camera= (a Camera or a camera TOML file); only Lytro files carry "
+    raise LfprocError("decoding a capture needs `camera=` (a Camera or a camera TOML file); only Lytro files carry "
                       "their camera in their metadata")
 
 

@@ -102,7 +102,7 @@ class DecodeSetup:
         try:
             views = decoder(capture.data, capture.cfa)
         except LfprocError as exc:
-            raise LfprocError(f"{name}: {exc}") from None
+            raise LfprocError(f"{name}: {exc.marked}") from None
         check_capture_is_not_white(name, views, decoder.views_delivered)
         inputs = dict(self.inputs) if path is None else {"capture": path, **self.inputs}
         return LightField.from_views(views, self.camera, decoder.output_grid, decoder.views_delivered,
@@ -166,10 +166,10 @@ class DecodeSetup:
         except LfprocError as exc:
             if not self.has_white or str(exc).startswith(where):
                 raise
-            raise LfprocError(f"{where}: {exc}") from None
+            raise LfprocError(f"{where}: {exc.marked}") from None
         if not np.asarray(decoder.views_delivered).any():
             raise LfprocError(f"{where}: no view of its micro images can be decoded faithfully (no lit micro "
-                              f"image where the grid puts one); pass the white image of this camera as white=")
+                              f"image where the grid puts one); pass the white image of this camera as `white=`")
         return decoder
 
     def _read_white(self):
@@ -222,8 +222,8 @@ def camera_file(camera) -> str | None:
 
 def _missing_capture(path: str) -> str:
     if os.path.isdir(path):
-        return (f"{path}: is a folder, not a capture file; pass one capture, or for many make one setup with "
-                f"lfproc.prepare_decoding(camera, white=...) and call its .decode(path) for each file")
+        return (f"{path}: is a folder, not a capture file; pass one capture, or `for many make one setup "
+                f"with lfproc.prepare_decoding(camera, white=...) and call its .decode(path) for each file`")
     return f"{path}: no such file; check the path"
 
 

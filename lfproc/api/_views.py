@@ -94,7 +94,7 @@ def view_stack(lf, *, inside_aperture: bool = False) -> ViewStack:
         raise LfprocError("view_stack needs a LightField with its camera (lfproc.read_light_field) to tag the "
                           "views")
     if inside_aperture and lf.camera.main_optics.image_aperture_sine is None:   # no f-number (nor NA)
-        raise LfprocError(f"{lf.camera.source or 'camera'}: inside_aperture=True needs main_lens.f_number in "
+        raise LfprocError(f"{lf.camera.source or 'camera'}: `inside_aperture=True` needs main_lens.f_number in "
                           f"the camera file")
     keep = shown_views(lf, inside_aperture).keep
     source = None if lf.source is None else os.path.abspath(lf.source)

@@ -29,13 +29,13 @@ def run_dask(jobs: list[Job], scheduler, on_result, operators=None) -> None:
     try:
         from distributed import Client, as_completed
     except ImportError:
-        raise LfprocError("scheduler= needs dask.distributed: pip install 'lfproc[distributed]'") from None
+        raise LfprocError("`scheduler=` needs dask.distributed: pip install 'lfproc[distributed]'") from None
     owns_client = isinstance(scheduler, str)
     if owns_client:
         try:
             client = Client(scheduler, timeout="20s")
         except (OSError, TimeoutError, ValueError) as exc:
-            raise LfprocError(f"scheduler={scheduler}: cannot reach the Dask scheduler ({exc}); start it with "
+            raise LfprocError(f"`scheduler={scheduler}`: cannot reach the Dask scheduler ({exc}); start it with "
                               f"'dask scheduler' and check the address") from None
     else:
         client = scheduler

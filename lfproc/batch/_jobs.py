@@ -71,7 +71,8 @@ class Job:
 @dataclass(frozen=True)
 class JobResult:
     """What became of one capture: ``outputs`` are image paths (each with its sidecar ``NAME.json``);
-    ``warnings`` the :class:`lfproc.LfprocWarning` messages its processing gave (each distinct one once)."""
+    ``warnings`` the :class:`lfproc.LfprocWarning` messages its processing gave (each distinct one once);
+    ``error`` and ``warnings`` with their arguments marked (``error.marked``, :mod:`lfproc.errors`)."""
 
     source: str
     status: str                 # "done" | "failed" | "skipped" | "cancelled" (stopped by an interrupt: nothing written)

@@ -151,7 +151,7 @@ def _run_pool(jobs, workers: int, on_result, max_attempts: int, stop: StopSignal
             if attempts[job.source] >= max_attempts:
                 on_result(job, JobResult(job.source, "failed", (), f"{job.source}: the worker process died "
                                                                    f"{attempts[job.source]} times (out of "
-                                                                   f"memory?); try fewer workers="))
+                                                                   f"memory?); try fewer `workers=`"))
             else:
                 queue.appendleft(job)
             return

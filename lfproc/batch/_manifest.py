@@ -173,7 +173,7 @@ def lock_outdir(outdir: str):
         try:
             fh = open(path, "a+", encoding="utf-8")
         except OSError as exc:
-            raise LfprocError(f"{outdir}: cannot write in the output folder ({exc.strerror}); check outdir=...") \
+            raise LfprocError(f"{outdir}: cannot write in the output folder ({exc.strerror}); check `outdir=...`") \
                 from None
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -181,8 +181,8 @@ def lock_outdir(outdir: str):
             fh.seek(0)
             holder = fh.read().strip()
             fh.close()
-            raise LfprocError(f"{outdir}: another lfproc batch{_describe_holder(holder)} is writing to this folder; "
-                              f"wait for it to finish or choose another outdir=...") from None
+            raise LfprocError(f"{outdir}: another batch{_describe_holder(holder)} is writing to this folder; "
+                              f"wait for it to finish or choose another `outdir=...`") from None
         try:  # the lock file may have been removed by a batch that ended while this one opened it
             same = os.fstat(fh.fileno()).st_ino == os.stat(path).st_ino
         except FileNotFoundError:

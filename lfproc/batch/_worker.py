@@ -70,14 +70,15 @@ def shared_operators(job: Job, progress=None):
 
     lf = LightField.load(job.source) if is_lightfield_file(job.source) else decode_setup(job).decode(job.source)
     if lf.camera is None:
-        raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
+        raise LfprocError(f"{job.source}: this light field carries no camera; decode it with `camera=`")
     return prepare_deconvolution(lf, job.deconvolve["z_um"], job.deconvolve["superres"], cache=True,
                                  progress=progress)
 
 
 def run_job(job: Job, before_commit=None, checkpoint=None, operators=None) -> JobResult:
     """Process one capture; any error becomes a ``failed`` result (with its message), never an exception, and
-    every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once).
+    every :class:`lfproc.LfprocWarning` it raises is in the result's ``warnings`` (each distinct one once); both
+    with their arguments marked (``error.marked``, :mod:`lfproc.errors`), for the command to word.
 
     The capture's outputs appear together or not at all (:func:`lfproc.atomic.all_or_nothing`):
     ``before_commit()`` runs when all are written, before the first is renamed into place, and may
@@ -97,7 +98,7 @@ def run_job(job: Job, before_commit=None, checkpoint=None, operators=None) -> Jo
         with all_or_nothing(before_commit, checkpoint), _warnings_into(said):
             lf = LightField.load(job.source) if is_lightfield_file(job.source) else decode_setup(job).decode(job.source)
             if lf.camera is None:
-                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with camera=")
+                raise LfprocError(f"{job.source}: this light field carries no camera; decode it with `camera=`")
             outputs = []
             if job.deconvolve:
                 if operators is None:
@@ -116,7 +117,7 @@ def run_job(job: Job, before_commit=None, checkpoint=None, operators=None) -> Jo
     except Cancelled:
         return JobResult(job.source, "cancelled", (), None, time.perf_counter() - start, tuple(said))
     except LfprocError as exc:
-        return JobResult(job.source, "failed", (), str(exc), time.perf_counter() - start, tuple(said))
+        return JobResult(job.source, "failed", (), exc.marked, time.perf_counter() - start, tuple(said))
     except Exception as exc:  # noqa: BLE001 - isolate the failure, name it as a bug
         return JobResult(job.source, "failed", (), f"{job.source}: unexpected {type(exc).__name__}: {exc} "
                                                    f"(a bug in lfproc; please report it)",
@@ -137,8 +138,8 @@ def _warnings_into(said: list):
             others = []
             for item in caught:
                 if issubclass(item.category, LfprocWarning):
-                    if str(item.message) not in said:
-                        said.append(str(item.message))
+                    if item.message.marked not in said:
+                        said.append(item.message.marked)
                 else:
                     others.append(item)
     for item in others:

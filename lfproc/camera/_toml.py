@@ -47,10 +47,9 @@ def read_camera_file(path: str | os.PathLike) -> dict:
     path = os.fspath(path)
     other = _other_camera_format(path)
     if other is not None:
-        raise LfprocError(f"{path}: {other}, not a camera TOML file; read it with lfproc.read_camera(path), which "
-                          f"reads camera files, napari-LF's metadata.txt and Lytro files (the command lfproc camera "
-                          f"writes a camera file from it)")
-    return read_toml(path, "camera file", "an existing TOML file to camera=")
+        raise LfprocError(f"{path}: {other}, not a camera TOML file; `read it with lfproc.read_camera(path), which "
+                          f"reads camera files, napari-LF's metadata.txt and Lytro files`")
+    return read_toml(path, "camera file", "an existing TOML file to `camera=`")
 
 
 def _other_camera_format(path: str) -> str | None:

@@ -2,7 +2,7 @@
 
 Subcommand modules import numba, OpenCV and OpenImageIO only inside their ``run`` function, so
 ``lfproc geometry`` starts in a fraction of a second. An `LfprocError` becomes one line on stderr and
-exit status 2, its Python argument names reworded as the commands' flags (:mod:`.words`); anything
+exit status 2, the arguments and how-tos its message marks in the command's words (:mod:`.words`); anything
 else is a bug and exits with status 1 and a traceback.
 
 Internal package: not lfproc's API (docs/api.md lists that); its names serve lfproc's own stages, commands and
@@ -57,7 +57,7 @@ def main(argv=None) -> int:
         with _plain_warnings(args.command):
             status = args.func(args)
     except LfprocError as exc:
-        print(f"lfproc {args.command}: error: {command_words(str(exc))}", file=sys.stderr)
+        print(f"lfproc {args.command}: error: {command_words(exc.marked, args.command)}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # `lfproc geometry | head`: the reader left, which is not an error
         import os
@@ -78,7 +78,7 @@ def _plain_warnings(command: str):
     said = set()
 
     def show(message, category, filename, lineno, file=None, line=None):
-        text = f"lfproc {command}: warning: {command_words(str(message))}"
+        text = f"lfproc {command}: warning: {command_words(getattr(message, 'marked', str(message)), command)}"
         if text not in said:
             said.add(text)
             print(text, file=sys.stderr)

@@ -87,24 +87,24 @@ def run(args) -> int:
     check_slice_options(args)
     sources = _without_pictures(args.inputs, batch.expand_inputs(args.inputs))
     to_decode = [s for s in sources if not is_lightfield_file(s)]
-    if to_decode and not (args.calib or args.white or args.white_dir):
+    if to_decode and not (args.grid or args.white or args.white_dir):
         raise LfprocError("give --white WHITE (a white image), --white-dir DIR (a Lytro calibration folder) or "
                           "--calib GRID.json (from lfproc calibrate)")
-    for path, flag in ((args.calib, "--calib"), (args.white, "--white"), (args.camera, "--camera"),
+    for path, flag in ((args.grid, "--calib"), (args.white, "--white"), (args.camera, "--camera"),
                        (args.dark, "--dark")):
         if path is not None and not os.path.isfile(path):
             raise LfprocError(f"{path}: {flag} file not found; check the path")
-    if args.deconvolve and args.z_range is None:
+    if args.deconvolve and args.z_range_um is None:
         raise LfprocError("--deconvolve needs --z-range Z0:Z1:STEP (the volume's planes, micrometres from the native "
                           "object plane)")
     if args.deconvolve and args.aperture is not None:
         raise LfprocError("--aperture shapes refocused slices; with --deconvolve --z-range gives the volume's planes: "
                           "drop --aperture (refocus in another batch)")
-    if args.a is None and args.depth_range is None and args.at is None and args.z_range is None and not args.views:
+    if args.a is None and args.depth_range_mm is None and args.distance_mm is None and args.z_range_um is None and not args.views:
         raise LfprocError("nothing to do: give --a LIST, --depth-range NEAR:FAR, --at MM, --z-range Z0:Z1 "
                           "and/or --views (or --deconvolve --z-range Z0:Z1:STEP)")
-    if args.aperture is not None and args.a is None and args.depth_range is None and args.at is None \
-            and args.z_range is None:
+    if args.aperture is not None and args.a is None and args.depth_range_mm is None and args.distance_mm is None \
+            and args.z_range_um is None:
         raise LfprocError("--aperture shapes the refocused slices: add --a, --depth-range, --at or --z-range")
     if (args.mosaic or args.gif or args.inside_aperture) and not args.views:
         raise LfprocError("--mosaic, --gif and --inside-aperture shape the views: add --views")
@@ -124,31 +124,31 @@ def run(args) -> int:
         camera, camera_toml = LightField.read_camera(sources[0]), ""
         if camera is None:
             raise LfprocError(f"{sources[0]}: this light field carries no camera; give --camera CAM")
-    if args.calib and to_decode:   # a grid of another camera: refused here, naming the camera file
+    if args.grid and to_decode:   # a grid of another camera: refused here, naming the camera file
         from ..grid import LensGrid
         from ..inputs import check_grid_fits_camera
-        check_grid_fits_camera(camera, LensGrid.load(args.calib))
+        check_grid_fits_camera(camera, LensGrid.load(args.grid))
     if args.views:
         check_view_options(args, camera)
-    settings = deconvolution_settings(args, camera) if args.deconvolve else None
-    if not args.deconvolve and (args.a is not None or args.depth_range is not None or args.at is not None
-                                or args.z_range is not None):
-        a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, z_range=args.z_range,
+    settings = deconvolution_settings(args, camera, args.z_range_um) if args.deconvolve else None
+    if not args.deconvolve and (args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None
+                                or args.z_range_um is not None):
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
+                                          max_slices=args.max_slices, z_range=args.z_range_um,
                                           view_extent=aperture_extent(camera, args.aperture)))
     else:
         a_values = ()
     require_output_folder(args.outdir)
     white = _abs(white_image_for(to_decode, args.white, args.white_dir)) if to_decode else None
-    if args.calib and not white:  # decode with the white image the grid file recorded (as lfproc refocus
+    if args.grid and not white:  # decode with the white image the grid file recorded (as lfproc refocus
         from ..grid import LensGrid  # does), and let its file stamp into every capture's fingerprint
 
-        fit = LensGrid.load(args.calib).calibration
+        fit = LensGrid.load(args.grid).calibration
         recorded = fit.white_image if fit is not None else None
         white = os.path.abspath(recorded) if recorded and os.path.isfile(recorded) else None
     stems = unique_stems(sources)
     outdir = os.path.abspath(args.outdir)
-    jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.calib), white, a_values,
+    jobs = [batch.Job(src, stems[src], outdir, camera_toml, _abs(args.grid), white, a_values,
                       bool(args.views), args.format, args.interpolation, args.decode_interpolation, args.demosaic,
                       args.upsample, bool(args.mosaic), bool(args.gif), bool(args.inside_aperture), args.aperture,
                       _abs(args.dark), args.stack if a_values else None, _abs(args.camera),
@@ -160,10 +160,11 @@ def run(args) -> int:
         batch.decode_setup(first_to_decode)
     summed = _summed_views(camera, args.aperture, first_to_decode) if a_values else None
     from ..geometry import summed_view_extent
-    if summed is not None and (args.depth_range is not None or args.at is not None or args.z_range is not None):
+    if summed is not None and (args.depth_range_mm is not None or args.distance_mm is not None
+                               or args.z_range_um is not None):
         # planned again for the DOF of the views the slices will really sum (those that carry light), as refocus does
-        a_values = tuple(slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, z_range=args.z_range,
+        a_values = tuple(slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                          args.integer, max_slices=args.max_slices, z_range=args.z_range_um,
                                           view_extent=summed_view_extent(summed)))
         jobs = [dataclasses.replace(job, refocus_a=a_values) for job in jobs]
     if a_values:   # the workers keep their warnings to themselves: the z-step advice is said here, once
@@ -181,7 +182,7 @@ def run(args) -> int:
                   f"(interrupted or killed); resuming", file=sys.stderr)
         batch.remove_stale_partial_files(outdir)
         manifest = batch.Manifest(outdir, {
-            "camera": _abs(args.camera), "calib": _abs(args.calib), "white": white,
+            "camera": _abs(args.camera), "calib": _abs(args.grid), "white": white,
             "refocus_a": list(a_values), "views": bool(args.views), "format": args.format,
             "interpolation": args.interpolation, "upsample": args.upsample, "mosaic": bool(args.mosaic),
             "gif": bool(args.gif), "inside_aperture": bool(args.inside_aperture), "aperture": args.aperture,
@@ -234,7 +235,7 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     manifest.data.pop("operators", None)      # a record of this run's operators only (none when none are needed)
     operators = _shared_operators(todo[0], manifest) if todo and todo[0].deconvolve else None
     if jobs[0].refocus_a:
-        describe_slices(camera, jobs[0].refocus_a, args.depth_range, max_gap_mm=args.max_gap,
+        describe_slices(camera, jobs[0].refocus_a, args.depth_range_mm, max_gap_mm=args.max_gap,
                         integer=args.integer, max_slices=args.max_slices, view_mask=summed)
     start = time.perf_counter()
     interrupted = False
@@ -242,9 +243,9 @@ def _process(args, jobs, manifest, camera, summed=None) -> int:
     try:
         with tqdm(total=len(todo), unit="capture", disable=None, file=sys.stderr, desc="lfproc batch") as bar:
             def on_result(job, result):
-                # worded for Python by the library: the manifest and stderr use the flags
-                result = dataclasses.replace(result, error=result.error and command_words(result.error),
-                                             warnings=tuple(command_words(line) for line in result.warnings))
+                # marked by the library: the manifest and stderr use the flags
+                result = dataclasses.replace(result, error=result.error and command_words(result.error, "batch"),
+                                             warnings=tuple(command_words(line, "batch") for line in result.warnings))
                 if result.warnings:
                     warned.append((job.source, result.warnings))
                 counts[result.status] += 1

@@ -21,7 +21,7 @@ def register(sub) -> None:
                                                 "generation -stk.lfp with its frame metadata), or napari-LF's "
                                                 "metadata.txt")
     p.add_argument("-o", "--output", required=True, metavar="CAMERA.toml", help="camera file to write")
-    p.add_argument("--focus-distance", type=float, metavar="MM",
+    p.add_argument("--focus-distance", dest="focus_distance_mm", type=float, metavar="MM",
                    help="distance from the sensor the main lens was focused at, in mm (inf allowed); "
                         "default: infinity (b_U = f_U)")
     p.set_defaults(func=run)
@@ -45,7 +45,7 @@ def run(args) -> int:
         raise LfprocError(f"{path}: not a Lytro file (.lfr/.lfp, or .raw with .txt/.json metadata) nor napari-LF "
                           f"metadata (metadata.txt); write other camera files by hand (README)")
     meta = camera_metadata(path)
-    built = lytro_camera(meta, args.focus_distance)
+    built = lytro_camera(meta, args.focus_distance_mm)
     try:
         write_text_atomic(args.output, _lambda_note(meta) + built.to_toml())
     except OSError as exc:
@@ -81,7 +81,7 @@ def _napari(path: str, args) -> int:
     from ..errors import LfprocError
     from ..io import napari_camera
 
-    if args.focus_distance is not None:
+    if args.focus_distance_mm is not None:
         raise LfprocError(f"{path}: --focus-distance is for a camera's main lens; a microscope has none (its slices "
                           f"are placed by z, lfproc refocus --z-range)")
     camera, notes = napari_camera(path)

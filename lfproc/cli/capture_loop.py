@@ -21,7 +21,7 @@ def add_decode_options(p) -> None:
     p.add_argument("--camera", metavar="CAM",
                    help="camera TOML file (not needed for decoded .lfp.npz inputs, which carry theirs, nor for Lytro "
                         "captures, whose metadata gives one with the main lens focused at infinity)")
-    p.add_argument("--calib", metavar="GRID.json", help="lens grid written by lfproc calibrate")
+    p.add_argument("--calib", dest="grid", metavar="GRID.json", help="lens grid written by lfproc calibrate")
     p.add_argument("--white", metavar="WHITE", help="white image (also a Lytro .raw with its metadata): "
                                                     "calibrates the grid (without --calib) and corrects vignetting")
     p.add_argument("--white-dir", metavar="DIR", help="Lytro calibration folder: use the white image of the "
@@ -129,7 +129,7 @@ def prepare_inputs(args, paths, camera=None) -> Inputs:
 
 def captures_of(args) -> list[str]:
     """The capture paths of a command's positional RAW argument(s)."""
-    raw = getattr(args, "raw", None)
+    raw = getattr(args, "capture", None)
     return [raw] if isinstance(raw, str) else list(raw or [])
 
 
@@ -149,7 +149,7 @@ def setup_from_args(args, camera=None, captures=None):
     from ..api import prepare_decoding
 
     camera = camera or camera_from_args(args)
-    setup = prepare_decoding(camera, args.white, args.calib, getattr(args, "dark", None),
+    setup = prepare_decoding(camera, args.white, args.grid, getattr(args, "dark", None),
                              white_dir=getattr(args, "white_dir", None),
                              captures=captures_of(args) if captures is None else list(captures),
                              decode_interpolation=args.decode_interpolation, demosaic=args.demosaic, cache=True,
@@ -220,7 +220,7 @@ def for_each_capture(command: str, paths: list[str], work, total_steps: int | No
                 done += 1
             except LfprocError as exc:
                 failed.append(path)
-                progress.write(f"lfproc {command}: error: {command_words(str(exc))}", file=sys.stderr)
+                progress.write(f"lfproc {command}: error: {command_words(exc.marked, command)}", file=sys.stderr)
     if len(paths) > 1:
         elapsed = time.perf_counter() - start
         summary = f"lfproc {command}: {done} of {len(paths)} captures done in {elapsed:.1f} s"

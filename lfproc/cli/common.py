@@ -79,10 +79,11 @@ def add_slice_options(p) -> None:
     which = p.add_mutually_exclusive_group()
     which.add_argument("--a", metavar="LIST",
                        help="refocus parameters: numbers and ranges START:STOP[:STEP], e.g. --a -0.4:0.7:0.1")
-    which.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
+    which.add_argument("--depth-range", dest="depth_range_mm", metavar="NEAR_MM:FAR_MM",
                        help="render the fewest slices whose depths of field cover this range (FAR may be inf)")
-    which.add_argument("--at", metavar="DISTANCE_MM", type=float, help="the slice focused at this distance (mm)")
-    which.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+    which.add_argument("--at", dest="distance_mm", metavar="DISTANCE_MM", type=float,
+                       help="the slice focused at this distance (mm)")
+    which.add_argument("--z-range", dest="z_range_um", metavar="Z0:Z1[:STEP]",
                        help="microscope cameras: the fewest slices whose depths of field cover Z0..Z1 micrometres "
                             "from the native object plane (positive towards the objective); with STEP an evenly "
                             "spaced z-stack")
@@ -102,7 +103,7 @@ def add_slice_planning_options(p) -> None:
 
 def check_slice_options(args) -> None:
     """Option combinations that make no sense, before any work."""
-    if (args.max_gap or args.integer) and args.depth_range is None:
+    if (args.max_gap or args.integer) and args.depth_range_mm is None:
         raise LfprocError("--max-gap and --integer apply to --depth-range only")
     if args.max_slices < 1:
         raise LfprocError(f"--max-slices must be >= 1, got {args.max_slices}")

@@ -9,7 +9,7 @@ def register(sub) -> None:
     p = sub.add_parser("decode", help="decode a raw capture into a light field file",
                        description="Resample a capture along the fitted lens grid into m x m views and save them "
                                    "with the camera and grid (an uncompressed numpy .npz: numpy.load(path)['views'] reads it).")
-    p.add_argument("raw", metavar="RAW", help="raw capture (camera raw, TIFF, PNG, EXR, Lytro)")
+    p.add_argument("capture", metavar="RAW", help="raw capture (camera raw, TIFF, PNG, EXR, Lytro)")
     add_decode_options(p)
     p.add_argument("-o", "--output", required=True, metavar="LF_FILE", help="output light field file (.lfp.npz)")
     p.set_defaults(func=run)
@@ -17,7 +17,7 @@ def register(sub) -> None:
 
 def run(args) -> int:
     require_output_file(args.output, "-o LF_FILE", "capture.lfp.npz")
-    lf = setup_from_args(args).decode(args.raw)
+    lf = setup_from_args(args).decode(args.capture)
     lf.save(args.output)
     m, _, ny, nx, ch = lf.views.shape
     lit = int((lf.views != 0).any(axis=(2, 3, 4)).sum())

@@ -19,9 +19,9 @@ def register(sub) -> None:
                                    "OUTDIR/STEM_volume.json (z_um per plane, voxel_um, iterations, superres, the "
                                    "optics, provenance). The operators are kept in lfproc's cache (lfproc info "
                                    "--cache): later captures of the same rig and z range reuse them.")
-    p.add_argument("raw", metavar="CAPTURE", help="the capture (or a light field from lfproc decode, .lfp.npz)")
+    p.add_argument("capture", metavar="CAPTURE", help="the capture (or a light field from lfproc decode, .lfp.npz)")
     add_decode_options(p)
-    p.add_argument("--z-range", required=True, metavar="Z0:Z1:STEP",
+    p.add_argument("--z-range", dest="z_um", required=True, metavar="Z0:Z1:STEP",
                    help="the planes, micrometres from the native object plane (positive towards the objective), "
                         "from Z0 to Z1 in steps of STEP, e.g. -100:100:20")
     add_deconvolution_options(p)
@@ -42,13 +42,14 @@ def add_deconvolution_options(p) -> None:
     p.add_argument("--no-filter", action="store_true", help="skip the depth-adaptive anti-aliasing filter")
 
 
-def deconvolution_settings(args, camera) -> dict:
-    """The keyword arguments of :func:`lfproc.deconvolve` the options ask for (``z_um`` from ``--z-range``), checked
-    against the camera before any work: a camera without microscope optics, S beyond m̂, planes out of reach."""
+def deconvolution_settings(args, camera, z_range: str) -> dict:
+    """The keyword arguments of :func:`lfproc.deconvolve` the options ask for (``z_um`` from ``z_range``, the text
+    of ``--z-range``), checked against the camera before any work: a camera without microscope optics, S beyond
+    m̂, planes out of reach."""
     from ..errors import LfprocError
     from ..wave import check_superres, check_z, wave_optics_of
 
-    z = z_planes(args.z_range)
+    z = z_planes(z_range)
     if args.iterations < 1:
         raise LfprocError(f"--iterations must be 1 or more, got {args.iterations}")
     optics = wave_optics_of(camera, camera.source or args.camera or "camera")
@@ -85,11 +86,11 @@ def run(args) -> int:
     from ..outputs import output_stem
 
     require_output_folder(args.outdir)
-    camera = input_camera(args, [args.raw])
-    settings = deconvolution_settings(args, camera)          # refused before any work
-    stem = args.stem or output_stem(args.raw)
-    inputs = prepare_inputs(args, [args.raw], camera)          # calibration last: every cheap check fails first
-    lf = inputs.load(args.raw)
+    camera = input_camera(args, [args.capture])
+    settings = deconvolution_settings(args, camera, args.z_um)          # refused before any work
+    stem = args.stem or output_stem(args.capture)
+    inputs = prepare_inputs(args, [args.capture], camera)          # calibration last: every cheap check fails first
+    lf = inputs.load(args.capture)
     with tqdm(total=len(settings["z_um"]) + args.iterations, unit="step", disable=None, file=sys.stderr,
               desc="lfproc deconvolve", leave=False) as bar:
         def progress(stage, done, total):
@@ -99,7 +100,7 @@ def run(args) -> int:
         volume = deconvolve(lf, **settings, cache=True, progress=progress)
     with all_or_nothing():                                   # both files or neither, even when interrupted
         stack, sidecar = volume.save(args.outdir, stem)
-    print(f"{args.raw}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "
+    print(f"{args.capture}: {volume!r} -> {os.path.join(args.outdir, os.path.basename(stack))}, "
           f"{os.path.basename(sidecar)}")
     return 0
 

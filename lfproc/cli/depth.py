@@ -22,13 +22,13 @@ def register(sub) -> None:
                                    "paper's geometry). Writes STEM_depth.tif (float32 mm, NaN = unknown), "
                                    "STEM_depth_confidence.tif, STEM_allfocus.tif, STEM_depth_preview.png and "
                                    "STEM_depth_points.ply, each with a sidecar; the same metadata embedded.")
-    p.add_argument("raw", nargs="+", metavar="RAW",
+    p.add_argument("capture", nargs="+", metavar="RAW",
                    help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)
-    p.add_argument("--depth-range", metavar="NEAR_MM:FAR_MM",
+    p.add_argument("--depth-range", dest="depth_range_mm", metavar="NEAR_MM:FAR_MM",
                    help="search only these distances from the sensor (FAR may be inf); default: from infinity to "
                         "a = 3 nearer, narrowed to what the scene occupies")
-    p.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+    p.add_argument("--z-range", dest="z_range_um", metavar="Z0:Z1[:STEP]",
                    help="microscope cameras: search only these depths, micrometres from the native object plane "
                         "(positive towards the objective), with STEP the sweep step in um; default: the N_u "
                         "resolvable depths, |a| <= 1")
@@ -45,13 +45,13 @@ def check_depth_options(args, camera):
     from ..depth import MIN_CONFIDENCE, search_range_a
     from ..errors import LfprocError
 
-    depth_range = parse_depth_range(args.depth_range) if args.depth_range is not None else None
-    if args.z_range is not None and depth_range is not None:
+    depth_range = parse_depth_range(args.depth_range_mm) if args.depth_range_mm is not None else None
+    if args.z_range_um is not None and depth_range is not None:
         raise LfprocError("give --depth-range (mm, cameras) or --z-range (um, microscopes), not both")
     if camera.center_index < 1:
         raise LfprocError(f"{camera.source or 'camera'}: depth needs micro images of 3 px or more "
                           f"(decode.micro_image_px >= 3)")
-    if args.z_range is None:
+    if args.z_range_um is None:
         search_range_a(camera, depth_range)   # a range this camera cannot focus fails here
     min_confidence = MIN_CONFIDENCE if args.min_confidence is None else args.min_confidence
     if not 0.0 <= min_confidence <= 1.0:
@@ -64,16 +64,16 @@ def z_sweep(args, camera) -> dict:
     from .. import geometry
     from ..camera import NATIVE_PLANE_UM
     from ..errors import LfprocError
-    if args.z_range is None:
+    if args.z_range_um is None:
         return {}
     geometry.require_space(camera, NATIVE_PLANE_UM, "--z-range (use --depth-range NEAR_MM:FAR_MM for a camera)")
     try:
-        values = [float(v) for v in args.z_range.split(":")]
+        values = [float(v) for v in args.z_range_um.split(":")]
     except ValueError:
         values = []
     if len(values) not in (2, 3) or not all(math.isfinite(v) for v in values) or values[0] == values[1] or (
             len(values) == 3 and values[2] <= 0):
-        raise LfprocError(f"--z-range: {args.z_range!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres with Z0 != Z1 "
+        raise LfprocError(f"--z-range: {args.z_range_um!r} must be Z0:Z1 or Z0:Z1:STEP in micrometres with Z0 != Z1 "
                           f"and STEP > 0, e.g. -50:50 or -50:50:2")
     ends = [float(a) for a in geometry.position_parameter(camera, values[:2])]
     out = {"a_range": (min(ends), max(ends))}
@@ -89,11 +89,11 @@ def run(args) -> int:
     from ..viewpoints import with_aperture
 
     require_output_folder(args.outdir)
-    stems = unique_stems(args.raw)
-    camera = input_camera(args, args.raw)
+    stems = unique_stems(args.capture)
+    camera = input_camera(args, args.capture)
     depth_range, min_confidence, sweep = check_depth_options(args, camera)
     aperture_extent(camera, args.aperture)            # an impossible --aperture fails before any work
-    inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
+    inputs = prepare_inputs(args, args.capture, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
         lf = with_aperture(inputs.load(path), args.aperture)
@@ -103,4 +103,4 @@ def run(args) -> int:
         progress.update(1)
         print(f"{path}: {result.summary()} -> {args.outdir}/{stems[path]}_depth*.*, {stems[path]}_allfocus.tif")
 
-    return for_each_capture("depth", args.raw, work)
+    return for_each_capture("depth", args.capture, work)

@@ -26,7 +26,7 @@ def register(sub) -> None:
                    help="the camera, for pictures whose metadata does not describe it (first-generation stacks) or "
                         "to override it: its f_number, lens pitch and b_U turn lambda into a and mm (e.g. a camera "
                         "file from 'lfproc camera' on a Lytro file of the same camera)")
-    p.add_argument("--focus-distance", type=float, metavar="MM",
+    p.add_argument("--focus-distance", dest="focus_distance_mm", type=float, metavar="MM",
                    help="distance from the sensor the main lens was focused at (mm): b_U by the thin-lens equation "
                         "instead of the metadata's infinityLambda or the camera file's b_U")
     p.add_argument("--views-jpeg", action="store_true",
@@ -45,9 +45,9 @@ def run(args) -> int:
 
     require_output_folder(args.outdir)   # before any input is read
     camera = None
-    if args.focus_distance is not None and not (args.focus_distance > 0):
+    if args.focus_distance_mm is not None and not (args.focus_distance_mm > 0):
         raise LfprocError(f"--focus-distance must be a positive distance in mm (inf allowed), got "
-                          f"{args.focus_distance:g}")
+                          f"{args.focus_distance_mm:g}")
     if args.camera is not None:
         from ..camera import Camera
         from ..io import camera_lambda_map
@@ -59,7 +59,7 @@ def run(args) -> int:
         if not (has_container_extension(path) or is_container(path)):
             raise LfprocError(f"{path}: not a Lytro picture (.lfp/.lfr container); lfproc export reads processed "
                               f"Lytro pictures, use lfproc refocus/views/depth for captures")
-    if args.focus_distance is not None and camera is None:   # every picture must know its camera: before any output
+    if args.focus_distance_mm is not None and camera is None:   # every picture must know its camera: before any output
         from ..io import open_picture, picture_lambda_map
 
         for path in args.pictures:
@@ -71,7 +71,7 @@ def run(args) -> int:
     stems = unique_stems(args.pictures)
     for path in args.pictures:
         written = export_picture(path, args.outdir, stems[path], tiff=args.tiff, camera=camera,
-                                 camera_path=args.camera, focus_distance_mm=args.focus_distance,
+                                 camera_path=args.camera, focus_distance_mm=args.focus_distance_mm,
                                  views_jpeg=args.views_jpeg, wobble=args.wobble)
         print(f"{path}: {len(written)} images -> {os.path.abspath(args.outdir)}")
     return 0

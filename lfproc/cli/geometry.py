@@ -17,14 +17,14 @@ def register(sub) -> None:
                                    "those disparities between views G apart. Negative lists work with or without "
                                    "'=': --a -1:1 or --a=-1:1.")
     p.add_argument("--camera", required=True, metavar="CAM", help="camera TOML file")
-    p.add_argument("--calib", metavar="GRID.json",
+    p.add_argument("--calib", dest="grid", metavar="GRID.json",
                    help="the grid from 'lfproc calibrate': m̂ from its measured micro image pitch and the views "
                         "decoding delivers from its white image (read once, then from the decoder cache), so that "
                         "every number is the one refocus writes into its sidecars; without it m̂ is the camera "
                         "file's (nominal, unless [decode] micro_image_px states it) and all views count")
     p.add_argument("--a", default=None, metavar="LIST",
                    help="refocus parameters: numbers and inclusive ranges START:STOP[:STEP] (default 0:5)")
-    p.add_argument("--z-range", metavar="Z0:Z1[:STEP]",
+    p.add_argument("--z-range", dest="z_range_um", metavar="Z0:Z1[:STEP]",
                    help="microscope cameras: the fewest slices whose depths of field cover Z0..Z1 micrometres from "
                         "the native object plane (positive towards the objective), or with STEP an evenly spaced "
                         "stack")
@@ -51,21 +51,21 @@ def run(args) -> int:
     from ..errors import LfprocError
 
     camera = Camera.from_toml(args.camera)
-    if args.a is not None and args.z_range is not None:
+    if args.a is not None and args.z_range_um is not None:
         raise LfprocError("give --a or --z-range, not both")
-    if args.z_range is None:
+    if args.z_range_um is None:
         a_values = parse_number_list("0:5" if args.a is None else args.a, "--a")
     if not (args.wavelength_nm > 0 and math.isfinite(args.wavelength_nm)):
         raise LfprocError(f"--wavelength-nm must be a positive number, got {args.wavelength_nm}")
     if args.gap == 0:
         raise LfprocError("--gap must be a non-zero number of views (e.g. 1, or -6 as in PlenoptiSign)")
     disparities = None if args.disparity is None else parse_number_list(args.disparity, "--disparity")
-    if args.calib is not None:
-        camera, aperture = grid_geometry_inputs(camera, args.calib, args.aperture)
+    if args.grid is not None:
+        camera, aperture = grid_geometry_inputs(camera, args.grid, args.aperture)
     else:
         aperture = synthetic_aperture(camera, args.aperture)
-    if args.z_range is not None:      # planned with the m̂ the slices are refocused with
-        a_values = [float(a) for a in z_range_parameters(camera, args.z_range)]
+    if args.z_range_um is not None:      # planned with the m̂ the slices are refocused with
+        a_values = [float(a) for a in z_range_parameters(camera, args.z_range_um)]
     real = getattr(args, "real_rays", False)
     if real and not geometry.traces_real_rays(camera):
         raise LfprocError(f"{args.camera}: --real-rays needs the main lens's surfaces; add main_lens.prescription "
@@ -120,7 +120,7 @@ def synthetic_aperture(camera, f_number) -> dict:
 def nominal_m_hat_note(args, camera) -> None:
     """One line on stderr, once the table is sure to follow, when m̂ is the nominal one a white image would
     override (neither stated in the camera file nor measured: no ``--calib``)."""
-    if args.calib is None and not camera.micro_image_px_given:
+    if args.grid is None and not camera.micro_image_px_given:
         print(f"lfproc geometry: note: m̂ {camera.m_hat} is the camera file's nominal one ({camera.pitch_px:.3f} px a "
               f"lens); decoding with a white image takes it from the measured pitch: --calib GRID.json gives the "
               f"numbers refocus writes", file=sys.stderr)

@@ -27,6 +27,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from ..io import describe_file
     from .common import dumps_strict
+    from .words import command_words
 
     if args.samples:
         return _print_samples(args.json)
@@ -36,7 +37,9 @@ def run(args) -> int:
         from ..errors import LfprocError
         raise LfprocError("lfproc info needs a FILE (or --samples to list the bundled samples, --cache to show the "
                           "decoder cache)")
-    info = describe_file(args.file)
+    # a description's notes mark what Python calls would do: said here as the commands do it
+    info = {key: command_words(value, "info") if isinstance(value, str) else value
+            for key, value in describe_file(args.file).items()}
     if args.json:
         sys.stdout.write(dumps_strict(info, indent=1) + "\n")
         return 0

@@ -18,7 +18,7 @@ def register(sub) -> None:
                                    "written with a sidecar (source, a, distance_mm, near_mm, far_mm, dof_mm), the "
                                    "same fields embedded in the image metadata. Prints one line per slice: a, the "
                                    "distance it focuses at and its depth of field.")
-    p.add_argument("raw", nargs="+", metavar="RAW",
+    p.add_argument("capture", nargs="+", metavar="RAW",
                    help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)
     add_slice_options(p).required = True
@@ -57,8 +57,8 @@ def run(args) -> int:
     check_render_options(args)
     check_slice_options(args)
     require_output_folder(args.outdir)
-    stems = unique_stems(args.raw)
-    camera = input_camera(args, args.raw)
+    stems = unique_stems(args.capture)
+    camera = input_camera(args, args.capture)
     plans, described = {}, set()
 
     def slices_for(camera, view_mask=None):
@@ -66,19 +66,20 @@ def run(args) -> int:
         extent = summed_extent(camera, args.aperture, view_mask)
         key = (camera.to_toml(), extent)
         if key not in plans:
-            plans[key] = slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                          max_slices=args.max_slices, view_extent=extent, z_range=args.z_range)
+            plans[key] = slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                          args.integer, max_slices=args.max_slices, view_extent=extent,
+                                          z_range=args.z_range_um)
         return key, plans[key]
 
     def describe_once(key, camera, values, view_mask):
         """The slice table, printed when the first capture with this camera has rendered."""
         if key not in described:
             described.add(key)
-            describe_slices(camera, values, args.depth_range, max_gap_mm=args.max_gap, integer=args.integer,
+            describe_slices(camera, values, args.depth_range_mm, max_gap_mm=args.max_gap, integer=args.integer,
                             max_slices=args.max_slices, view_mask=view_mask)
 
     a_values = slices_for(camera)[1]   # every list (and --aperture) is checked before any capture is read
-    inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
+    inputs = prepare_inputs(args, args.capture, camera)   # calibration last: every cheap check fails first
 
     def work(path, progress):
         lf = with_aperture(inputs.load(path), args.aperture)
@@ -92,7 +93,7 @@ def run(args) -> int:
         print(f"{path}: {len(values)} slice(s) -> {os.path.dirname(written[0]) or '.'}/{stems[path]}_*"
               + (f"; z-stack -> {stack_file}" if stack_file else ""))
 
-    return for_each_capture("refocus", args.raw, work, total_steps=len(args.raw) * len(a_values))
+    return for_each_capture("refocus", args.capture, work, total_steps=len(args.capture) * len(a_values))
 
 
 def summed_extent(camera, aperture, view_mask=None):

@@ -21,7 +21,7 @@ def register(sub) -> None:
                                    "network access. Several captures: one page each in OUTDIR/STEM/ plus an index. "
                                    "Without --a/--depth-range/--at the slices are planned for the depths the scene "
                                    "shows (its depth map, as lfproc depth computes it).")
-    p.add_argument("raw", nargs="+", metavar="INPUT",
+    p.add_argument("capture", nargs="+", metavar="INPUT",
                    help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz); "
                         "processed Lytro pictures get a page of their focus stack")
     add_decode_options(p)
@@ -52,15 +52,16 @@ def run(args) -> int:
     require_output_folder(args.outdir)
     if args.serve:
         make_server(".", args.port).server_close()  # the port is free: checked before any work
-    stems = unique_stems(args.raw)
-    camera = input_camera(args, args.raw)
-    chosen = args.a is not None or args.depth_range is not None or args.at is not None or args.z_range is not None
+    stems = unique_stems(args.capture)
+    camera = input_camera(args, args.capture)
+    chosen = (args.a is not None or args.depth_range_mm is not None or args.distance_mm is not None
+              or args.z_range_um is not None)
     extent = aperture_extent(camera, args.aperture)   # an impossible --aperture fails before any work
     if chosen:  # every list is checked before any capture is read
-        slice_parameters(camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                         max_slices=args.max_slices, view_extent=extent, z_range=args.z_range)
-    inputs = prepare_inputs(args, args.raw, camera)   # calibration last: every cheap check fails first
-    several = len(args.raw) > 1
+        slice_parameters(camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap, args.integer,
+                         max_slices=args.max_slices, view_extent=extent, z_range=args.z_range_um)
+    inputs = prepare_inputs(args, args.capture, camera)   # calibration last: every cheap check fails first
+    several = len(args.capture) > 1
     options = PageOptions(min_long_side=args.display_size, upscale=args.upscale)
     pages = {}
 
@@ -68,8 +69,8 @@ def run(args) -> int:
         lf = with_aperture(inputs.load(path), args.aperture)
         a_values = None
         if chosen:
-            a_values = slice_parameters(lf.camera, args.a, args.depth_range, args.at, args.max_gap, args.integer,
-                                        max_slices=args.max_slices, z_range=args.z_range,
+            a_values = slice_parameters(lf.camera, args.a, args.depth_range_mm, args.distance_mm, args.max_gap,
+                                        args.integer, max_slices=args.max_slices, z_range=args.z_range_um,
                                         view_extent=summed_extent(lf.camera, args.aperture, lf.view_mask))
             check_view_coverage(lf.camera, a_values, lf.lens_shape, path, lf.view_mask)
         folder = os.path.join(args.outdir, stems[path]) if several else args.outdir
@@ -81,10 +82,10 @@ def run(args) -> int:
         progress.update(1)
         print(f"{path}: viewer page -> {pages[path]}")
 
-    status = for_each_capture("viewer", args.raw, work)
+    status = for_each_capture("viewer", args.capture, work)
     if several and pages:
         index = write_index(args.outdir, [page_entry(args.outdir, os.path.dirname(pages[p]))
-                                          for p in args.raw if p in pages])
+                                          for p in args.capture if p in pages])
     else:
         index = next(iter(pages.values()), None)
     if index is None:
@@ -99,10 +100,10 @@ def _pictures(args) -> bool:
     """Processed Lytro pictures get a focus stack page (``viewer/_picture.py``); True when they were the inputs."""
     from ..io import is_picture_file
 
-    pictures = [path for path in args.raw if os.path.isfile(path) and is_picture_file(path)]
+    pictures = [path for path in args.capture if os.path.isfile(path) and is_picture_file(path)]
     if not pictures:
         return False
-    if len(pictures) != len(args.raw):
+    if len(pictures) != len(args.capture):
         raise LfprocError(f"{pictures[0]}: a processed Lytro picture among captures; view pictures and captures in "
                           f"separate runs")
     from ..outputs import unique_stems
@@ -111,7 +112,7 @@ def _pictures(args) -> bool:
     require_output_folder(args.outdir)
     if args.serve:
         make_server(".", args.port).server_close()
-    index = build_picture_pages(args.raw, args.outdir, unique_stems(args.raw))
+    index = build_picture_pages(args.capture, args.outdir, unique_stems(args.capture))
     print(f"viewer: {os.path.abspath(index)}")
     if args.serve:
         serve_until_interrupted(os.path.abspath(args.outdir), args.port)

@@ -11,7 +11,7 @@ def register(sub) -> None:
     p = sub.add_parser("views", help="extract the viewpoint images of captures",
                        description="Decode each capture and write one image per view with a sidecar (source, view "
                                    "[ky, kx], position_mm [y, x], tilt_deg [y, x]), the same embedded in the image.")
-    p.add_argument("raw", nargs="+", metavar="RAW",
+    p.add_argument("capture", nargs="+", metavar="RAW",
                    help="captures (camera raw, TIFF/PNG/EXR, Lytro) or light fields from lfproc decode (.lfp.npz)")
     add_decode_options(p)
     add_output_folder_option(p)
@@ -47,10 +47,10 @@ def run(args) -> int:
     from ..outputs import unique_stems
 
     require_output_folder(args.outdir)
-    stems = unique_stems(args.raw)
-    camera = input_camera(args, args.raw)
+    stems = unique_stems(args.capture)
+    camera = input_camera(args, args.capture)
     check_view_options(args, camera)
-    inputs = prepare_inputs(args, args.raw, camera)
+    inputs = prepare_inputs(args, args.capture, camera)
     per_capture = int(geometry.views_inside_aperture(camera).sum()) if args.inside_aperture else camera.m_hat ** 2
 
     def work(path, progress):
@@ -62,4 +62,4 @@ def run(args) -> int:
         shown = shown_views(lf, args.inside_aperture)
         print(f"{path}: {shown.summary()}; {len(written)} file(s) -> {args.outdir}/{stems[path]}_*")
 
-    return for_each_capture("views", args.raw, work, total_steps=len(args.raw) * per_capture)
+    return for_each_capture("views", args.capture, work, total_steps=len(args.capture) * per_capture)

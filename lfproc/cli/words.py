@@ -1,91 +1,90 @@
-"""The commands' words for the library's: a message the library words for a Python caller (``white=``,
-``aperture=2.8``) is reworded here, where a command reports it, with the flags its user typed (``--white
-WHITE``, ``--aperture 2.8``).
+"""The commands' words for the library's marks: a library message marks each argument it names (```white=```,
+```aperture=2.8```) and each how-to in Python (```lfproc.calibrate_white(white, camera).save(path)```)
+(:mod:`lfproc.errors`); a command reports it with its own words.
 
-The library names an argument as ``name=`` in four forms, each with its command-line reading:
+An argument becomes the command's option of that name (the argparse option whose ``dest`` is the argument's
+name, so a new option needs no edit here), in the form the mark gives:
 
 =====================  ==========================  ===========================================
-library (Python)       command                     e.g.
+mark (Python)          command                     e.g.
 =====================  ==========================  ===========================================
-``name=``              the flag                    ``decode with camera=`` → ``--camera``
-``name=...``           the flag and its metavar    ``pass white=...`` → ``--white WHITE``
-``name=VALUE``         the flag and the value      ``dark=d.tif`` → ``--dark d.tif``
-``name=True``          the flag (a switch)         ``white_is_white=True`` → ``--white-is-white``
+```name=```            the flag                    ``decode with camera=`` → ``--camera``
+```name=...```         the flag and its metavar    ``pass white=...`` → ``--white WHITE``
+```name=VALUE```       the flag and the value      ``dark=d.tif`` → ``--dark d.tif``
+```name=True```        the flag (a switch)         ``white_is_white=True`` → ``--white-is-white``
 =====================  ==========================  ===========================================
 
-A few messages name a command's positional argument (``WHITE`` of ``lfproc calibrate``) where Python
-has a keyword, or tell a Python caller how to make a lens grid (``lfproc.calibrate_white``) where a command's
-user runs ``lfproc calibrate``: :data:`PHRASES` words those whole, before the table is applied.
+A positional argument is named by its metavar (``WHITE`` of ``lfproc calibrate``). An argument the command has
+no option for, and a how-to :data:`HOW_TO` does not list, stay in Python words.
 """
 
 from __future__ import annotations
 
-import re
+import functools
 
-#: Python argument -> (the commands' flag, or None for a positional argument; the metavar)
-FLAGS = {
-    "aperture": ("--aperture", "F"),
-    "background": ("--background", "B"),
-    "camera": ("--camera", "CAM.toml"),
-    "capture": (None, "RAW"),
-    "dark": ("--dark", "DARK"),
-    "decode_interpolation": ("--decode-interpolation", "METHOD"),
-    "demosaic": ("--demosaic", "METHOD"),
-    "depth_range_mm": ("--depth-range", "NEAR_MM:FAR_MM"),
-    "distance_mm": ("--at", "MM"),
-    "focus_distance_mm": ("--focus-distance", "MM"),
-    "gap": ("--gap", "G"),
-    "grid": ("--calib", "GRID.json"),
-    "inside_aperture": ("--inside-aperture", None),
-    "interpolation": ("--interpolation", "METHOD"),
-    "iterations": ("--iterations", "N"),
-    "min_confidence": ("--min-confidence", "C"),
-    "outdir": ("-o", "OUTDIR"),
-    "port": ("--port", "PORT"),
-    "scheduler": ("--scheduler", "ADDRESS"),
-    "superres": ("--superres", "S"),
-    "tolerance": ("--tolerance", "T"),
-    "white": ("--white", "WHITE"),
-    "white_dir": ("--white-dir", "DIR"),
-    "white_is_white": ("--white-is-white", None),
-    "workers": ("--workers", "N"),
-    "z_range_um": ("--z-range", "Z0:Z1"),
-    "z_um": ("--z-range", "Z0:Z1"),
-}
+from ..errors import ARGUMENT, MARK
 
-#: whole phrases the commands word otherwise than the table would (their positional WHITE; a warning that
-#: also gave the Python spelling before the library spoke Python)
-PHRASES = {
+#: the API's how-tos (marked in library messages) -> what a command's user runs instead
+HOW_TO = {
     "lfproc.calibrate_white(white, camera).save(path)": "lfproc calibrate WHITE --camera CAM -o GRID.json",
     "lfproc.read_light_field(...).save(path)": "'lfproc decode'",
-    "check the grid (lfproc.calibrate_white)": "check the grid (lfproc calibrate)",
-    "(a LensGrid from lfproc.calibrate_white, or its saved file)": "(from lfproc calibrate)",
-    "as white=, or pass white_is_white=True": "as WHITE, or pass --white-is-white",
-    "pass the white image as white= and": "pass the white image as WHITE (--white) and",
-    "say so with white_is_white=True": "say so with --white-is-white (white_is_white=True)",
+    "lfproc.calibrate_white": "lfproc calibrate",
+    "a LensGrid from lfproc.calibrate_white, or its saved file": "from lfproc calibrate",
+    "lfproc.sample_path() is their folder": "lfproc info --samples",
+    "lfproc.read_camera(path) of a Lytro file of the same camera": "'lfproc camera' on a Lytro file of the same "
+                                                                   "camera",
+    "lfproc.read_camera(path) reads it from a Lytro file's metadata": "'lfproc camera' writes it from a Lytro "
+                                                                      "file's metadata",
+    "read it with lfproc.read_camera(path), which reads camera files, napari-LF's metadata.txt and Lytro files":
+        "write a camera file from it with 'lfproc camera'",
+    "lfproc.outputs.export_picture": "'lfproc export'",
+    "lfproc.outputs.export_picture(..., camera=...) gives them": "'lfproc export --camera CAM.toml' gives them",
+    "lfproc.read_camera": "lfproc camera",
+    "lfproc.read_camera(path) reads it as a camera": "lfproc.read_camera reads it as a camera, the command lfproc "
+                                                     "camera writes a camera file from it",
+    "a lens grid, the file lfproc.calibrate_white(...).save(path) writes: pass it as grid=": "a lens grid, lfproc "
+                                                                                         "calibrate's GRID.json: "
+                                                                                         "pass it as --calib",
+    "read it with lfproc.read_light_field": "use lfproc refocus, views or depth on it",
+    "for many make one setup with lfproc.prepare_decoding(camera, white=...) and call its .decode(path) for each "
+    "file": "for many, give lfproc batch their folder",
 }
 
-_WORDS = re.compile("|".join(re.escape(p) for p in PHRASES) + r"|(?<![\w./=-])("
-                    + "|".join(sorted(FLAGS, key=len, reverse=True)) + r")=(\.\.\.|True\b)?")
+
+def command_words(marked: str, command: str) -> str:
+    """``marked`` (a library message with its marks, ``error.marked``) as ``lfproc command`` reports it."""
+    options = _options(command)
+
+    def word(match) -> str:
+        text = match.group(1)
+        argument = ARGUMENT.fullmatch(text)
+        if argument is None:
+            return HOW_TO.get(text, text)
+        name, value = argument.groups()
+        return _flag(options[name], value) if name in options else text
+
+    return MARK.sub(word, marked)
 
 
-def command_words(message: str) -> str:
-    """``message`` (worded for a Python caller) with each argument named as the commands name it."""
-    return _WORDS.sub(_flag, message)
-
-
-def _flag(match) -> str:
-    if match.group(1) is None:
-        return PHRASES[match.group(0)]
-    flag, metavar = FLAGS[match.group(1)]
-    form = match.group(2)
-    rest = match.string[match.end():match.end() + 1]
-    if form == "...":
-        return metavar if flag is None else f"{flag} {metavar}"
-    if form == "True":
+def _flag(action, value: str) -> str:
+    """How ``lfproc COMMAND`` names its option ``action`` given the value ``value`` (the mark's form)."""
+    metavar = action.metavar or action.dest.upper()
+    if not action.option_strings:
+        return metavar                                # a positional argument: WHITE, RAW
+    flag = action.option_strings[0]
+    if value in ("", "True"):
         return flag
-    if flag is None:
-        return metavar
-    if rest and not rest.isspace() and rest not in ",;)":
-        return f"{flag} "        # a value follows: ``--dark d.tif``
-    return flag
+    return f"{flag} {metavar if value == '...' else value}"
+
+
+@functools.lru_cache(maxsize=None)
+def _options(command: str) -> dict:
+    """``lfproc command``'s arguments by ``dest`` (the first option of a ``dest`` when two share it)."""
+    from . import build_parser
+
+    parser = build_parser()
+    commands = next(action for action in parser._actions if action.dest == "command").choices
+    options = {}
+    for action in commands[command]._actions:
+        options.setdefault(action.dest, action)
+    return options

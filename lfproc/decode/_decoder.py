@@ -213,5 +213,5 @@ def decode_capture(capture, white, grid: LensGrid, camera, **options):
     try:
         views = decoder(capture.data, capture.cfa)
     except LfprocError as exc:
-        raise LfprocError(f"{capture.source}: {exc}") from None
+        raise LfprocError(f"{capture.source}: {exc.marked}") from None
     return LightField.from_views(views, camera, decoder.output_grid, decoder.views_delivered, decoder.view_centre)

@@ -57,7 +57,7 @@ def largest_whole_block(whole: np.ndarray, even_start_row: bool) -> tuple[int, i
             q0 += 1
         else:
             q1 -= 1
-    raise LfprocError("no micro lens lies wholly on the sensor; check the grid (lfproc.calibrate_white) and the "
+    raise LfprocError("no micro lens lies wholly on the sensor; check the grid (`lfproc.calibrate_white`) and the "
                       "camera's pitch")
 
 

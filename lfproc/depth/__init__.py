@@ -13,7 +13,7 @@ tests, and may change without notice.
 
 from ._confidence import MIN_CONFIDENCE, UNLIT_FRACTION, lit_lenses
 from ._estimate import depth
-from ._result import METHOD, DepthMap
+from ._result import DepthMap
 from ._outputs import summary_line
 from ._preview import preview_image, write_preview
 from ._search import search_range_a

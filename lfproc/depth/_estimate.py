@@ -213,7 +213,7 @@ def depth(lf, *, depth_range_mm=None, a_range=None, step=None, view_step=None, c
     camera = camera if camera is not None else getattr(lf, "camera", None)
     if camera is None:
         raise LfprocError("depth needs the light field's camera (distances come from its geometry); "
-                          "pass camera=, or a LightField that carries it")
+                          "pass `camera=`, or a LightField that carries it")
     if views.ndim != 5 or views.shape[0] != views.shape[1] or views.shape[0] % 2 == 0:
         raise LfprocError(f"depth needs views shaped (m, m, Ny, Nx, C) with m odd, got {views.shape}")
     m, _, ny, nx, _ = views.shape

@@ -58,10 +58,10 @@ def search_range_a(camera, depth_range_mm=None, a_range=None) -> tuple[float, fl
         from .. import geometry
 
         if camera is None:
-            raise LfprocError("a depth range in mm needs the light field's camera; decode with camera=")
+            raise LfprocError("a depth range in mm needs the light field's camera; decode with `camera=`")
         from ..camera import SENSOR_MM
 
-        geometry.require_space(camera, SENSOR_MM, "depth_range_mm= (for micrometres give z_range_um=)")
+        geometry.require_space(camera, SENSOR_MM, "`depth_range_mm=` (for micrometres give `z_range_um=`)")
         near, far = (float(v) for v in depth_range_mm)
         if not (near > 0 and far >= near) or math.isnan(far):
             raise LfprocError(f"depth range {near}:{far} mm is not a valid range; give NEAR:FAR with 0 < NEAR <= FAR")

@@ -114,13 +114,13 @@ def aperture_views(camera: Camera, f_number: float) -> np.ndarray:
         f = math.nan
     widest, narrowest = aperture_limits(camera)
     if not math.isfinite(f) or f <= 0:
-        raise LfprocError(f"aperture={f_number!r} is not an f-number; give one from f/{widest:.3g} to "
-                          f"f/{narrowest:.3g}, e.g. aperture={min(max(2 * widest, 4.0), narrowest):g}")
+        raise LfprocError(f"`aperture={f_number!r}` is not an f-number; give one from f/{widest:.3g} to "
+                          f"f/{narrowest:.3g}, e.g. `aperture={min(max(2 * widest, 4.0), narrowest):g}`")
     if f < widest * (1.0 - 1e-9):
-        raise LfprocError(f"aperture={f:g} is wider than the main lens (f/{widest:.3g}); give f/{widest:.3g} "
+        raise LfprocError(f"`aperture={f:g}` is wider than the main lens (f/{widest:.3g}); give f/{widest:.3g} "
                           f"or narrower (up to f/{narrowest:.3g}, one view)")
     if f > narrowest * (1.0 + 1e-9):
-        raise LfprocError(f"aperture={f:g} is narrower than one view (f/{narrowest:.3g} on this camera); give "
+        raise LfprocError(f"`aperture={f:g}` is narrower than one view (f/{narrowest:.3g} on this camera); give "
                           f"f/{widest:.3g} to f/{narrowest:.3g}")
     pos, _, length, _ = _pupil(camera)
     radius = length / (2.0 * f)

@@ -81,7 +81,7 @@ def _check_request(camera: Camera, near: float, far: float, max_gap: float, view
         raise LfprocError("depth-range planning needs micro images of 3 px or more (micro_image_px >= 3)")
     if _view_extent(camera, view_extent) == 0:
         raise LfprocError("depth-range planning needs more than the central view summed (one view does not "
-                          "refocus); give a wider aperture=")
+                          "refocus); give a wider `aperture=`")
     if not (space.holds(near) and space.holds(far) and (near == far or space.is_nearer(near, far))):
         raise LfprocError(f"{what}{near}:{far} {space.symbol} is not a valid range; give NEAR:FAR {space.origin}, "
                           f"NEAR at or nearer than FAR")

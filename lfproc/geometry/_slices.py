@@ -317,7 +317,7 @@ def refocus_parameter(camera: Camera, distance_mm) -> np.ndarray | float:
     float or ndarray
         ``a`` of the same shape.
     """
-    require_space(camera, SENSOR_MM, "a distance in mm (distance_mm=)")
+    require_space(camera, SENSOR_MM, "a distance in mm (`distance_mm=`)")
     return camera.main_optics.refocus_parameter(camera, distance_mm)
 
 

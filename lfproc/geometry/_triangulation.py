@@ -89,7 +89,7 @@ def triangulate(camera: Camera, disparity_px, gap=1, a=0.0) -> Triangulation:
     g = np.asarray(gap, dtype=np.float64)
     a = np.asarray(a, dtype=np.float64)
     if np.any(g == 0) or not np.all(np.isfinite(g)):
-        raise LfprocError("the view gap G must be a non-zero number of views (e.g. gap=1)")
+        raise LfprocError("the view gap G must be a non-zero number of views (e.g. `gap=1`)")
     if not np.all(np.isfinite(a)):
         raise LfprocError("the slice a that disparities are measured against must be finite")
     if np.any(np.isinf(dx)):

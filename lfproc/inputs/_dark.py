@@ -45,7 +45,7 @@ def subtract_dark(image, dark, what: str = "capture"):
                           f"{image.source} has {image.cfa}; take the dark frame with the same camera")
     if what == "white image" and float(np.mean(dark.data, dtype=np.float64)) > float(np.mean(image.data, dtype=np.float64)):
         raise LfprocError(f"{image.source} and {dark.source} look swapped: the dark frame {dark.source} is brighter "
-                          f"on average than the white image {image.source}; pass the white image as white= "
-                          f"and the dark frame (lens cap on) as dark=")
+                          f"on average than the white image {image.source}; pass the white image as `white=` "
+                          f"and the dark frame (lens cap on) as `dark=`")
     data = np.subtract(image.data, dark.data, dtype=np.float32)
     return Capture(data=data, cfa=image.cfa, source=image.source)

@@ -128,10 +128,10 @@ def check_white_is_white(source: str, image, cfa: str, grid, *, white_is_white: 
         raise LfprocError(f"{source}: this is a capture of a scene, not a white image: its micro images differ from "
                           f"their neighbours (texture ratio {evidence.texture:.3f}; real white images give < 0.01, "
                           f"refused above {TEXTURE_LIMIT}); give a white image (a uniform bright surface, e.g. through "
-                          f"a diffuser) as white=, or pass white_is_white=True if this is one")
+                          f"a diffuser) as `white=`, or pass `white_is_white=True` if this is one")
     if evidence.doubts:
         warn(f"{source}: may be a capture of a scene, not a white image: {'; and '.join(evidence.doubts)}; "
-             f"if it is a white image, say so with white_is_white=True")
+             f"if it is a white image, say so with `white_is_white=True`")
     return evidence
 
 
@@ -324,5 +324,5 @@ def check_capture_is_not_white(source: str, views: np.ndarray, view_mask=None) -
     if flatness < WHITE_FLATNESS:
         raise LfprocError(f"{source}: this looks like a white image, not a capture: decoded, its lenses show a smooth "
                           f"field with no scene ({100 * flatness:.2f} % lens-to-lens variation, captures show "
-                          f">= {100 * WHITE_FLATNESS:.1f} %); pass the capture as capture= and the white image as "
-                          f"white=")
+                          f">= {100 * WHITE_FLATNESS:.1f} %); pass the capture as `capture=` and the white image as "
+                          f"`white=`")

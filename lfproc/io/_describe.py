@@ -70,10 +70,9 @@ def _refuse_json(path: str) -> None:
     if raw is not None:
         what = f" (the metadata of the Lytro raw {raw}: pass that)"
     elif is_napari_metadata(path):
-        what = " (napari-LF's metadata of a microscope: lfproc.read_camera reads it as a camera, the command " \
-               "lfproc camera writes a camera file from it)"
+        what = " (napari-LF's metadata of a microscope: `lfproc.read_camera(path) reads it as a camera`)"
     elif isinstance(document, dict) and "pitch_px" in document:
-        what = " (a lens grid, lfproc calibrate's GRID.json: pass it as grid=)"
+        what = " (`a lens grid, the file lfproc.calibrate_white(...).save(path) writes: pass it as grid=`)"
     elif isinstance(document, dict) and ("provenance" in document or "source" in document):
         what = " (the sidecar of an output lfproc wrote: the metadata of the image beside it, readable as it is)"
     else:
@@ -344,7 +343,7 @@ def lfproc_product(tags: dict) -> str | None:
     depth map, a preview picture of one of these, an image exported from a processed Lytro picture); None for
     anything else lfproc wrote (a simulated capture or white image is still a capture)."""
     if _is_picture_export(tags):
-        return f"image of a processed Lytro picture ({tags['kind']}), exported by lfproc export"
+        return f"image of a processed Lytro picture ({tags['kind']}), exported by `lfproc.outputs.export_picture`"
     if "preview" in tags:
         return "preview picture"
     if "a" in tags:

@@ -75,7 +75,7 @@ def describe_picture(container) -> dict:
         info["focus_distance_mm"] = slice_distance_mm(mapping.camera, 0.0)
         info["distance_from"] = DISTANCE_FROM
     else:
-        info["camera_note"] = f"no distances: {why}; 'lfproc export --camera CAM.toml' gives them"
+        info["camera_note"] = f"no distances: {why}; `lfproc.outputs.export_picture(..., camera=...) gives them`"
     info["missing_sections"] = list(picture.missing)
     info["damaged"] = picture.damaged
     return info

@@ -194,7 +194,7 @@ def picture_refusal(path: str, toc: dict) -> str:
         return (f"{path}: holds no raw light field but a processed Lytro picture of a kind lfproc does not read; "
                 f"use the raw .lfp/.lfr the camera wrote")
     return (f"{path}: holds no raw light field but a processed Lytro picture ({describe_contents(toc)}); use "
-            f"'lfproc export' for its images and depth map, or the raw .lfp/.lfr the camera wrote")
+            f"`lfproc.outputs.export_picture` for its images and depth map, or the raw .lfp/.lfr the camera wrote")
 
 
 def raw_frame(container: LytroContainer) -> RawFrame:

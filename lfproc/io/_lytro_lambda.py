@@ -141,10 +141,11 @@ def camera_lambda_map(camera, source: str) -> LambdaMap:
     lens = camera.main_optics
     if not isinstance(lens, MainLens):     # lambda is a main lens's focus unit (a Lytro camera's)
         raise LfprocError(f"{source}: describes a {lens.describe()}, not a Lytro camera; pass a camera file with a "
-                          f"[main_lens] (e.g. from 'lfproc camera' on a Lytro file of the same camera)")
+                          f"[main_lens] (e.g. from `lfproc.read_camera(path) of a Lytro file of the same camera`)")
     if lens.f_number is None or lens.f_number <= 0:
         raise LfprocError(f"{source}: [main_lens] has no f_number, which turns lambda into distances; add "
-                          f"f_number (the Lytro F01 is f/1.91; 'lfproc camera' writes it from a Lytro file's metadata)")
+                          f"f_number (the Lytro F01 is f/1.91; `lfproc.read_camera(path) reads it from a Lytro "
+                          f"file's metadata`)")
     pitch = camera.mla_pitch_mm
     infinity = (lens.image_distance_mm - lens.focal_length_mm) / (lens.f_number * pitch)
     return LambdaMap(camera=camera, f_number=lens.f_number, lens_pitch_mm=pitch, infinity_lambda=infinity)

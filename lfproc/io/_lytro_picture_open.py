@@ -73,10 +73,9 @@ def open_picture(path: str) -> LytroPicture:
         if found is not None:     # the raw image section removed (ExifTool's test file): neither picture nor capture
             raise LfprocError(f"{path}: holds a raw frame's metadata but not its image (the section {found[1]} is "
                               f"not in the file: removed, or an incomplete copy), and no processed picture: nothing to "
-                              f"export or refocus; its metadata still gives the camera (lfproc.read_camera, the "
-                              f"command lfproc camera)")
-        raise LfprocError(f"{path}: holds the raw light field, not a processed picture; use lfproc refocus, views or "
-                          f"depth on it")
+                              f"export or refocus; its metadata still gives the camera (`lfproc.read_camera`)")
+        raise LfprocError(f"{path}: holds the raw light field, not a processed picture; `read it with "
+                          f"lfproc.read_light_field`")
     picture = read_picture(container)
     if picture.missing:
         picture.image_bytes(picture.missing[0])    # raises, naming the section

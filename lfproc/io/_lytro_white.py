@@ -16,7 +16,7 @@ from ._lytro_metadata import LytroMetadata
 
 #: the largest relative difference of main lens focal lengths (zoom) between capture and white image
 ZOOM_TOLERANCE = 0.02
-_FIX_DIR = "pass the calibration folder of the camera that took it (white_dir=) or a matching white="
+_FIX_DIR = "pass the calibration folder of the camera that took it (`white_dir=`) or a matching `white=`"
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ def pick_white_image(capture: LytroMetadata, folder: str | os.PathLike) -> White
 
     folder = os.fspath(folder)
     if not os.path.isdir(folder):
-        raise LfprocError(f"{folder}: white_dir= must be a folder of the camera's calibration files (white "
+        raise LfprocError(f"{folder}: `white_dir=` must be a folder of the camera's calibration files (white "
                           f"images with their metadata); check the path")
     candidates, serials = [], set()
     for path in _lytro_files(folder):

@@ -84,7 +84,7 @@ def read_oiio_capture(path: str, camera=None) -> Capture:
             named, article = " ".join(["the camera", camera.source or camera.name]).strip(), "an" if bits == 8 else "a"
             raise LfprocError(f"{path}: {article} {bits}-bit file (at most {type_max:g}), but {named} saturates at "
                               f"{white:g} (sensor.white_level, a {sensor_bits}-bit sensor): it describes another "
-                              f"camera; pass camera= the camera of the instrument that took this file (or, if it is "
+                              f"camera; pass `camera=` the camera of the instrument that took this file (or, if it is "
                               f"that camera, set its sensor.white_level to {type_max:g})")
         if black >= white:
             raise LfprocError(f"{path}: the camera's sensor.black_level {black:g} is not below this file's white level "

@@ -76,6 +76,6 @@ def read_capture(path: str | os.PathLike, camera=None) -> Capture:
         except _NotThisFormat as exc:
             reasons.append(str(exc))
         except LfprocError as exc:
-            raise LfprocError(f"{exc}{hint}") from None
+            raise LfprocError(f"{exc.marked}{hint}") from None
     raise LfprocError(f"{path}: not a readable image or camera raw{unreadable_reasons(reasons)}; "
                       f"pass a camera raw (DNG, CR2, NEF, …), a Lytro .lfr/.lfp, a TIFF, PNG or EXR file{hint}")

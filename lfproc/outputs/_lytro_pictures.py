@@ -70,9 +70,9 @@ def export_picture(path: str, outdir: str, stem: str, *, tiff: bool = False, cam
         mapping, camera_from = camera_lambda_map(camera, camera_path or "camera"), f"camera file {camera_path}"
     if focus_distance_mm is not None:
         if mapping is None:
-            raise LfprocError(f"{path}: focus_distance_mm= needs the camera, and this picture's metadata does not "
-                              f"describe it ({note}); add camera=... (e.g. from 'lfproc camera' on a Lytro "
-                              f"file of the same camera)")
+            raise LfprocError(f"{path}: `focus_distance_mm=` needs the camera, and this picture's metadata does not "
+                              f"describe it ({note}); add `camera=...` (e.g. from "
+                              f"`lfproc.read_camera(path) of a Lytro file of the same camera`)")
         mapping = refocused_map(mapping, focus_distance_mm)
     common = {"source": source, "camera_model": meta.model if meta else None}
     if mapping is None:
@@ -119,16 +119,16 @@ def _say_what_has_no_distance(path: str, mapping, note: str, records: list) -> N
     from ..errors import LfprocWarning
 
     if mapping is None:
-        warn(f"{path}: no distances, lambda only: {note}; pass camera= a camera file of the camera that took "
-             f"it (lfproc camera on a raw .lfr/.lfp of the same camera) and focus_distance_mm= where its lens "
-             f"focused")
+        warn(f"{path}: no distances, lambda only: {note}; pass `camera=` the camera that took it (e.g. "
+             f"from `lfproc.read_camera(path) of a Lytro file of the same camera`) and `focus_distance_mm=` where "
+             f"its lens focused")
         return
     beyond = [r["lambda"] for r in records if r.get("distance_mm") is None or not math.isfinite(r["distance_mm"])]
     if beyond:
         warn(f"{path}: {len(beyond)} of {len(records)} stack images (lambda {min(beyond):+.3g} to "
              f"{max(beyond):+.3g}) lie beyond infinity for the camera's focus (infinity at lambda "
              f"{mapping.infinity_lambda:.3g}), so their distance_mm is null: the lens focused nearer than "
-             f"the camera says; pass focus_distance_mm= where it focused, if known")
+             f"the camera says; pass `focus_distance_mm=` where it focused, if known")
 
 
 def _linear(rgb: np.ndarray) -> np.ndarray:

@@ -84,7 +84,7 @@ def refocus(lf, a, interpolation: str = "linear", upsample: int = 1, view_shifts
         from ..viewpoints import with_aperture   # light (numpy); the aperture is geometry, not refocusing
 
         if getattr(lf, "camera", None) is None:
-            raise LfprocError("refocus: aperture= needs a LightField with its camera")
+            raise LfprocError("refocus: `aperture=` needs a LightField with its camera")
         lf = with_aperture(lf, aperture)
     views = _views_array(lf)
     slopes, scalar = _slopes(a)

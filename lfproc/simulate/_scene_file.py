@@ -119,7 +119,7 @@ def parse_scene_dict(data: dict, source: str = "scene", base_dir: str = ".") -> 
     try:
         scene = Scene(planes=planes, background=tuple(background))
     except LfprocError as exc:
-        raise LfprocError(f"{source}: {exc}") from None
+        raise LfprocError(f"{source}: {exc.marked}") from None
     return SceneFile(camera=camera, scene=scene, options=options, source=source, beads=beads)
 
 

@@ -42,8 +42,8 @@ def build_picture_page(path: str, outdir: str, *, stem: str, index_href: str | N
             return _views_page(picture, outdir, stem=stem, index_href=index_href)
         held = ", ".join(picture.contents)
         raise LfprocError(f"{path}: holds no raw light field but a processed Lytro picture ({held}) with no focus "
-                          f"stack and no perspective views to view; use 'lfproc export' for its depth map, or the "
-                          f"raw .lfp/.lfr the camera wrote")
+                          f"stack and no perspective views to view; use `lfproc.outputs.export_picture` for its depth "
+                          f"map, or the raw .lfp/.lfr the camera wrote")
     meta, mapping, why = picture_lambda_map(picture)
     lambdas = np.array([s.lambda_ for s in picture.stack])
     records = mapping.slices(lambdas) if mapping else [{"lambda": float(v)} for v in lambdas]

@@ -36,12 +36,12 @@ def make_server(folder: str, port: int = 8000) -> ViewerServer:
         When the port is taken or not allowed.
     """
     if not 0 <= port <= 65535:
-        raise LfprocError(f"port={port} is not a TCP port; give 1 to 65535, or 0 for any free one")
+        raise LfprocError(f"`port={port}` is not a TCP port; give 1 to 65535, or 0 for any free one")
     handler = functools.partial(_QuietHandler, directory=str(folder))
     try:
         return ViewerServer((HOST, port), handler)
     except OSError as exc:
-        raise LfprocError(f"cannot serve on {HOST}:{port} ({exc.strerror or exc}); choose another port= "
+        raise LfprocError(f"cannot serve on {HOST}:{port} ({exc.strerror or exc}); choose another `port=` "
                           f"(0 picks a free one)") from None
 
 

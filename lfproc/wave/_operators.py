@@ -113,10 +113,10 @@ def wave_optics_of(camera, where: str = "camera"):
 def check_superres(superres, m_hat: int) -> int:
     """S as an int, refusing what the lenslet sampling cannot give (S > m̂: finer than the samples behind a lens)."""
     if isinstance(superres, bool) or not float(superres).is_integer() or superres < 1:
-        raise LfprocError(f"superres= must be a whole number of voxels per lens (1 or more), got {superres!r}")
+        raise LfprocError(f"`superres=` must be a whole number of voxels per lens (1 or more), got {superres!r}")
     if superres > m_hat:
-        raise LfprocError(f"superres={superres} is finer than the {m_hat} samples behind each lens: the light field "
-                          f"holds at most {m_hat} voxels per lens pitch; use superres= {m_hat} or less")
+        raise LfprocError(f"`superres={superres}` is finer than the {m_hat} samples behind each lens: the light field "
+                          f"holds at most {m_hat} voxels per lens pitch; use `superres={m_hat}` or less")
     return int(superres)
 
 
@@ -132,17 +132,17 @@ def check_z(z_um, optics, pitch_um: float, lenses: float | None = None) -> np.nd
     """The planes' depths as a sorted float array, refusing repeats and depths the optics cannot image here."""
     z = np.atleast_1d(np.asarray(z_um, dtype=np.float64))
     if z.ndim != 1 or z.size == 0 or not np.all(np.isfinite(z)):
-        raise LfprocError("z_um= must be one depth or a non-empty sequence of finite depths in um")
+        raise LfprocError("`z_um=` must be one depth or a non-empty sequence of finite depths in um")
     if len(np.unique(z)) != len(z):
-        raise LfprocError("z_um= asks for the same plane twice; give each depth once")
+        raise LfprocError("`z_um=` asks for the same plane twice; give each depth once")
     reach = imageable_z_um(optics, pitch_um, lenses)
     far = float(np.max(np.abs(z)))
     if far > reach:
         spread = float(blur_radius_lenses(optics, pitch_um, far))
         where = (f"half of the light field's {lenses:.0f} lenses" if lenses is not None
                  and lenses / 2.0 < MAX_BLUR_LENSES else f"the {MAX_BLUR_LENSES} lenses the operators model")
-        raise LfprocError(f"z_um= reaches {far:g} um, where a point's light spreads over {spread:.1f} lenses in radius, "
-                          f"more than {where}: these optics image z from {-reach:.4g} to {reach:.4g} um here")
+        raise LfprocError(f"`z_um=` reaches {far:g} um, where a point's light spreads over {spread:.1f} lenses in "
+                          f"radius, more than {where}: these optics image z from {-reach:.4g} to {reach:.4g} um here")
     return np.sort(z)
 
 
