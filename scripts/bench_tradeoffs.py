@@ -103,7 +103,7 @@ def decode_section(s: suite.Settings) -> tuple[dict, np.ndarray]:
 # ----------------------------------------------------------------------------- refocus
 def refocus_section(views: np.ndarray, s: suite.Settings) -> dict:
     import bench_interpolation
-    from lfproc.refocus import refocus
+    from lfproc import refocus
     from lfproc.simulate import plane_views
 
     floor = bl.measure(lambda: views.sum(axis=(0, 1)), s.cheap_repeats, memory=False)
@@ -141,8 +141,8 @@ def refocus_section(views: np.ndarray, s: suite.Settings) -> dict:
 # ----------------------------------------------------------------------------- depth
 def depth_accuracy() -> list[dict]:
     """Each setting on the rendered, decoded cards scene: errors on the textured planes' clear lenses."""
-    import lfproc
     from lfproc import geometry
+    from lfproc.depth import depth      # the estimate itself (lfproc.depth_map adds the provenance of files)
 
     camera = bench_depth.test_camera()
     _, scene, roles = bench_depth.scenes(camera)[0]
@@ -158,7 +158,7 @@ def depth_accuracy() -> list[dict]:
     ref, ref_every = geometry.slice_geometry(camera, truth_a[clear]), geometry.slice_geometry(camera, truth_a[every])
     rows = []
     for label, options in DEPTH_SETTINGS:
-        distance = lfproc.depth(lf, **options).distance_mm
+        distance = depth(lf, **options).distance_mm
         err = (distance[clear] - ref.distance_mm) / ref.dof_mm
         err_every = (distance[every] - ref_every.distance_mm) / ref_every.dof_mm
         rows.append({"setting": label, "options": options, "lenses": int(clear.sum()),
@@ -171,6 +171,7 @@ def depth_accuracy() -> list[dict]:
 
 def depth_section(s: suite.Settings) -> dict:
     import lfproc
+    from lfproc.depth import depth
 
     lf = bench_depth.illum_light_field()
     if s.quick:
@@ -178,7 +179,7 @@ def depth_section(s: suite.Settings) -> dict:
     one_slice = bl.measure(lambda: lfproc.refocus(lf, 0.5, interpolation="cubic"), s.cheap_repeats, memory=False)
     speed = []
     for label, options in DEPTH_SETTINGS:
-        timing, depth_map = bl.measure_keeping(lambda: lfproc.depth(lf, **options), s.repeats, memory=False)
+        timing, depth_map = bl.measure_keeping(lambda: depth(lf, **options), s.repeats, memory=False)
         speed.append({"setting": label, "timing": timing.as_dict(), "slices": int(len(depth_map.a_searched)),
                       "view_step": int(depth_map.view_step), "ratio_to_one_slice": timing.median_s / one_slice.median_s})
         suite.log(f"  depth {label}: {timing.median_s:.2f} s")
@@ -428,7 +429,7 @@ def markdown(r: dict) -> str:
             f"The decoded views above ({ref['gb']:.2f} GB). Floor: one read of the views (`views.sum(axis=(0, 1))`), "
             f"{_t(ref['floor'])}. Plane PSNR: a light field of one textured plane ({ref['plane_lenses'][0]} × "
             f"{ref['plane_lenses'][1]} lenses, two sinusoids below 0.2 cycles per lens) refocused at its own a, "
-            f"against the texture. Bias: the sharpest slice (`lfproc.refocus.slice_sharpness`) of a sweep in steps "
+            f"against the texture. Bias: the sharpest slice (`lfproc.refocusing.slice_sharpness`) of a sweep in steps "
             f"of 0.001 minus the true a, worst over exact plane views (`lfproc.simulate.plane_views`) at "
             f"{len(bias['photographic']['a0'])} values of a in [{bias['photographic']['a0'][0]:g}, "
             f"{bias['photographic']['a0'][-1]:g}] (photographic, m̂ = {bias['photographic']['m_hat']}) and "
@@ -448,7 +449,7 @@ def markdown(r: dict) -> str:
             f"{ref['many_slices']['count']} real slices ({ref['many_slices']['interpolation']}) in one call: "
             f"{_t(ref['many_slices']['timing'])}.", "",
             "## Depth", "",
-            f"Speed: `lfproc.depth` on {' × '.join(map(str, dep['views_shape']))} float32 views (smooth random content "
+            f"Speed: `lfproc.depth_map` on {' × '.join(map(str, dep['views_shape']))} float32 views (smooth random content "
             f"on two surfaces, `scripts/bench_depth.py`); one cubic refocused slice of them: {_t(dep['one_slice'])}. "
             f"Accuracy: the rendered and decoded scene *{dep['scene']}* (`scripts/bench_depth.py`), textured lenses "
             f"away from borders and occlusions ({dep['accuracy'][0]['lenses']} lenses): |distance error| as a share "

@@ -341,6 +341,25 @@ def test_distance_parameters_and_aperture(sample_api):
     assert narrow.dof_mm[0] > fs.dof_mm[1]
 
 
+def test_a_depth_range_plans_the_slices_the_command_plans(sample_api, tmp_path):
+    """focal_stack(lf, depth_range_mm=...) renders the slices `lfproc refocus --depth-range` renders (the DOF of
+    the views that carry light), with the same tags; a microscope's z_range_um= those of --z-range Z0:Z1."""
+    lf = sample_api["lf"]
+    proc = run_cli("refocus", SAMPLE / "capture.png", "--camera", SAMPLE / "camera.toml", "--white",
+                   SAMPLE / "white.png", "--depth-range", "300:2000", "-o", tmp_path / "cli")
+    assert proc.returncode == 0, proc.stderr
+    fs = lfproc.focal_stack(lf, depth_range_mm=(300.0, 2000.0))
+    sidecars = sorted((tmp_path / "cli").glob("*.json"))
+    assert len(sidecars) == len(fs) >= 3
+    for record, sidecar in zip(fs.records(), sidecars):
+        assert_same_record(record, read_json(sidecar))
+    assert fs.near_mm.min() <= 300.0 and fs.far_mm.max() >= 2000.0          # the range is covered
+    with pytest.raises(lfproc.LfprocError, match="exactly one of"):
+        lfproc.focal_stack(lf, a=[1.0], depth_range_mm=(300.0, 2000.0))
+    with pytest.raises(lfproc.LfprocError, match="z_range_um= is a range of positions"):
+        lfproc.focal_stack(lf, z_range_um=(-10.0, 10.0))
+
+
 def test_arrays_refocus_like_the_light_field_or_are_told_why_not(sample_api):
     from lfproc.refocusing import refocus
 
@@ -427,6 +446,19 @@ def test_microscope_stack_in_micrometres_equals_the_command(lfm, tmp_path):
     assert sidecar["provenance"]["inputs"]["camera"]["sha256"] == sha256(lfm / "lfm.toml")
     fs.save(tmp_path / "api")
     assert_same_files(tmp_path / "api", tmp_path / "cli")
+
+
+def test_microscope_z_range_plans_the_slices_the_command_plans(lfm, tmp_path):
+    proc = run_cli("refocus", lfm / "capture.tif", "--camera", lfm / "lfm.toml", "--white", lfm / "white.tif",
+                   "--z-range", "-20:20", "-o", tmp_path / "cli")
+    assert proc.returncode == 0, proc.stderr
+    lf = lfproc.read_light_field(str(lfm / "capture.tif"), str(lfm / "lfm.toml"), white=str(lfm / "white.tif"))
+    fs = lfproc.focal_stack(lf, z_range_um=(20.0, -20.0))                       # either order
+    sidecars = sorted((tmp_path / "cli").glob("*.json"))
+    assert len(sidecars) == len(fs) >= 2
+    by_z = sorted(fs.records(), key=lambda r: r["z_um"])                        # files run from low to high z
+    for record, sidecar in zip(by_z, sidecars):
+        assert_same_record(record, read_json(sidecar))
 
 
 def test_microscope_grid_views_and_depth_equal_the_commands(lfm, tmp_path):

@@ -131,8 +131,9 @@ class FocalStack(SlicesInSpace):
                 f"{self.views_summed} views summed>")
 
 
-def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | None = None,
-                interpolation: str = DEFAULT_INTERPOLATION, upsample: int = 1) -> FocalStack:
+def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, depth_range_mm=None, z_range_um=None,
+                aperture: float | None = None, interpolation: str = DEFAULT_INTERPOLATION,
+                upsample: int = 1) -> FocalStack:
     """Refocused slices of a light field (Eq. 9), tagged as ``lfproc refocus`` tags them.
 
     Parameters
@@ -147,6 +148,11 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     z_um : float or sequence of float, optional
         Depths from the native object plane in µm, positive towards the objective (a microscope). Positions
         are the optics' own: the one of ``distance_mm`` and ``z_um`` that is their object space's position key.
+    depth_range_mm, z_range_um : (float, float), optional
+        Instead of listing slices: the fewest slices whose depths of field (those of the views summed) cover this
+        range of distances from the sensor (a photographic camera; FAR may be ``inf``) or of depths in µm (a
+        microscope), as ``lfproc refocus --depth-range NEAR:FAR`` and ``--z-range Z0:Z1`` plan them. Depths no
+        slice can cover are warned about.
     aperture : float, optional
         A synthetic aperture f-number: average only the views inside it (:func:`lfproc.with_aperture`).
     interpolation : {"nearest", "linear", "cubic", "cubic-sharp", "cubic-spline"}
@@ -161,8 +167,8 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
     Raises
     ------
     LfprocError
-        No camera, not exactly one of ``a``/``distance_mm``/``z_um``, positions in another object space than the
-        optics', slices that image no real object (beyond infinity, nearer than a main lens's front focal
+        No camera, not exactly one of ``a``/``distance_mm``/``z_um``/``depth_range_mm``/``z_range_um``, positions
+        in another object space than the optics', slices that image no real object (beyond infinity, nearer than a main lens's front focal
         plane), or slices whose refocused area is under half the image; each states the light field's one
         usable range, in the terms of the argument given.
 
@@ -183,10 +189,16 @@ def focal_stack(lf, a=None, *, distance_mm=None, z_um=None, aperture: float | No
         raise LfprocError("focal_stack needs a LightField with its camera (lfproc.read_light_field, or "
                           "LightField.from_views(views, camera, view_mask=...)) to tag the slices")
     camera = lf.camera
-    a_values, what, asked = _parameters(camera, a, distance_mm, z_um)
     if int(upsample) != upsample or upsample < 1:
         raise LfprocError(f"upsample must be an integer >= 1, got {upsample}")
     lf = with_aperture(lf, aperture)
+    ranges = {name: value for name, value in (("depth_range_mm", depth_range_mm), ("z_range_um", z_range_um))
+              if value is not None}
+    if ranges:
+        if len(ranges) > 1 or any(value is not None for value in (a, distance_mm, z_um)):
+            raise LfprocError("give exactly one of a=, `distance_mm=`, `z_um=`, `depth_range_mm=` or `z_range_um=`")
+        a = _planned(camera, *next(iter(ranges.items())), lf.view_mask)
+    a_values, what, asked = _parameters(camera, a, distance_mm, z_um)
     source = None if lf.source is None else os.path.abspath(lf.source)
     check_view_coverage(camera, a_values, lf.lens_shape, lf.source or "light field", lf.view_mask, what, asked)
     check_z_step(camera, a_values)
@@ -228,6 +240,35 @@ def _parameters(camera, a, distance_mm, z_um):
     if len(set(values.tolist())) != len(values):
         raise LfprocError(f"{name}= asks for the same slice twice; give each once")
     return [float(v) for v in values], name, asked
+
+
+def _planned(camera, name: str, bounds, view_mask) -> list[float]:
+    """The a of the fewest slices covering ``bounds`` (``depth_range_mm``: the DOF of the views ``view_mask``
+    marks, as ``--depth-range``; ``z_range_um``: as ``--z-range Z0:Z1``), the depths left uncovered warned."""
+    from .. import geometry
+    from ..errors import warn
+
+    try:
+        low, high = (float(v) for v in bounds)
+    except (TypeError, ValueError):
+        raise LfprocError(f"{name}= must be two numbers (near, far), got {bounds!r}") from None
+    space = camera.main_optics.object_space
+    position = {"depth_range_mm": "distance_mm", "z_range_um": "z_um"}[name]
+    if position != space.position_key:
+        raise LfprocError(f"{name}= is a range of positions the optics of this camera "
+                          f"({camera.main_optics.describe()}) do not use: they place slices in {space.symbol} "
+                          f"{space.origin}")
+    near, far = float(space.nearer(low, high)), float(space.farther(low, high))
+    if name == "z_range_um":
+        return [float(v) for v in geometry.plan_slices(camera, near, far, what="z_range_um= ")]
+    geometry.check_usable_distances(camera, near, f"{name}=")
+    extent = None if view_mask is None else geometry.summed_view_extent(view_mask)
+    plan = geometry.plan_depth_range(camera, near, far, view_extent=extent, what=f"{name}= ")
+    if not len(plan.a):
+        raise LfprocError(f"{name}= {near:g}, {far:g}: no slice can be planned ({plan.uncovered[0][2]})")
+    for lo, hi, why in plan.uncovered:
+        warn(f"no slice is in focus at {space.interval(*space.low_high(lo, hi))}: {why}")
+    return [float(v) for v in plan.a]
 
 
 def _stem(stem, source) -> str:
