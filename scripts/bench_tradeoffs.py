@@ -66,6 +66,7 @@ DECONV_SUPERRES = (3, 5)
 DECONV_ITERATIONS = (4, 8, 16)
 DECONV_SLACK = 1.1      # "as well as any": a worst lateral error within 10 % of the smallest measured
 PREVIEW_SLACK = 1.1     # a preview decode may take this much longer than the fastest if it is more accurate
+PREVIEW_MIN_DB = 40.0   # a preview still looks like the scene: 40 dB, the usual threshold of visible error
 
 
 def _finite(value):
@@ -310,8 +311,9 @@ def recommendations(r: dict) -> list[str]:
     speed = {(x["interpolation"], x["demosaic"]): x["timing"]["median_s"] for x in dec["rows"]}
     psnr = {(x["capture"], x["interpolation"], x["demosaic"]): x["psnr_db"] for x in dec["accuracy"]}
     mono = {i: psnr[("mono", i, "fast")] for i in suite.INTERPOLATIONS}
-    quickest = min(speed[(i, "fast")] for i in suite.INTERPOLATIONS)
-    fastest = max((i for i in suite.INTERPOLATIONS if speed[(i, "fast")] <= PREVIEW_SLACK * quickest),
+    seen = [i for i in suite.INTERPOLATIONS if mono[i] >= PREVIEW_MIN_DB] or list(suite.INTERPOLATIONS)
+    quickest = min(speed[(i, "fast")] for i in seen)
+    fastest = max((i for i in seen if speed[(i, "fast")] <= PREVIEW_SLACK * quickest),
                   key=lambda i: mono[i])       # the most accurate of those about as fast as the fastest
     demosaic = sorted(("fast", "careful"), key=lambda d: -psnr[("RGGB", "linear", d)])   # the better one first
     sharpest = max(suite.INTERPOLATIONS, key=lambda i: mono[i])
@@ -343,8 +345,8 @@ def recommendations(r: dict) -> list[str]:
     f = bl.fmt
     return [
         "## Which setting to pick", "",
-        f"- **Preview**: decode with `{fastest}`, the most accurate of the decodes within "
-        f"{(PREVIEW_SLACK - 1) * 100:.0f} % of the fastest ({f(speed[(fastest, 'fast')])} s, {mono[fastest]:.1f} dB"
+        f"- **Preview**: decode with `{fastest}`, the most accurate of the decodes at or above "
+        f"{PREVIEW_MIN_DB:.0f} dB within {(PREVIEW_SLACK - 1) * 100:.0f} % of the fastest of them ({f(speed[(fastest, 'fast')])} s, {mono[fastest]:.1f} dB"
         + (f"; `linear`, the default, {f(speed[('linear', 'fast')])} s and {mono['linear']:.1f} dB" if fastest != "linear"
            else ", the default") + "), refocus at integer a "
         f"(a gather: {f(integer['timing']['median_s'])} s, {f(integer['ratio_to_floor'])} × one read of the views, "
