@@ -82,6 +82,37 @@ def missing_sections(obj) -> list[str]:
     return []
 
 
+class _Elided:
+    """A default too long to print in a signature (its docstring says what it is)."""
+
+    def __repr__(self) -> str:
+        return "…"
+
+
+def _short_defaults(signature: inspect.Signature) -> inspect.Signature:
+    """The signature with every default whose repr is longer than 40 characters written as ``…``."""
+    return signature.replace(parameters=[
+        p.replace(default=_Elided()) if p.default is not p.empty and len(repr(p.default)) > 40 else p
+        for p in signature.parameters.values()])
+
+
+def _wrapped(name: str, text: str, width: int = 100) -> str:
+    """``name(text)`` on one line, or one parameter a line where that is wider than ``width``."""
+    if len(name) + len(text) <= width:
+        return name + text
+    close = text.rindex(")")
+    inner, tail = text[1:close], text[close + 1:]
+    parts, depth, start = [], 0, 0
+    for k, char in enumerate(inner):
+        depth += char in "([{"
+        depth -= char in ")]}"
+        if char == "," and depth == 0:
+            parts.append(inner[start:k].strip())
+            start = k + 1
+    parts.append(inner[start:].strip())
+    return name + "(\n" + "".join(f"    {part},\n" for part in parts) + ")" + tail
+
+
 def _signature(qualified: str, obj) -> str:
     if inspect.ismodule(obj):
         return f"import {qualified}"
@@ -89,14 +120,14 @@ def _signature(qualified: str, obj) -> str:
         return f"class {qualified}({obj.__bases__[0].__name__})"
     if callable(obj):
         try:
-            text = str(inspect.signature(obj))
+            text = str(_short_defaults(inspect.signature(obj)))
         except (TypeError, ValueError):
             text = "(...)"
         text = re.sub(r" at 0x[0-9a-f]+", "", text)
         text = re.sub(r"(: |-> )'([^']*)'", r"\1\2", text)     # annotations as written, not as strings
         if inspect.isclass(obj):
-            return f"class {qualified}{text.removesuffix(' -> None')}"
-        return f"{qualified}{text}"
+            return _wrapped(f"class {qualified}", text.removesuffix(' -> None'))
+        return _wrapped(qualified, text)
     return f"{qualified} = {obj!r}"
 
 
