@@ -2,7 +2,8 @@
 
 The public API is what ``lfproc.__all__`` lists (docs/api.md): the calls of the contract (``read_camera``,
 ``calibrate_white``, ``read_light_field``, ``prepare_decoding``, ``focal_stack``, ``view_stack``, ``depth_map``,
-``deconvolve``, ``refocus``, ``viewpoints``, ``with_aperture``), their results, and two subpackages:
+``deconvolve``, ``prepare_deconvolution``, ``refocus``, ``slice_sharpness``, ``viewpoints``, ``with_aperture``,
+``focused_at``), their results, and two subpackages:
 :mod:`lfproc.geometry` (the paper's metric model, without images) and :mod:`lfproc.simulate` (rendered test
 scenes). Every other package is internal (its docstring says so).
 
@@ -36,6 +37,9 @@ _LAZY = {
     "depth_map": ("lfproc.api", "depth_map"),
     "DepthMap": ("lfproc.depth", "DepthMap"),
     "deconvolve": ("lfproc.api", "deconvolve"),
+    "prepare_deconvolution": ("lfproc.api", "prepare_deconvolution"),
+    "slice_sharpness": ("lfproc.refocusing", "slice_sharpness"),
+    "focused_at": ("lfproc.io", "focused_at"),
     "Volume": ("lfproc.api", "Volume"),
     "geometry": ("lfproc.geometry", None),
     "simulate": ("lfproc.simulate", None),

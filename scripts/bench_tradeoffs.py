@@ -435,7 +435,7 @@ def markdown(r: dict) -> str:
             f"The decoded views above ({ref['gb']:.2f} GB). Floor: one read of the views (`views.sum(axis=(0, 1))`), "
             f"{_t(ref['floor'])}. Plane PSNR: a light field of one textured plane ({ref['plane_lenses'][0]} × "
             f"{ref['plane_lenses'][1]} lenses, two sinusoids below 0.2 cycles per lens) refocused at its own a, "
-            f"against the texture. Bias: the sharpest slice (`lfproc.refocusing.slice_sharpness`) of a sweep in steps "
+            f"against the texture. Bias: the sharpest slice (`lfproc.slice_sharpness`) of a sweep in steps "
             f"of 0.001 minus the true a, worst over exact plane views (`lfproc.simulate.plane_views`) at "
             f"{len(bias['photographic']['a0'])} values of a in [{bias['photographic']['a0'][0]:g}, "
             f"{bias['photographic']['a0'][-1]:g}] (photographic, m̂ = {bias['photographic']['m_hat']}) and "

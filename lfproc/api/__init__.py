@@ -11,7 +11,7 @@ What a notebook user writes, and what the commands, batch, demo and viewer are b
     vs = lfproc.view_stack(lf)                                           # -> ViewStack (lit views + tags)
     dm = lfproc.depth_map(lf)                                            # -> DepthMap (arrays + tags)
     vol = lfproc.deconvolve(lf, z_um=[-20, 0, 20], superres=3)           # -> Volume (microscopes)
-    ops = lfproc.api.prepare_deconvolution(lf, z_um=[-20, 0, 20])       # -> WaveOperators: a time-lapse,
+    ops = lfproc.prepare_deconvolution(lf, z_um=[-20, 0, 20])       # -> WaveOperators: a time-lapse,
     vols = [lfproc.deconvolve(f, operators=ops) for f in frames]         #    the operators built once
     fs.save("out/")                                                      # exactly what `lfproc refocus` writes
 

@@ -221,7 +221,9 @@ def prepare_deconvolution(lf, z_um, superres: int = DEFAULT_SUPERRES, *, cache: 
 
     Returns
     -------
-    lfproc.wave.WaveOperators
+    WaveOperators
+        The projection operators, picklable: pass them to every frame's ``lfproc.deconvolve(frame,
+        operators=...)``.
 
     Raises
     ------

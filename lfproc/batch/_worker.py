@@ -63,7 +63,7 @@ def _portable_setups(jobs: list[Job]) -> dict:
 
 def shared_operators(job: Job, progress=None):
     """The deconvolution operators of a batch, built ONCE, in the process that starts it, from its first
-    capture (:func:`lfproc.api.prepare_deconvolution`, through lfproc's cache as ``lfproc deconvolve`` does), to be
+    capture (:func:`lfproc.prepare_deconvolution`, through lfproc's cache as ``lfproc deconvolve`` does), to be
     given to every worker (:func:`run_local`, :func:`run_dask`): no worker builds them."""
     from ..api import prepare_deconvolution
     from ..lightfield import LightField, is_lightfield_file

@@ -40,7 +40,7 @@ def read_camera(path: str | os.PathLike) -> Camera:
     Warns
     -----
     LfprocWarning
-        A Lytro file's camera: its focus distance is assumed (infinity); ``lfproc.io.focused_at(camera, MM)``
+        A Lytro file's camera: its focus distance is assumed (infinity); ``lfproc.focused_at(camera, MM)``
         sets the real one.
     """
     from ._lytro_camera import lytro_camera
@@ -52,7 +52,7 @@ def read_camera(path: str | os.PathLike) -> Camera:
     if is_lytro_file(path):
         camera = lytro_camera(camera_metadata(path)).camera
         warn(f"{path}: camera from its metadata, main lens focused at infinity (the metadata has no focus "
-             f"distance); lfproc.io.focused_at(camera, MM) sets where it focused")
+             f"distance); lfproc.focused_at(camera, MM) sets where it focused")
         return camera
     if is_napari_metadata(path):
         return napari_camera(path)[0]

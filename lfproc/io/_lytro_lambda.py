@@ -163,9 +163,28 @@ def refocused_map(mapping: LambdaMap, focus_distance_mm: float) -> LambdaMap:
 
 
 def focused_at(camera, focus_distance_mm: float):
-    """``camera`` with its main lens focused at ``focus_distance_mm`` from the sensor (b_U from the thin-lens
-    equation, ``MainLens.focused_at``); the provenance of b_U (or of a focus distance) no longer holds and is
-    dropped."""
+    """The camera with its main lens focused at another distance (no Lytro file records where it focused).
+
+    b_U follows from the thin-lens equation (``MainLens.focused_at``); the provenance of b_U (or of a focus
+    distance) no longer holds and is dropped. Every slice distance moves with it (Eq. 21).
+
+    Parameters
+    ----------
+    camera : Camera
+        With a main lens (a photographic camera).
+    focus_distance_mm : float
+        The distance from the sensor the main lens was focused at, mm (``inf`` allowed).
+
+    Returns
+    -------
+    Camera
+        The same camera, its main lens focused there.
+
+    Raises
+    ------
+    LfprocError
+        A camera without a main lens, or a distance the lens cannot focus at.
+    """
     stale = ("main_lens.image_distance_mm", "main_lens.focus_distance_mm")
     if not isinstance(camera.main_optics, MainLens):
         raise LfprocError(f"{camera.source or 'camera'}: a focus distance needs a main lens ([main_lens]); this "
