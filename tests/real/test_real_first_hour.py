@@ -132,5 +132,5 @@ def test_the_fuzz_fixture_gives_one_line(real_dir):
     """``../shared/fixtures/fuzz`` beside the real data: the damaged-IFD TIFF exits 2 with exactly one line."""
     path = real_dir.parent / "fixtures" / "fuzz" / "tiff-ifd-stripbytecounts.tif"
     if not path.is_file():
-        pytest.skip(f"{path}: absent")
+        pytest.skip(f"{path}: absent")   # a copy of the real data without the fixtures beside it (LFPROC_REAL_DATA)
     assert_clean_error(run_cli("info", path), str(path), "not a readable image")
