@@ -102,3 +102,19 @@ def _sidecar(path: Path, folder: Path):
                 "grid.json"))}
         return [strip(v) for v in value] if isinstance(value, list) else value
     return strip(json.loads(path.read_text().replace(str(folder), "HERE")))
+
+
+def volume_written(folder):
+    """(record, data) of the one volume ``lfproc deconvolve`` wrote in ``folder``."""
+    import tifffile
+
+    return (json.loads(next(folder.glob("*_volume.json")).read_text()),
+            tifffile.imread(next(folder.glob("*_volume.ome.tif"))))
+
+
+def same_volume(volume, written, rtol=1e-5):
+    """The Python volume is the command's: the same planes, voxel size, iterations and voxels (float32)."""
+    record, data = written
+    assert record["z_um"] == list(volume.z_um) and record["voxel_um"] == list(volume.voxel_um)
+    assert record["iterations"] == volume.records()["iterations"] and np.isfinite(volume.data).all()
+    np.testing.assert_allclose(volume.data, data, rtol=rtol, atol=rtol * float(np.abs(data).max()))

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, run_cli
-from readme_walk import README, blocks, commands, own_data_section, run_commands, run_python, same_outputs
+from readme_walk import (README, blocks, own_data_section, run_commands, run_python, same_outputs,
+                         same_volume, volume_written)
 
 CI = (ROOT / ".ci" / "run").read_text()
 
@@ -128,13 +129,13 @@ def test_a_microscope_as_the_readme_says(tmp_path):
     run_commands(section, tmp_path)
     volume_file = tmp_path / "beads" / "volume" / "capture_volume.ome.tif"
     assert volume_file.is_file()                                          # the bead render, deconvolved
+    by_command = volume_written(scope / "volume")                        # before Python writes over it
+    stack_record = json.loads(next((scope / "stack").glob("*_z-40.000um.json")).read_text())
     namespace = run_python(section, tmp_path)
     stack, volume = namespace["z_stack"], namespace["volume"]
     assert list(stack.z_um) == [-40.0, -30.0, -20.0, -10.0, 0.0, 10.0, 20.0, 30.0, 40.0]
-    assert list(volume.z_um) == list(stack.z_um) and np.isfinite(volume.data).all()
-    cli_volume = json.loads(next((scope / "volume").glob("*_volume.json")).read_text())
-    saved = json.loads(next((scope / "volume").glob("*_volume.json")).read_text())
-    assert cli_volume["z_um"] == saved["z_um"]
+    assert stack.records()[0]["z_um"] == stack_record["z_um"] and stack.records()[0]["dof_um"] == stack_record["dof_um"]
+    same_volume(volume, by_command)
 
 
 def _anchor(heading: str) -> str:
