@@ -87,7 +87,9 @@ def test_a_lytro_picture_as_the_readme_says(tmp_path):
     section = own_data_section("A Lytro picture")
     folder = _folder_with_samples(tmp_path / "lytro")
     run_commands(section, folder)
-    assert sorted(p.suffix for p in (folder / "out" / "lytro-slices").iterdir())
+    written = sorted((folder / "out" / "lytro-slices").glob("IMG_0001_*"))
+    assert {p.suffix for p in written} == {".tif", ".json"} and len(written) >= 2
+    assert all(json.loads(p.read_text())["distance_mm"] > 0 for p in written if p.suffix == ".json")
     namespace = run_python(section, folder)
     distances = [r["distance_mm"] for r in namespace["lytro_slices"].records()]
     assert distances == pytest.approx([10000.0, 30000.0], rel=1e-9)
